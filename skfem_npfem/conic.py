@@ -1,0 +1,625 @@
+"""One N-PFEM time step as a Clarabel cone program.
+
+The mixed (stress-based) step of ``formulation.md`` §3-§5:
+
+    minimise   1/2 sum_i V_i (s_i - s_n,i)^T C (s_i - s_n,i)
+               + 1/2 sum_j dt^2/m~_j r_j^2
+               - (prescribed-displacement work) + sum_c g_c lambda_c
+    subject to (G s + r - N lambda_n - T lambda_t)_F = f~_F     (equilibrium)
+               lambda_n >= 0, |lambda_t| <= mu lambda_bar_n    (contact)
+               k_i - a_i^T s_i >= || M s_i ||                    (yield cone per node)
+
+The displacement increment is the multiplier of the equilibrium rows:
+``du_F = -z_eq`` (Clarabel's stationarity is ``P x + q + A^T z = 0``).  The static
+variant drops the inertial force ``r``.  The problem is non-dimensionalised with a
+stress scale ``s*``, a length ``h`` and ``U* = s* h / E`` before it is handed to
+Clarabel; without that the interior-point method needs several times the
+iterations or fails (pitfall 5).
+
+Pieces of the program are built by small named functions (``_objective``,
+``_equilibrium``, ``_contact_rows``, ``_yield_rows``) so a reader finds each
+physical ingredient by name.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import clarabel
+import numpy as np
+import scipy.sparse as sp
+
+from .errors import ParameterError, SolverError
+from .materials import Material
+from .smoothing import NodalIntegration
+
+__all__ = [
+    "Contacts",
+    "SolverOptions",
+    "StepData",
+    "StepSolution",
+    "solve_step",
+]
+
+LINEAR_SOLVERS = ("auto", "qdldl", "faer", "mkl")
+ACCEPTED = ("Solved", "AlmostSolved")
+
+
+@dataclass
+class SolverOptions:
+    """Settings passed to Clarabel.
+
+    Parameters
+    ----------
+    linear_solver : {"auto", "qdldl", "faer", "mkl"}
+        Clarabel's ``direct_solve_method``.  ``"auto"`` lets Clarabel choose
+        (qdldl for small problems, faer for large ones).
+    max_threads : int
+        Threads for faer (0: Clarabel decides).
+    tol : float
+        Gap and feasibility tolerances (Clarabel default 1e-8).
+    max_iter : int
+        Interior-point iteration limit.
+    time_limit : float
+        Seconds per solve (``inf``: none).
+    verbose : bool
+        Print Clarabel's log.
+    scaling : bool
+        Non-dimensionalise the program (strongly recommended).
+    """
+
+    linear_solver: str = "auto"
+    max_threads: int = 0
+    tol: float = 1e-8
+    max_iter: int = 200
+    time_limit: float = math.inf
+    verbose: bool = False
+    scaling: bool = True
+
+    def __post_init__(self) -> None:
+        if self.linear_solver not in LINEAR_SOLVERS:
+            raise ParameterError(
+                "linear_solver", self.linear_solver, f"one of {LINEAR_SOLVERS}"
+            )
+        if not (isinstance(self.max_threads, int) and self.max_threads >= 0):
+            raise ParameterError("max_threads", self.max_threads, "an integer >= 0")
+        if not (math.isfinite(self.tol) and 0 < self.tol < 1e-2):
+            raise ParameterError("tol", self.tol, "a number in (0, 1e-2)")
+        if not (isinstance(self.max_iter, int) and self.max_iter > 0):
+            raise ParameterError("max_iter", self.max_iter, "an integer > 0")
+
+    def clarabel_settings(self) -> clarabel.DefaultSettings:
+        """Return a configured ``clarabel.DefaultSettings``."""
+        s = clarabel.DefaultSettings()
+        s.verbose = bool(self.verbose)
+        s.direct_solve_method = self.linear_solver
+        s.max_threads = int(self.max_threads)
+        s.max_iter = int(self.max_iter)
+        s.time_limit = float(self.time_limit)
+        s.tol_gap_abs = s.tol_gap_rel = s.tol_feas = self.tol
+        s.tol_infeas_abs = s.tol_infeas_rel = self.tol
+        return s
+
+
+@dataclass
+class Contacts:
+    """Contact candidates of one step (node against a rigid plane).
+
+    Attributes
+    ----------
+    node : ndarray (nc,) int
+        Local node index.
+    normal : ndarray (nc, d)
+        Unit wall normal pointing into the body.
+    gap : ndarray (nc,)
+        Current gap (>= 0), m.
+    mu_lambda : ndarray (nc,)
+        Friction bound ``mu * lambda_bar_n`` (N) from the previous step; 0 means
+        frictionless.
+    """
+
+    node: np.ndarray
+    normal: np.ndarray
+    gap: np.ndarray
+    mu_lambda: np.ndarray
+
+    @classmethod
+    def empty(cls, dim: int) -> Contacts:
+        """No contacts."""
+        return cls(np.zeros(0, int), np.zeros((0, dim)), np.zeros(0), np.zeros(0))
+
+    @property
+    def size(self) -> int:
+        """Number of candidates."""
+        return int(self.node.shape[0])
+
+
+@dataclass
+class StepData:
+    """Everything one cone step needs, on the active nodes of one mesh.
+
+    Attributes
+    ----------
+    ni : NodalIntegration
+        Smoothing operators (``ni.components`` selects the stress variables).
+    materials : list of Material
+        Materials referenced by ``material``.
+    material : ndarray (N,) int
+        Material index per node.
+    sigma_n : ndarray (N, n_full)
+        Stress at the start of the step (full Voigt), Pa.
+    force : ndarray (N, d)
+        External nodal force over the step (gravity ``m g`` plus tractions), N.
+    fixed : ndarray (N, d) bool
+        Prescribed degrees of freedom.
+    du_prescribed : ndarray (N, d)
+        Displacement increment on prescribed dofs (ignored elsewhere), m.
+    contacts : Contacts
+        Contact candidates.
+    dt : float
+        Time step, s (dynamic only).
+    mass : ndarray (N,) or None
+        Nodal masses, kg (dynamic only).
+    v_n : ndarray (N, d) or None
+        Velocity at the start of the step, m/s (dynamic only).
+    theta1, theta2 : float
+        Time-integration parameters (dynamic only).
+    dynamic : bool
+        Include inertia (otherwise quasi-static).
+    stress_scale : float or None
+        Stress scale ``s*`` for non-dimensionalisation (None: automatic).
+    """
+
+    ni: NodalIntegration
+    materials: list[Material]
+    material: np.ndarray
+    sigma_n: np.ndarray
+    force: np.ndarray
+    fixed: np.ndarray
+    du_prescribed: np.ndarray
+    contacts: Contacts
+    dt: float = 1.0
+    mass: np.ndarray | None = None
+    v_n: np.ndarray | None = None
+    theta1: float = 1.0
+    theta2: float = 1.0
+    dynamic: bool = False
+    stress_scale: float | None = None
+
+
+@dataclass
+class StepSolution:
+    """Result of :func:`solve_step`.
+
+    Attributes
+    ----------
+    du : ndarray (N, d)
+        Displacement increment (from the equilibrium duals), m.
+    sigma : ndarray (N, n_full)
+        End-of-step stress (full Voigt, not yet rotated), Pa.
+    deps_p : ndarray (N, n_full)
+        Plastic strain increment (engineering shear).
+    reaction : ndarray (N, d)
+        Reaction forces on prescribed dofs (zero elsewhere), N.
+    lambda_n, lambda_t : ndarray
+        Contact normal (nc,) and tangential (nc, d-1) forces on the body, N.
+    status : str
+        Clarabel status.
+    iterations : int
+        Interior-point iterations.
+    timings : dict
+        Seconds spent in ``assembly``, ``setup`` and ``solve``.
+    sizes : dict
+        Variables, rows and nonzeros of the program.
+    """
+
+    du: np.ndarray
+    sigma: np.ndarray
+    deps_p: np.ndarray
+    reaction: np.ndarray
+    lambda_n: np.ndarray
+    lambda_t: np.ndarray
+    status: str
+    iterations: int
+    timings: dict = field(default_factory=dict)
+    sizes: dict = field(default_factory=dict)
+
+
+def _block_diag_upper(blocks: np.ndarray) -> sp.csc_matrix:
+    """Upper triangle of a block-diagonal matrix from (n, b, b) blocks."""
+    n, b, _ = blocks.shape
+    iu, ju = np.triu_indices(b)
+    base = (np.arange(n) * b)[:, None]
+    return sp.csc_matrix(
+        (blocks[:, iu, ju].ravel(), ((base + iu).ravel(), (base + ju).ravel())),
+        shape=(n * b, n * b),
+    )
+
+
+class _Program:
+    """Assembled (unscaled) blocks of the cone program and their layout."""
+
+    def __init__(self, data: StepData) -> None:
+        ni = data.ni
+        self.dim = d = ni.dim
+        self.N = N = ni.n_nodes
+        self.comp = list(ni.components)
+        self.ns = ns = len(self.comp)
+        self.data = data
+        dofs_fixed = np.asarray(data.fixed, bool).reshape(-1)
+        self.free = np.flatnonzero(~dofs_fixed)
+        self.pres = np.flatnonzero(dofs_fixed)
+        self.ubar = np.asarray(data.du_prescribed, float).reshape(-1)[self.pres]
+        self.sig_n = np.asarray(data.sigma_n, float)[:, self.comp]
+        # Generalised external force f~ (formulation.md §3).
+        f = np.asarray(data.force, float).reshape(-1)
+        if data.dynamic:
+            th1, th2 = data.theta1, data.theta2
+            self.mt = np.repeat(np.asarray(data.mass, float), d) / (th1 * th2)
+            f = f / th1 + self.mt * np.asarray(data.v_n, float).reshape(-1) / data.dt
+            if th1 != 1.0:
+                f = f - (1 - th1) / th1 * (ni.G @ self.sig_n.reshape(-1))
+        self.ftilde = f
+        c = data.contacts
+        self.nc = c.size
+        self.fric = np.flatnonzero(c.mu_lambda > 0.0)  # contacts with friction
+        self.nt = self.fric.size * (d - 1)
+        self.nr = self.free.size if data.dynamic else 0
+        self.n_sigma = N * ns
+        self.nx = self.n_sigma + self.nr + self.nc + self.nt
+        # Physical blocks
+        self.compliance = np.empty((N, ns, ns))
+        for m_id, mat in enumerate(data.materials):
+            sel = data.material == m_id
+            if np.any(sel):
+                self.compliance[sel] = mat.compliance(d, tuple(self.comp))
+
+    # -- objective ------------------------------------------------------------
+    def objective(self) -> tuple[sp.csc_matrix, np.ndarray]:
+        data, ni = self.data, self.data.ni
+        V = ni.volumes
+        blocks = V[:, None, None] * self.compliance
+        P_sigma = _block_diag_upper(blocks)
+        q = np.zeros(self.nx)
+        q_sigma = -np.einsum("nij,nj->ni", blocks, self.sig_n).reshape(-1)
+        if self.pres.size:
+            # Work of prescribed displacements: -G_P^T ubar.
+            q_sigma -= ni.G[self.pres].T @ self.ubar
+        q[: self.n_sigma] = q_sigma
+        diag = []
+        if self.nr:
+            diag.append(data.dt**2 / self.mt[self.free])
+        n_rest = self.nc + self.nt
+        diag.append(np.zeros(n_rest))
+        P = sp.block_diag([P_sigma, sp.diags(np.concatenate(diag))], format="csc")
+        # Contact gaps enter the objective linearly.
+        q[self.n_sigma + self.nr : self.n_sigma + self.nr + self.nc] = (
+            self.data.contacts.gap
+        )
+        return P, q
+
+    # -- constraints -----------------------------------------------------------
+    def contact_maps(self) -> tuple[sp.csc_matrix, sp.csc_matrix]:
+        """Place contact forces on dofs: N (dN x nc) and T (dN x nt)."""
+        d, c = self.dim, self.data.contacts
+        ndof = d * self.N
+        rows = (d * c.node[:, None] + np.arange(d)).ravel()
+        Nmat = sp.csc_matrix(
+            (c.normal.ravel(), (rows, np.repeat(np.arange(self.nc), d))),
+            shape=(ndof, self.nc),
+        )
+        tang = _tangents(c.normal[self.fric])  # (nf, d-1, d)
+        nodes = c.node[self.fric]
+        if self.nt:
+            r = (d * nodes[:, None, None] + np.arange(d)[None, None, :]) * np.ones(
+                (1, d - 1, 1), int
+            )
+            col = np.arange(self.nt).reshape(-1, d - 1)[:, :, None] * np.ones(
+                (1, 1, d), int
+            )
+            Tmat = sp.csc_matrix(
+                (tang.ravel(), (r.ravel(), col.ravel())), shape=(ndof, self.nt)
+            )
+        else:
+            Tmat = sp.csc_matrix((ndof, 0))
+        return Nmat, Tmat
+
+    def equilibrium(self) -> tuple[sp.csc_matrix, np.ndarray]:
+        """Rows (G s + r - N lambda_n - T lambda_t)_F = f~_F."""
+        G = self.data.ni.G
+        Nmat, Tmat = self.contact_maps()
+        blocks = [G[self.free]]
+        if self.nr:
+            blocks.append(sp.identity(self.nr, format="csc"))
+        blocks += [-Nmat[self.free], -Tmat[self.free]]
+        return sp.hstack(blocks, format="csc"), self.ftilde[self.free]
+
+    def contact_rows(self) -> tuple[sp.csc_matrix, np.ndarray, int]:
+        """Nonnegative rows: lambda_n >= 0 and 2D friction |lambda_t| <= mu lambda."""
+        off_n = self.n_sigma + self.nr
+        off_t = off_n + self.nc
+        rows, cols, vals, b = [], [], [], []
+        nrow = 0
+        if self.nc:
+            rows.append(np.arange(self.nc))
+            cols.append(off_n + np.arange(self.nc))
+            vals.append(-np.ones(self.nc))
+            b.append(np.zeros(self.nc))
+            nrow = self.nc
+        if self.nt and self.dim == 2:
+            bound = self.data.contacts.mu_lambda[self.fric]
+            nf = self.fric.size
+            for sign in (1.0, -1.0):  # s = mu*lam - sign*lambda_t >= 0
+                rows.append(nrow + np.arange(nf))
+                cols.append(off_t + np.arange(nf))
+                vals.append(np.full(nf, sign))
+                b.append(bound)
+                nrow += nf
+        A = _coo(rows, cols, vals, nrow, self.nx)
+        return A, (np.concatenate(b) if b else np.zeros(0)), nrow
+
+    def yield_rows(self):
+        """Cut-off rows (nonnegative) and one SOC per plastic node."""
+        data = self.data
+        ns = self.ns
+        soc_blocks = []  # (A coo parts, b, cone dims)
+        cut_rows, cut_cols, cut_vals, cut_b = [], [], [], []
+        for m_id, mat in enumerate(data.materials):
+            nodes = np.flatnonzero(data.material == m_id)
+            if nodes.size == 0 or not mat.plastic:
+                continue
+            cone = mat.cone(self.dim, tuple(self.comp), data.sigma_n[nodes])
+            m = cone.M.shape[0]
+            # Rows per node: [a^T ; -M] on s_i, b = (k ; 0).
+            rowmat = np.concatenate(
+                [cone.a[:, None, :], np.broadcast_to(-cone.M, (nodes.size, m, ns))],
+                axis=1,
+            )  # (n, 1+m, ns)
+            bvec = np.zeros((nodes.size, 1 + m))
+            bvec[:, 0] = cone.k
+            soc_blocks.append((nodes, rowmat, bvec, 1 + m))
+            if cone.cutoff_a is not None:
+                cut_rows.append(np.arange(nodes.size))
+                cut_cols.append(nodes)
+                cut_vals.append(cone.cutoff_a)
+                cut_b.append(np.full(nodes.size, cone.cutoff_k))
+        return soc_blocks, (cut_cols, cut_vals, cut_b)
+
+    def friction_cones_3d(self):
+        """SOC(3) rows (mu lambda_bar ; lambda_t) per frictional contact in 3D."""
+        nf = self.fric.size
+        off_t = self.n_sigma + self.nr + self.nc
+        rows = (3 * np.arange(nf)[:, None] + np.array([1, 2])).ravel()
+        cols = off_t + np.arange(2 * nf)
+        A = sp.csc_matrix((-np.ones(2 * nf), (rows, cols)), shape=(3 * nf, self.nx))
+        b = np.zeros((nf, 3))
+        b[:, 0] = self.data.contacts.mu_lambda[self.fric]
+        return A, b.ravel(), nf
+
+
+def _coo(rows, cols, vals, nrow, ncol) -> sp.csc_matrix:
+    if not rows:
+        return sp.csc_matrix((nrow, ncol))
+    return sp.csc_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+        shape=(nrow, ncol),
+    )
+
+
+def _tangents(normals: np.ndarray) -> np.ndarray:
+    """Unit tangents (n, d-1, d) orthogonal to unit normals (n, d)."""
+    d = normals.shape[1]
+    if d == 2:
+        return np.stack([-normals[:, 1], normals[:, 0]], axis=1)[:, None, :]
+    # 3D: pick the coordinate axis least aligned with n, Gram-Schmidt.
+    ref = np.eye(3)[np.argmin(np.abs(normals), axis=1)]
+    t1 = ref - np.sum(ref * normals, axis=1, keepdims=True) * normals
+    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    t2 = np.cross(normals, t1)
+    return np.stack([t1, t2], axis=1)
+
+
+def _stress_scale(data: StepData) -> float:
+    """Characteristic stress s* for scaling (user value or an automatic one).
+
+    The largest of: the current stress, the plastic strengths, and the total
+    external load spread over the body's cross-section (``rho g H`` for a column
+    under gravity, up to a factor of order one).
+    """
+    if data.stress_scale is not None:
+        return float(data.stress_scale)
+    ni = data.ni
+    cands = [float(np.max(np.abs(data.sigma_n), initial=0.0))]
+    section = float(ni.volumes.sum()) ** ((ni.dim - 1) / ni.dim)
+    cands.append(float(np.abs(np.asarray(data.force)).sum()) / section)
+    for m_id, mat in enumerate(data.materials):
+        sel = data.material == m_id
+        if mat.plastic and np.any(sel):
+            rows = mat.cone(ni.dim, ni.components, data.sigma_n[sel])
+            cands.append(float(np.max(rows.k)))
+    s = max(cands)
+    if not s > 0.0:
+        s = min(m.E for m in data.materials) * 1e-6
+    return s
+
+
+def solve_step(
+    data: StepData, options: SolverOptions | None = None, step: int | None = None
+) -> StepSolution:
+    """Assemble and solve one N-PFEM step.
+
+    Parameters
+    ----------
+    data : StepData
+        Operators, state and loads of the step.
+    options : SolverOptions, optional
+        Clarabel settings.
+    step : int, optional
+        Step index, used in error messages.
+
+    Returns
+    -------
+    StepSolution
+
+    Raises
+    ------
+    SolverError
+        If Clarabel's status is not Solved/AlmostSolved or the result is not finite.
+    """
+    options = options or SolverOptions()
+    t0 = time.perf_counter()
+    prog = _Program(data)
+    ni, d, N, ns = data.ni, prog.dim, prog.N, prog.ns
+    P, q = prog.objective()
+    A_eq, b_eq = prog.equilibrium()
+    A_c, b_c, n_c = prog.contact_rows()
+    socs, (cut_cols, cut_vals, cut_b) = prog.yield_rows()
+
+    # Scales (formulation.md §5).
+    E_ref = min(m.E for m in data.materials)
+    h = float(np.mean(ni.volumes)) ** (1.0 / d)
+    if options.scaling:
+        s_star = _stress_scale(data)
+        F_star = s_star * h ** (d - 1)
+        U_star = s_star * h / E_ref
+    else:
+        s_star = F_star = U_star = 1.0
+    J_star = F_star * U_star
+    col_scale = np.concatenate(
+        [np.full(prog.n_sigma, s_star), np.full(prog.nx - prog.n_sigma, F_star)]
+    )
+
+    A_parts = [A_eq, A_c]
+    b_parts = [b_eq, b_c]
+    row_scale = [np.full(b_eq.size, 1 / F_star), np.full(n_c, 1 / F_star)]
+    cones = [clarabel.ZeroConeT(b_eq.size)]
+    n_nonneg = n_c
+    if cut_cols:
+        nodes = np.concatenate(cut_cols)
+        vals = np.concatenate(
+            [np.broadcast_to(v, (len(c), ns)) for c, v in zip(cut_cols, cut_vals, strict=True)]
+        )
+        rr = np.repeat(np.arange(nodes.size), ns)
+        cc = (nodes[:, None] * ns + np.arange(ns)).ravel()
+        A_parts.append(
+            sp.csc_matrix((vals.ravel(), (rr, cc)), shape=(nodes.size, prog.nx))
+        )
+        b_parts.append(np.concatenate(cut_b))
+        row_scale.append(np.full(nodes.size, 1 / s_star))
+        n_nonneg += nodes.size
+    if n_nonneg:
+        cones.append(clarabel.NonnegativeConeT(n_nonneg))
+    for nodes, rowmat, bvec, dim_cone in socs:
+        n = nodes.size
+        rr = np.broadcast_to(
+            (np.arange(n)[:, None] * dim_cone + np.arange(dim_cone))[:, :, None],
+            (n, dim_cone, ns),
+        )
+        cc = np.broadcast_to(
+            (nodes[:, None] * ns + np.arange(ns))[:, None, :], (n, dim_cone, ns)
+        )
+        A_parts.append(
+            sp.csc_matrix(
+                (rowmat.ravel(), (rr.ravel(), cc.ravel())),
+                shape=(n * dim_cone, prog.nx),
+            )
+        )
+        b_parts.append(bvec.ravel())
+        row_scale.append(np.full(n * dim_cone, 1 / s_star))
+        cones.extend([clarabel.SecondOrderConeT(dim_cone)] * n)
+    if prog.nt and d == 3:
+        A_f, b_f, nf = prog.friction_cones_3d()
+        A_parts.append(A_f)
+        b_parts.append(b_f)
+        row_scale.append(np.full(b_f.size, 1 / F_star))
+        cones.extend([clarabel.SecondOrderConeT(3)] * nf)
+
+    A = sp.vstack(A_parts, format="csc")
+    b = np.concatenate(b_parts)
+    R = np.concatenate(row_scale)
+    Dc = sp.diags(col_scale)
+    A_hat = (sp.diags(R) @ A @ Dc).tocsc()
+    b_hat = R * b
+    P_hat = (Dc @ P @ Dc / J_star).tocsc()
+    P_hat = sp.triu(P_hat, format="csc")
+    q_hat = col_scale * q / J_star
+    t1 = time.perf_counter()
+    solver = clarabel.DefaultSolver(
+        P_hat, q_hat, A_hat, b_hat, cones, options.clarabel_settings()
+    )
+    t2 = time.perf_counter()
+    sol = solver.solve()
+    t3 = time.perf_counter()
+    status = str(sol.status)
+    iters = int(sol.iterations)
+    if status not in ACCEPTED:
+        raise SolverError(status, step, iters, _hint(status, data))
+    x = col_scale * np.asarray(sol.x)
+    z = J_star * R * np.asarray(sol.z)
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(z))):
+        raise SolverError("NonFinite", step, iters, _hint("NonFinite", data))
+
+    du = np.zeros(d * N)
+    du[prog.free] = -z[: prog.free.size]
+    du[prog.pres] = prog.ubar
+    du = du.reshape(N, d)
+    sig_sel = x[: prog.n_sigma].reshape(N, ns)
+    sigma = np.array(data.sigma_n, dtype=float, copy=True)
+    sigma[:, prog.comp] = sig_sel
+    dsig = sig_sel - prog.sig_n
+    deps = ni.strain(du)
+    deps_p_sel = deps - np.einsum("nij,nj->ni", prog.compliance, dsig)
+    deps_p = np.zeros_like(sigma)
+    deps_p[:, prog.comp] = deps_p_sel
+    if d == 2 and 2 not in prog.comp:
+        # sigma_zz is elastic with eps_zz = 0 (formulation.md §4.6).
+        nu = np.array([m.nu for m in data.materials])[data.material]
+        sigma[:, 2] = data.sigma_n[:, 2] + nu * (dsig[:, 0] + dsig[:, 1])
+    # Reactions on prescribed dofs: R = G s + r - f~.
+    reaction = np.zeros(d * N)
+    if prog.pres.size:
+        gs = ni.G[prog.pres] @ sig_sel.reshape(-1)
+        r_p = 0.0
+        if data.dynamic:
+            r_p = prog.mt[prog.pres] * prog.ubar / data.dt**2
+        reaction[prog.pres] = gs + r_p - prog.ftilde[prog.pres]
+    off = prog.n_sigma + prog.nr
+    lam_n = x[off : off + prog.nc]
+    lam_t = np.zeros((prog.nc, d - 1))
+    lam_t[prog.fric] = x[off + prog.nc : off + prog.nc + prog.nt].reshape(-1, d - 1)
+    t4 = time.perf_counter()
+    return StepSolution(
+        du=du,
+        sigma=sigma,
+        deps_p=deps_p,
+        reaction=reaction.reshape(N, d),
+        lambda_n=lam_n,
+        lambda_t=lam_t,
+        status=status,
+        iterations=iters,
+        timings={
+            "assembly": (t1 - t0) + (t4 - t3),
+            "setup": t2 - t1,
+            "solve": t3 - t2,
+        },
+        sizes={"variables": prog.nx, "rows": int(b.size), "nnz_A": int(A.nnz)},
+    )
+
+
+def _hint(status: str, data: StepData) -> str:
+    """What the user can try for a failed status."""
+    if status in ("PrimalInfeasible", "AlmostPrimalInfeasible"):
+        if not data.dynamic:
+            return (
+                "the static problem has no admissible stress field: the load exceeds "
+                "the collapse load; use displacement control or mode='dynamic'"
+            )
+        return "no admissible stress field; check strengths (c, phi) and cut-offs"
+    if status in ("MaxIterations", "MaxTime"):
+        return "raise max_iter/time_limit, reduce dt, or use accuracy='fast'"
+    return (
+        "reduce dt (the step is retried automatically when adaptive stepping is on), "
+        "check material parameters for extreme ratios, or try linear_solver='qdldl'"
+    )

@@ -1,0 +1,53 @@
+"""Ready problems (scenes) shared by the API, the CLI, the demos and the tests."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from ..errors import ParameterError
+from .base import Param, Scene
+from .elastic_column import SCENE as ELASTIC_COLUMN
+from .strip_footing import SCENE as STRIP_FOOTING
+
+__all__ = ["SCENES", "Param", "Scene", "get_scene", "run_scene"]
+
+SCENES: dict[str, Scene] = {s.name: s for s in (ELASTIC_COLUMN, STRIP_FOOTING)}
+
+
+def get_scene(name: str) -> Scene:
+    """Look up a scene by name."""
+    if name not in SCENES:
+        raise ParameterError("scene", name, "one of " + ", ".join(SCENES))
+    return SCENES[name]
+
+
+def run_scene(
+    name: str,
+    overrides: dict[str, Any] | None = None,
+    *,
+    out: str | Path | None = None,
+    summary: str | Path | None = None,
+    progress: bool | None = False,
+    resume: bool = False,
+) -> dict[str, Any]:
+    """Run a scene and return its summary dict.
+
+    Parameters
+    ----------
+    name : str
+        Scene name (see ``skfem-npfem scenes``).
+    overrides : dict, optional
+        Parameter values (numbers or strings as on the command line).
+    out : path, optional
+        Folder for the VTU series (``result.pvd``) and checkpoints.
+    summary : path, optional
+        Also write the summary as JSON there.
+    progress : bool or None
+        Progress line on stderr (None: when stderr is a terminal).
+    resume : bool
+        Continue from the latest checkpoint in ``out``.
+    """
+    return get_scene(name).run(
+        overrides, out=out, summary=summary, progress=progress, resume=resume
+    )

@@ -1,0 +1,227 @@
+"""Scene framework: named problems with documented parameters.
+
+A scene is one source of truth for a ready problem: the library API, the CLI,
+the demos and the tests all build it through :func:`run_scene`.  Each scene
+declares its parameters (name, default, unit, allowed values) and turns a
+parameter dict into a :class:`~skfem_npfem.simulation.Simulation` plus a metrics
+function for the JSON summary.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..errors import ParameterError
+
+__all__ = ["Param", "Scene", "SceneRun", "parse_value"]
+
+
+@dataclass(frozen=True)
+class Param:
+    """One scene parameter.
+
+    Attributes
+    ----------
+    name : str
+        Name used with ``--set name=value``.
+    default : object
+        Default value (None: derived from other parameters, see ``help``).
+    unit : str
+        SI unit ("-" for dimensionless).
+    help : str
+        One-line description.
+    kind : type
+        float, int, str or bool.
+    choices : tuple or None
+        Allowed values for str/int parameters.
+    lo, hi : float
+        Allowed closed range for numbers (``lo_open``/``hi_open`` make it open).
+    """
+
+    name: str
+    default: Any
+    unit: str
+    help: str
+    kind: type = float
+    choices: tuple | None = None
+    lo: float = -math.inf
+    hi: float = math.inf
+    lo_open: bool = False
+    hi_open: bool = False
+
+    def allowed(self) -> str:
+        """Human-readable allowed values."""
+        if self.choices is not None:
+            return "one of " + ", ".join(map(str, self.choices))
+        if self.kind is bool:
+            return "true or false"
+        lo = "(" if self.lo_open or math.isinf(self.lo) else "["
+        hi = ")" if self.hi_open or math.isinf(self.hi) else "]"
+        what = "an integer" if self.kind is int else "a finite number"
+        return f"{what} in {lo}{self.lo:g}, {self.hi:g}{hi}"
+
+    def check(self, value: Any) -> Any:
+        """Convert and validate a value (strings are parsed)."""
+        if value is None and self.default is None:
+            return None
+        v = parse_value(self, value) if isinstance(value, str) else value
+        if self.kind is bool:
+            if not isinstance(v, bool):
+                raise ParameterError(self.name, value, self.allowed())
+            return v
+        if self.kind in (int, float):
+            if isinstance(v, bool) or not isinstance(v, int | float):
+                raise ParameterError(self.name, value, self.allowed())
+            if self.kind is int and int(v) != v:
+                raise ParameterError(self.name, value, self.allowed())
+            v = self.kind(v)
+            ok = math.isfinite(v)
+            ok = ok and (v > self.lo if self.lo_open else v >= self.lo)
+            ok = ok and (v < self.hi if self.hi_open else v <= self.hi)
+            if not ok:
+                raise ParameterError(self.name, value, self.allowed())
+        if self.choices is not None and v not in self.choices:
+            raise ParameterError(self.name, value, self.allowed())
+        return v
+
+
+def parse_value(param: Param, text: str) -> Any:
+    """Parse the text of ``--set name=text`` according to the parameter kind."""
+    t = text.strip()
+    try:
+        if param.kind is bool:
+            low = t.lower()
+            if low in ("1", "true", "yes", "on"):
+                return True
+            if low in ("0", "false", "no", "off"):
+                return False
+            raise ValueError
+        if param.kind is int:
+            f = float(t)
+            if f != int(f):
+                raise ValueError
+            return int(f)
+        if param.kind is float:
+            return float(t)
+    except (ValueError, OverflowError):
+        raise ParameterError(param.name, text, param.allowed()) from None
+    return t
+
+
+@dataclass
+class SceneRun:
+    """What a scene's ``build`` returns.
+
+    Attributes
+    ----------
+    simulation : Simulation
+        Ready to run.
+    run_kwargs : dict
+        Arguments of :meth:`Simulation.run` (``steps``, ``t_end`` or ``stop``).
+    metrics : callable
+        ``metrics(sim) -> dict`` of documented scene metrics.
+    """
+
+    simulation: Any
+    run_kwargs: dict
+    metrics: Callable[[Any], dict]
+    history: list = field(default_factory=list)
+
+
+@dataclass
+class Scene:
+    """A named problem with documented parameters and metrics.
+
+    Attributes
+    ----------
+    name : str
+        Scene name used on the command line.
+    description : str
+        One paragraph.
+    params : list of Param
+        Parameters with defaults and units.
+    build : callable
+        ``build(values: dict, out: Path | None, progress: bool | None) -> SceneRun``.
+    metrics_doc : dict
+        Summary metric name -> description (with unit).
+    """
+
+    name: str
+    description: str
+    params: list[Param]
+    build: Callable[..., SceneRun]
+    metrics_doc: dict[str, str]
+
+    def resolve(self, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
+        """Defaults updated with validated overrides."""
+        by_name = {p.name: p for p in self.params}
+        values = {p.name: p.default for p in self.params}
+        for key, val in (overrides or {}).items():
+            if key not in by_name:
+                raise ParameterError(
+                    "parameter",
+                    key,
+                    f"scene '{self.name}' has parameters: " + ", ".join(by_name),
+                )
+            values[key] = by_name[key].check(val)
+        return values
+
+    def run(
+        self,
+        overrides: dict[str, Any] | None = None,
+        *,
+        out: str | Path | None = None,
+        summary: str | Path | None = None,
+        progress: bool | None = None,
+        resume: bool = False,
+    ) -> dict[str, Any]:
+        """Build and run the scene; return (and optionally write) the summary."""
+        values = self.resolve(overrides)
+        start = time.perf_counter()
+        srun = self.build(values, out=out, progress=progress, resume=resume)
+        sim = srun.simulation
+        sim.run(**srun.run_kwargs)
+        result = {
+            "scene": self.name,
+            "parameters": values,
+            "metrics": srun.metrics(sim),
+            "solver": sim.summary(),
+            "wall_time_total": time.perf_counter() - start,
+            "history": [r.as_dict() for r in sim.records],
+        }
+        from .. import __version__
+
+        result["version"] = __version__
+        if summary is not None:
+            write_json(summary, result)
+        return result
+
+
+def write_json(path: str | Path, obj: dict) -> None:
+    """Write JSON atomically (NaN becomes null)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".tmp_{path.name}")
+    tmp.write_text(json.dumps(_clean(obj), indent=1))
+    tmp.replace(path)
+
+
+def _clean(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {str(k): _clean(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_clean(v) for v in obj]
+    if hasattr(obj, "item") and not isinstance(obj, str):
+        try:
+            obj = obj.item()
+        except (ValueError, AttributeError):
+            return _clean(list(obj))
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
