@@ -184,6 +184,10 @@ class Scene:
         """Build and run the scene; return (and optionally write) the summary."""
         values = self.resolve(overrides)
         start = time.perf_counter()
+        if out is not None:  # lets `skfem-npfem plot DIR` find the scene scales
+            write_json(
+                Path(out) / "scene.json", {"scene": self.name, "parameters": values}
+            )
         srun = self.build(values, out=out, progress=progress, resume=resume)
         sim = srun.simulation
         sim.run(**srun.run_kwargs)
