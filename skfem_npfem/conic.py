@@ -31,6 +31,7 @@ import clarabel
 import numpy as np
 import scipy.sparse as sp
 
+from .backends import choose_linear_solver, mkl_available
 from .errors import ParameterError, SolverError
 from .materials import Material
 from .smoothing import NodalIntegration
@@ -54,8 +55,9 @@ class SolverOptions:
     Parameters
     ----------
     linear_solver : {"auto", "qdldl", "faer", "mkl"}
-        Clarabel's ``direct_solve_method``.  ``"auto"`` lets Clarabel choose
-        (qdldl for small problems, faer for large ones).
+        Clarabel's ``direct_solve_method``.  ``"auto"`` picks by availability,
+        dimension and size (:func:`skfem_npfem.backends.choose_linear_solver`):
+        MKL Pardiso when installed, else qdldl for small 2D and faer otherwise.
     max_threads : int
         Threads for faer (0: Clarabel decides).
     tol : float
@@ -90,11 +92,30 @@ class SolverOptions:
         if not (isinstance(self.max_iter, int) and self.max_iter > 0):
             raise ParameterError("max_iter", self.max_iter, "an integer > 0")
 
-    def clarabel_settings(self) -> clarabel.DefaultSettings:
+    def resolved_linear_solver(self, n_variables: int, dim: int) -> str:
+        """The backend actually used (``auto`` resolved by problem size).
+
+        Raises
+        ------
+        ParameterError
+            If ``mkl`` is requested but MKL Pardiso cannot be loaded.
+        """
+        if self.linear_solver == "auto":
+            return choose_linear_solver(n_variables, dim)
+        if self.linear_solver == "mkl" and not mkl_available():
+            raise ParameterError(
+                "linear_solver",
+                "mkl",
+                "MKL Pardiso is not available; install it with "
+                "pip install 'skfem-npfem[mkl]' or use auto, qdldl or faer",
+            )
+        return self.linear_solver
+
+    def clarabel_settings(self, linear_solver: str | None = None):
         """Return a configured ``clarabel.DefaultSettings``."""
         s = clarabel.DefaultSettings()
         s.verbose = bool(self.verbose)
-        s.direct_solve_method = self.linear_solver
+        s.direct_solve_method = linear_solver or self.linear_solver
         s.max_threads = int(self.max_threads)
         s.max_iter = int(self.max_iter)
         s.time_limit = float(self.time_limit)
@@ -546,8 +567,9 @@ def solve_step(
     P_hat = sp.triu(P_hat, format="csc")
     q_hat = col_scale * q / J_star
     t1 = time.perf_counter()
+    backend = options.resolved_linear_solver(prog.nx, d)
     solver = clarabel.DefaultSolver(
-        P_hat, q_hat, A_hat, b_hat, cones, options.clarabel_settings()
+        P_hat, q_hat, A_hat, b_hat, cones, options.clarabel_settings(backend)
     )
     t2 = time.perf_counter()
     sol = solver.solve()
@@ -604,7 +626,12 @@ def solve_step(
             "setup": t2 - t1,
             "solve": t3 - t2,
         },
-        sizes={"variables": prog.nx, "rows": int(b.size), "nnz_A": int(A.nnz)},
+        sizes={
+            "variables": prog.nx,
+            "rows": int(b.size),
+            "nnz_A": int(A.nnz),
+            "linear_solver": backend,
+        },
     )
 
 

@@ -1,0 +1,138 @@
+"""Linear-solver backends of Clarabel and the automatic choice between them.
+
+Clarabel factorises one KKT system per interior-point iteration; that is over 95 %
+of an N-PFEM step.  Its ``direct_solve_method`` can be ``qdldl`` (single-threaded),
+``faer`` (supernodal, multithreaded) or ``mkl`` (Intel MKL Pardiso).
+
+MKL Pardiso is optional (``pip install "skfem-npfem[mkl]"``).  Clarabel loads it at
+run time by looking for an *unversioned* ``libmkl_rt.so`` in ``LD_LIBRARY_PATH``,
+``$MKLROOT/lib``, ``$MKL_PARDISO_PATH`` or ``/opt/intel/oneapi/mkl/latest/lib``; the
+PyPI ``mkl`` wheel only ships ``libmkl_rt.so.<N>`` in ``<sys.prefix>/lib``.
+:func:`mkl_available` bridges that gap without any user set-up: it adds the
+unversioned link next to the wheel's libraries (or, if that folder is read-only,
+builds a private folder in the user cache with the runtime library and links to its
+sibling libraries, which MKL loads from its own folder), points
+``MKL_PARDISO_PATH`` there before the first solve, and checks with a 2x2 solve.
+Clarabel tries to load MKL once per process, so the check runs before any solve
+that asks for ``mkl``.
+"""
+
+from __future__ import annotations
+
+import functools
+import glob
+import hashlib
+import os
+import shutil
+import sys
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+
+__all__ = ["choose_linear_solver", "mkl_available", "mkl_library_dir"]
+
+# Problem sizes (number of cone-program variables) where the backends cross over,
+# measured on a 2-core machine by benchmarks/step_time.py (see docs/performance.md).
+QDLDL_MAX_VARIABLES_2D = 12_000
+MKL_MIN_VARIABLES = 3_000
+
+
+def _wheel_lib_dirs() -> list[Path]:
+    """Folders that may hold the PyPI ``mkl`` wheel's ``libmkl_rt.so.<N>``."""
+    cands = {Path(sys.prefix) / "lib", Path(sys.base_prefix) / "lib"}
+    for var in ("MKLROOT", "CONDA_PREFIX"):
+        if os.environ.get(var):
+            cands.add(Path(os.environ[var]) / "lib")
+    return [c for c in cands if c.is_dir()]
+
+
+def mkl_library_dir() -> Path | None:
+    """Folder with an unversioned ``libmkl_rt.so`` usable by Clarabel, or None.
+
+    Creates the unversioned link (or a private folder in the user cache) when only
+    the versioned library of the PyPI wheel exists.
+    """
+    if sys.platform != "linux":
+        return None
+    for folder in _wheel_lib_dirs():
+        unversioned = folder / "libmkl_rt.so"
+        if unversioned.exists():
+            return folder
+        versioned = sorted(glob.glob(str(folder / "libmkl_rt.so.*")))
+        if not versioned:
+            continue
+        try:  # next to the wheel's libraries, where MKL finds its siblings
+            unversioned.symlink_to(Path(versioned[-1]).name)
+            return folder
+        except OSError:
+            pass
+        return _private_copy(folder, Path(versioned[-1]))
+    return None
+
+
+def _private_copy(folder: Path, runtime: Path) -> Path | None:
+    """A cache folder with the runtime library and links to its siblings."""
+    key = hashlib.sha1(str(runtime.resolve()).encode()).hexdigest()[:12]
+    base = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache"))
+    target = base / "skfem-npfem" / f"mkl-{key}"
+    try:
+        target.mkdir(parents=True, exist_ok=True)
+        rt = target / "libmkl_rt.so"
+        if not rt.exists():
+            tmp = target / ".libmkl_rt.so.tmp"
+            shutil.copy2(runtime, tmp)
+            tmp.replace(rt)
+        for lib in folder.glob("lib*.so*"):
+            if lib.name.startswith("libmkl_rt."):
+                continue
+            link = target / lib.name
+            if not link.exists():
+                link.symlink_to(lib)
+    except OSError:
+        return None
+    return target
+
+
+@functools.cache
+def mkl_available() -> bool:
+    """True if Clarabel can use MKL Pardiso in this process (checked once)."""
+    folder = mkl_library_dir()
+    if folder is None:
+        return False
+    os.environ.setdefault("MKL_PARDISO_PATH", str(folder))
+    import clarabel
+
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    settings.direct_solve_method = "mkl"
+    try:
+        solver = clarabel.DefaultSolver(
+            sp.csc_matrix(np.eye(2)),
+            np.array([1.0, -1.0]),
+            sp.csc_matrix(np.eye(2)),
+            np.ones(2),
+            [clarabel.NonnegativeConeT(2)],
+            settings,
+        )
+        return str(solver.solve().status) == "Solved"
+    except Exception:  # Clarabel reports an unavailable backend as Exception
+        return False
+
+
+def choose_linear_solver(n_variables: int, dim: int) -> str:
+    """Pick Clarabel's direct solver from availability, dimension and size.
+
+    MKL Pardiso when installed and the problem is not tiny; otherwise qdldl for
+    small 2D problems and faer for large 2D and all 3D problems (denser factors).
+
+    Examples
+    --------
+    >>> choose_linear_solver(500, 2) in ("qdldl", "mkl")
+    True
+    """
+    if n_variables >= MKL_MIN_VARIABLES and mkl_available():
+        return "mkl"
+    if dim == 2 and n_variables < QDLDL_MAX_VARIABLES_2D:
+        return "qdldl"
+    return "faer"
