@@ -46,6 +46,7 @@ __all__ = [
 
 LINEAR_SOLVERS = ("auto", "qdldl", "faer", "mkl")
 ACCEPTED = ("Solved", "AlmostSolved")
+ACCURACY_PRESETS = {"high": 1e-8, "fast": 1e-6}
 
 
 @dataclass
@@ -70,6 +71,10 @@ class SolverOptions:
         Print Clarabel's log.
     scaling : bool
         Non-dimensionalise the program (strongly recommended).
+    accuracy : {"high", "fast"} or None
+        Preset that overrides ``tol``: ``"high"`` = 1e-8 (Clarabel's default),
+        ``"fast"`` = 1e-6 (fewer interior-point iterations; its cost in accuracy
+        is measured in docs/performance.md).
     """
 
     linear_solver: str = "auto"
@@ -79,8 +84,15 @@ class SolverOptions:
     time_limit: float = math.inf
     verbose: bool = False
     scaling: bool = True
+    accuracy: str | None = None
 
     def __post_init__(self) -> None:
+        if self.accuracy is not None:
+            if self.accuracy not in ACCURACY_PRESETS:
+                raise ParameterError(
+                    "accuracy", self.accuracy, f"one of {tuple(ACCURACY_PRESETS)}"
+                )
+            self.tol = ACCURACY_PRESETS[self.accuracy]
         if self.linear_solver not in LINEAR_SOLVERS:
             raise ParameterError(
                 "linear_solver", self.linear_solver, f"one of {LINEAR_SOLVERS}"
@@ -135,16 +147,48 @@ class Contacts:
     normal : ndarray (nc, d)
         Unit wall normal pointing into the body.
     gap : ndarray (nc,)
-        Current gap (>= 0), m.
+        Current gap (>= 0), m, plus ``normal . du_prescribed`` for a node with
+        prescribed dofs (the program only sees the free dofs; non-penetration is
+        ``gap + normal . du_free >= 0``).
     mu_lambda : ndarray (nc,)
-        Friction bound ``mu * lambda_bar_n`` (N) from the previous step; 0 means
-        frictionless.
+        Friction bound ``mu * lambda_bar_n`` (N) from the previous step; values
+        <= 0 mean frictionless (no tangential variable).
+
+    Notes
+    -----
+    Sign conventions (``formulation.md`` §4.3): the wall pushes on the body, so
+    the equilibrium rows read ``G s + r - N lambda_n - T lambda_t = f~`` with
+    ``lambda_n >= 0``; the normal dual gives ``gap + n . du >= 0`` and is zero
+    where ``lambda_n > 0``.  Tangential forces ``lambda_t`` act along
+    :func:`_tangents` of the normal and oppose the slip ``t . du``.
     """
 
     node: np.ndarray
     normal: np.ndarray
     gap: np.ndarray
     mu_lambda: np.ndarray
+
+    def __post_init__(self) -> None:
+        self.node = np.asarray(self.node, dtype=np.int64).reshape(-1)
+        nc = self.node.size
+        self.normal = np.asarray(self.normal, dtype=float)
+        self.gap = np.asarray(self.gap, dtype=float).reshape(-1)
+        self.mu_lambda = np.asarray(self.mu_lambda, dtype=float).reshape(-1)
+        if (
+            self.normal.ndim != 2
+            or self.normal.shape[0] != nc
+            or self.gap.size != nc
+            or self.mu_lambda.size != nc
+        ):
+            raise ParameterError(
+                "contacts",
+                (nc, self.normal.shape, self.gap.size, self.mu_lambda.size),
+                "node (nc,), normal (nc, d), gap (nc,) and mu_lambda (nc,)",
+            )
+        if not (np.all(np.isfinite(self.gap)) and np.all(np.isfinite(self.mu_lambda))):
+            raise ParameterError(
+                "contacts", "non-finite values", "finite gap, mu_lambda"
+            )
 
     @classmethod
     def empty(cls, dim: int) -> Contacts:
@@ -520,7 +564,10 @@ def solve_step(
     if cut_cols:
         nodes = np.concatenate(cut_cols)
         vals = np.concatenate(
-            [np.broadcast_to(v, (len(c), ns)) for c, v in zip(cut_cols, cut_vals, strict=True)]
+            [
+                np.broadcast_to(v, (len(c), ns))
+                for c, v in zip(cut_cols, cut_vals, strict=True)
+            ]
         )
         rr = np.repeat(np.arange(nodes.size), ns)
         cc = (nodes[:, None] * ns + np.arange(ns)).ravel()
@@ -595,6 +642,9 @@ def solve_step(
     deps_p_sel = deps - np.einsum("nij,nj->ni", prog.compliance, dsig)
     deps_p = np.zeros_like(sigma)
     deps_p[:, prog.comp] = deps_p_sel
+    # Elastic nodes have no plastic strain (avoid round-off noise of B du - C ds).
+    elastic = np.array([not m.plastic for m in data.materials])[data.material]
+    deps_p[elastic] = 0.0
     if d == 2 and 2 not in prog.comp:
         # sigma_zz is elastic with eps_zz = 0 (formulation.md §4.6).
         nu = np.array([m.nu for m in data.materials])[data.material]
