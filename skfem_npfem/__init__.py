@@ -24,12 +24,16 @@ from .materials import (
     compliance_matrix,
 )
 from .particles import Particles
+from .pfem import AlphaShapeMesher, main_body
+from .remesh import Triangulation, alpha_shape
 from .scenes import SCENES, get_scene, run_scene
-from .simulation import FixedMesh, Model, Simulation, StepRecord, advance
+from .simulation import AtRest, FixedMesh, Model, Simulation, StepRecord, advance
 from .smoothing import NodalIntegration, nodal_integration, p1_gradients
 
 __all__ = [
     "SCENES",
+    "AlphaShapeMesher",
+    "AtRest",
     "CheckpointError",
     "Contacts",
     "DruckerPrager",
@@ -50,12 +54,15 @@ __all__ = [
     "StepRecord",
     "StepSolution",
     "Tresca",
+    "Triangulation",
     "VonMises",
     "__version__",
     "advance",
+    "alpha_shape",
     "compliance_matrix",
     "floor",
     "get_scene",
+    "main_body",
     "nodal_integration",
     "p1_gradients",
     "run_scene",

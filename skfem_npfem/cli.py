@@ -201,8 +201,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="continue from the latest checkpoint in --out",
     )
     p_run.add_argument("--quiet", action="store_true", help="no progress output")
-    p_run.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
-                       help="show tracebacks")
+    p_run.add_argument(
+        "--debug",
+        action="store_true",
+        default=argparse.SUPPRESS,
+        help="show tracebacks",
+    )
     p_run.set_defaults(func=cmd_run)
     p_plot = sub.add_parser("plot", help="render PNG snapshots of a result folder")
     p_plot.add_argument("dir", help="result folder (with result.pvd)")
@@ -222,8 +226,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="stress_yy, plastic_strain_eq, velocity, ...",
     )
     p_plot.add_argument("--animation", default="gif", choices=("gif", "mp4", "none"))
-    p_plot.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
-                       help="show tracebacks")
+    p_plot.add_argument(
+        "--debug",
+        action="store_true",
+        default=argparse.SUPPRESS,
+        help="show tracebacks",
+    )
     p_plot.set_defaults(func=cmd_plot)
     return parser
 

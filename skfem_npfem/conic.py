@@ -128,6 +128,12 @@ class SolverOptions:
         s = clarabel.DefaultSettings()
         s.verbose = bool(self.verbose)
         s.direct_solve_method = linear_solver or self.linear_solver
+        if s.direct_solve_method == "mkl":
+            # Conditional numerical reproducibility: identical runs (and resumed
+            # runs) give bit-identical results with any thread count.
+            iparm = list(s.pardiso_iparm)
+            iparm[33] = 2
+            s.pardiso_iparm = iparm
         s.max_threads = int(self.max_threads)
         s.max_iter = int(self.max_iter)
         s.time_limit = float(self.time_limit)
@@ -348,7 +354,9 @@ class _Program:
         blocks = V[:, None, None] * self.compliance
         P_sigma = _block_diag_upper(blocks)
         q = np.zeros(self.nx)
-        q_sigma = -np.einsum("nij,nj->ni", blocks, self.sig_n).reshape(-1)
+        # The stress variables are the increments ds = s - s_n, so the energy
+        # 1/2 ds^T V C ds has no linear term (see ``solve_step``).
+        q_sigma = np.zeros(self.n_sigma)
         if self.pres.size:
             # Work of prescribed displacements: -G_P^T ubar.
             q_sigma -= ni.G[self.pres].T @ self.ubar
@@ -399,7 +407,9 @@ class _Program:
         if self.nr:
             blocks.append(sp.identity(self.nr, format="csc"))
         blocks += [-Nmat[self.free], -Tmat[self.free]]
-        return sp.hstack(blocks, format="csc"), self.ftilde[self.free]
+        # In the increments ds the right-hand side is the out-of-balance force.
+        rhs = self.ftilde[self.free] - G[self.free] @ self.sig_n.reshape(-1)
+        return sp.hstack(blocks, format="csc"), rhs
 
     def contact_rows(self) -> tuple[sp.csc_matrix, np.ndarray, int]:
         """Nonnegative rows: lambda_n >= 0 and 2D friction |lambda_t| <= mu lambda."""
@@ -437,19 +447,21 @@ class _Program:
                 continue
             cone = mat.cone(self.dim, tuple(self.comp), data.sigma_n[nodes])
             m = cone.M.shape[0]
-            # Rows per node: [a^T ; -M] on s_i, b = (k ; 0).
+            # Rows per node: [a^T ; -M] on ds_i, b = (k - a^T s_n ; M s_n).
             rowmat = np.concatenate(
                 [cone.a[:, None, :], np.broadcast_to(-cone.M, (nodes.size, m, ns))],
                 axis=1,
             )  # (n, 1+m, ns)
-            bvec = np.zeros((nodes.size, 1 + m))
-            bvec[:, 0] = cone.k
+            sn = self.sig_n[nodes]
+            bvec = np.empty((nodes.size, 1 + m))
+            bvec[:, 0] = cone.k - np.einsum("ns,ns->n", cone.a, sn)
+            bvec[:, 1:] = sn @ cone.M.T
             soc_blocks.append((nodes, rowmat, bvec, 1 + m))
             if cone.cutoff_a is not None:
                 cut_rows.append(np.arange(nodes.size))
                 cut_cols.append(nodes)
                 cut_vals.append(cone.cutoff_a)
-                cut_b.append(np.full(nodes.size, cone.cutoff_k))
+                cut_b.append(cone.cutoff_k - sn @ cone.cutoff_a)
         return soc_blocks, (cut_cols, cut_vals, cut_b)
 
     def friction_cones_3d(self):
@@ -510,6 +522,29 @@ def _stress_scale(data: StepData) -> float:
     return s
 
 
+def _displacement_scale(data: StepData, prog: _Program, F_star: float, h: float):
+    """Displacement scale ``U* = F* / (k_el + k_in)`` (formulation.md §5).
+
+    ``k_el = E h^(d-2)`` is the stiffness of one smoothing cell and
+    ``k_in = m~ / dt^2`` (mean modified nodal mass, dynamic steps only) its
+    inertia.  The static choice of §5, ``U* = s* h / E``, is the ``k_in = 0``
+    case; it stays right while the CFL number ``c dt / h`` is of order one or
+    larger.  For small time steps the increment is governed by inertia,
+    ``du ~ F* dt^2 / m~``, which is ``(c dt / h)^2`` times the static scale: the
+    scaled duals (``du = -U* z_eq``) would then be tiny and ``du`` (hence the
+    velocity) would lose its digits to round-off and the solver tolerance
+    (a column at rest moved at ``|v| ~ g t`` for ``dt = 1e-9`` s).  With both
+    terms the scaled increment stays of order one in every regime, and nothing
+    changes when ``k_in << k_el``.
+    """
+    d = prog.dim
+    k_el = min(m.E for m in data.materials) * h ** (d - 2)
+    k_in = 0.0
+    if data.dynamic and prog.mt.size:
+        k_in = float(np.mean(prog.mt)) / data.dt**2
+    return F_star / (k_el + k_in)
+
+
 def solve_step(
     data: StepData, options: SolverOptions | None = None, step: int | None = None
 ) -> StepSolution:
@@ -543,12 +578,11 @@ def solve_step(
     socs, (cut_cols, cut_vals, cut_b) = prog.yield_rows()
 
     # Scales (formulation.md §5).
-    E_ref = min(m.E for m in data.materials)
     h = float(np.mean(ni.volumes)) ** (1.0 / d)
     if options.scaling:
         s_star = _stress_scale(data)
         F_star = s_star * h ** (d - 1)
-        U_star = s_star * h / E_ref
+        U_star = _displacement_scale(data, prog, F_star, h)
     else:
         s_star = F_star = U_star = 1.0
     J_star = F_star * U_star
@@ -634,10 +668,10 @@ def solve_step(
     du[prog.free] = -z[: prog.free.size]
     du[prog.pres] = prog.ubar
     du = du.reshape(N, d)
-    sig_sel = x[: prog.n_sigma].reshape(N, ns)
+    dsig = x[: prog.n_sigma].reshape(N, ns)
+    sig_sel = prog.sig_n + dsig
     sigma = np.array(data.sigma_n, dtype=float, copy=True)
     sigma[:, prog.comp] = sig_sel
-    dsig = sig_sel - prog.sig_n
     deps = ni.strain(du)
     deps_p_sel = deps - np.einsum("nij,nj->ni", prog.compliance, dsig)
     deps_p = np.zeros_like(sigma)

@@ -18,7 +18,7 @@ import math
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -33,11 +33,14 @@ from .particles import Particles
 from .smoothing import nodal_integration
 
 __all__ = [
+    "AtRest",
     "FixedMesh",
     "Model",
     "Simulation",
     "StepRecord",
     "advance",
+    "energies",
+    "project_to_walls",
     "rotate_stress",
 ]
 
@@ -168,15 +171,35 @@ class StepRecord:
     mesh_volume: float
     n_contacts: int
     retries: int = 0
+    #: Sum of the particle masses, kg (exactly conserved).
+    mass: float = float("nan")
+    #: ``1/2 sum m |v|^2`` at the end of the step, J.
+    kinetic_energy: float = float("nan")
+    #: ``sum m g x_d`` at the end of the step (zero at ``x_d = 0``), J.
+    potential_energy: float = float("nan")
+    #: ``mesh_volume / (mesh volume of the first step) - 1``.
+    volume_change: float = float("nan")
+    #: Scene diagnostics (numbers) added by callbacks, e.g. ``runout``.
+    extra: dict[str, Any] = field(default_factory=dict)
     # Not serialised: the solution and mesh of the step (for scene metrics).
     solution: Any = field(default=None, repr=False, compare=False)
     active: Any = field(default=None, repr=False, compare=False)
     local_t: Any = field(default=None, repr=False, compare=False)
 
     def as_dict(self) -> dict[str, Any]:
-        """Plain dict of the scalar diagnostics (for JSON)."""
-        skip = ("solution", "active", "local_t")
-        return {k: v for k, v in vars(self).items() if k not in skip}
+        """Plain dict of the scalar diagnostics (for JSON); ``extra`` is merged in."""
+        skip = ("solution", "active", "local_t", "extra")
+        out = {k: v for k, v in vars(self).items() if k not in skip}
+        out.update({k: v for k, v in self.extra.items() if k not in out})
+        return out
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> StepRecord:
+        """Inverse of :meth:`as_dict` (unknown keys go to ``extra``)."""
+        names = {f.name for f in fields(cls)} - {"solution", "active", "local_t"}
+        known = {k: v for k, v in d.items() if k in names}
+        known["extra"] = {k: v for k, v in d.items() if k not in names}
+        return cls(**known)
 
 
 def rotate_stress(stress: np.ndarray, grad_du: np.ndarray) -> np.ndarray:
@@ -226,6 +249,62 @@ def tensor_to_voigt(T: np.ndarray, size: int) -> np.ndarray:
     return np.stack(cols, axis=1)
 
 
+def energies(p: Particles, model: Model) -> dict[str, float]:
+    """Total mass (kg), kinetic and gravitational potential energy (J) of particles.
+
+    The potential energy is ``sum m g x_d`` (zero at ``x_d = 0``; gravity acts
+    along ``-e_d``).
+
+    Examples
+    --------
+    >>> from skfem_npfem.materials import LinearElastic
+    >>> p = Particles.create([[0.0, 2.0]], [3.0], v=[[1.0, 0.0]])
+    >>> e = energies(p, Model(dim=2, materials=[LinearElastic(1e6, 0.3)], gravity=10))
+    >>> e["mass"], e["kinetic_energy"], e["potential_energy"]
+    (3.0, 1.5, 60.0)
+    """
+    m = p.mass
+    return {
+        "mass": float(m.sum()),
+        "kinetic_energy": float(0.5 * np.sum(m * np.sum(p.v * p.v, axis=1))),
+        "potential_energy": float(model.gravity * np.sum(m * p.x[:, -1])),
+    }
+
+
+def project_to_walls(
+    walls: list[RigidWall],
+    x: np.ndarray,
+    v: np.ndarray,
+    friction: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Put particles behind a wall back on it (:meth:`RigidWall.project`).
+
+    For the particles flagged in ``friction`` (the ballistic ones, which have no
+    contact rows) the wall also applies a Coulomb impulse: the tangential
+    velocity shrinks by ``mu`` times the normal velocity the wall removed (an
+    impact, or ``g dt`` per step while resting), never past zero.  Without it a
+    grain that left the body would slide on a rough floor for ever.
+    """
+    for wall in walls:
+        vn_old = v @ wall.normal
+        x, v_new = wall.project(x, v)
+        if friction is not None and wall.mu > 0 and v_new is not v:
+            dvn = (v_new @ wall.normal - vn_old) * friction
+            hit = np.flatnonzero(dvn > 0)
+            if hit.size:
+                vt = v_new[hit] - (v_new[hit] @ wall.normal)[:, None] * wall.normal
+                speed = np.linalg.norm(vt, axis=1)
+                keep = np.zeros_like(speed)
+                moving = speed > 0
+                keep[moving] = (
+                    np.maximum(speed[moving] - wall.mu * dvn[hit][moving], 0.0)
+                    / speed[moving]
+                )
+                v_new[hit] -= (1.0 - keep)[:, None] * vt
+        v = v_new
+    return x, v
+
+
 def equivalent_strain(deps: np.ndarray) -> np.ndarray:
     """``sqrt(2/3 e:e)`` of full-Voigt strains (engineering shear)."""
     normal = deps[:, :3]
@@ -242,21 +321,39 @@ def _contacts(
     """Contact candidates of the active particles against every wall.
 
     A particle is a candidate when its gap is below ``h + 2|v| dt + g dt^2`` so
-    that fast particles cannot tunnel through a wall within one step.
+    that fast particles cannot tunnel through a wall within one step.  The gap
+    handed to the cone program includes the normal part of any prescribed
+    displacement increment of the particle (the program only sees the free dofs).
+    The friction bound is ``mu`` times the particle's lagged normal force
+    :attr:`Particles.wall_force` of the wall.
     """
     d = model.dim
+    if p.wall_force.shape[1] < len(model.walls):
+        raise ParameterError(
+            "wall_force",
+            p.wall_force.shape,
+            f"one column per wall ({len(model.walls)}): create the particles with "
+            "Particles.create(..., n_walls=len(model.walls))",
+        )
     nodes, normals, gaps, bounds, wall_ids = [], [], [], [], []
     x, v = p.x[active], p.v[active]
+    fixed = p.fixed[active]
+    du_pres = np.where(fixed, p.v_prescribed[active] * dt, 0.0)
     reach = h + 2.0 * np.linalg.norm(v, axis=1) * dt + model.gravity * dt**2
     for w_id, wall in enumerate(model.walls):
         g = wall.gap(x)
         cand = np.flatnonzero(g < reach)
-        # A dof fixed normal to the wall needs no contact row.
-        cand = cand[~np.all(p.fixed[active[cand]][:, np.abs(wall.normal) > 0], axis=1)]
+        # A particle whose dofs along the normal are all fixed needs no contact row.
+        cand = cand[~np.all(fixed[cand][:, np.abs(wall.normal) > 0], axis=1)]
         nodes.append(cand)
         normals.append(np.broadcast_to(wall.normal, (cand.size, d)))
-        gaps.append(np.maximum(g[cand], 0.0))
-        bounds.append(wall.mu * p.wall_force[active[cand], w_id])
+        gaps.append(np.maximum(g[cand], 0.0) + du_pres[cand] @ wall.normal)
+        # Lagged normal force; values at the solver's noise level (a node that
+        # was only a candidate, lambda_n ~ +-1e-8 of the load) give no friction
+        # rather than a near-degenerate |lambda_t| <= tiny constraint.
+        lam = p.wall_force[active[cand], w_id]
+        noise = 1e-8 * np.max(np.abs(p.wall_force[:, w_id]), initial=0.0)
+        bounds.append(np.where(lam > noise, wall.mu * lam, 0.0))
         wall_ids.append(np.full(cand.size, w_id))
     if not nodes:
         return Contacts.empty(d), np.zeros(0, int), np.zeros(0, int)
@@ -366,9 +463,7 @@ def advance(
         v[inactive] = p.v[inactive] + dt * g
         a[inactive] = g
     if model.update_geometry:
-        x = p.x + du
-        for wall in model.walls:  # never leave a particle behind a wall
-            x, v = wall.project(x, v)
+        x, v = project_to_walls(model.walls, p.x + du, v, friction=inactive)
         u = p.u + (x - p.x)
     else:
         x, u = p.x, p.u + du
@@ -396,6 +491,7 @@ def advance(
         n_inactive=int(p.n - active.size),
         mesh_volume=float(ni.volumes.sum()),
         n_contacts=contacts.size,
+        **energies(new, model),
         solution=sol,
         active=active,
         local_t=local_t,
@@ -479,6 +575,8 @@ class Simulation:
         self.records: list[StepRecord] = []
         self._successes = 0
         self.last_record: StepRecord | None = None
+        #: Mass and energies of the initial state (see :func:`energies`).
+        self.initial = energies(particles, model)
 
     # -- output ---------------------------------------------------------------
     def point_data(self, p: Particles, active: np.ndarray | None) -> dict:
@@ -494,6 +592,12 @@ class Simulation:
             "mass": p.mass,
             "active": act,
         }
+        # Mesh sources that know the free surface (AlphaShapeMesher) report it
+        # for the mesh the step was solved on.
+        free = getattr(self.mesh_source, "free_surface", None)
+        flags = free() if callable(free) else None
+        if flags is not None:
+            data["free_surface"] = flags
         if self.extra_point_data is not None:
             data.update(self.extra_point_data(p))
         return data
@@ -516,11 +620,14 @@ class Simulation:
             return None
         from .io import checkpoint_path, save_checkpoint
 
+        self.checkpoint_dir.mkdir(parents=True, exist_ok=True)
         meta = {
             **self.meta,
             "step": self.step,
             "time": self.time,
             "dt": self.dt,
+            "successes": self._successes,
+            "initial": self.initial,
             "records": [_jsonable(r.as_dict()) for r in self.records],
         }
         return save_checkpoint(
@@ -529,8 +636,13 @@ class Simulation:
             meta,
         )
 
-    def restore(self, path: str | Path) -> None:
-        """Continue from a checkpoint written by :meth:`save_checkpoint`."""
+    def restore(self, path: str | Path) -> dict:
+        """Continue from a checkpoint written by :meth:`save_checkpoint`.
+
+        Restores the particles, step, time, the adaptive time-step state and the
+        step records, so that the continued run repeats the uninterrupted one
+        step for step.  Returns the checkpoint's metadata.
+        """
         from .io import load_checkpoint
 
         arrays, meta = load_checkpoint(path)
@@ -538,7 +650,11 @@ class Simulation:
         self.step = int(meta["step"])
         self.time = float(meta["time"])
         self.dt = float(meta["dt"])
-        self.records = [StepRecord(**r) for r in meta.get("records", [])]
+        self._successes = int(meta.get("successes", 0))
+        self.initial = dict(meta.get("initial", self.initial))
+        self.records = [StepRecord.from_dict(r) for r in meta.get("records", [])]
+        self.last_record = self.records[-1] if self.records else None
+        return meta
 
     # -- loop -----------------------------------------------------------------
     def run(
@@ -561,7 +677,9 @@ class Simulation:
         if steps is None and t_end is None and stop is None:
             raise ParameterError("steps", None, "give steps, t_end or a stop rule")
         if self.step == 0 and self.writer is not None and not self.writer.entries:
-            self.write_output(None, None)
+            # The initial state, with the mesh the first step will be built on.
+            active, local_t = self.mesh_source(self.particles.x)
+            self.write_output(active[local_t].T, active)
         start = time.perf_counter()
         n_target = None if steps is None else self.step + int(steps)
         while True:
@@ -569,14 +687,19 @@ class Simulation:
                 break
             if t_end is not None and self.time >= t_end * (1 - 1e-12):
                 break
+            if stop is not None and self.records and stop(self):
+                break  # a resumed run that had already stopped
             dt = self.dt
-            if t_end is not None:
-                dt = min(dt, t_end - self.time)
+            if t_end is not None and t_end - self.time < dt * (1 - 1e-9):
+                # Land on t_end, but never shorten a step by round-off only.
+                dt = t_end - self.time
             new, rec = self._try_step(dt)
             self.particles = new
             self.step += 1
             self.time += rec.dt
             rec.step, rec.time = self.step, self.time
+            v0 = self.records[0].mesh_volume if self.records else rec.mesh_volume
+            rec.volume_change = rec.mesh_volume / v0 - 1.0 if v0 > 0 else 0.0
             self.records.append(rec)
             self.last_record = rec
             last = (n_target is not None and self.step >= n_target) or (
@@ -612,14 +735,20 @@ class Simulation:
                 new, rec = self._advance(dt)
             except SolverError as err:
                 if not self.adaptive or dt / 2 < self.dt_min:
-                    self.save_checkpoint()
+                    saved = self.save_checkpoint()
+                    # Keep the solver's own advice (e.g. "use displacement
+                    # control" for a static overload) and add the loop's context.
+                    advice = str(err).split("; ", 1)[1] if "; " in str(err) else ""
+                    where = f"dt={dt:g} s" + (
+                        f" (floor {self.dt_min:g} s)" if self.adaptive else ""
+                    )
+                    if saved is not None:
+                        where += f"; results up to step {self.step} are on disk"
                     raise SolverError(
                         err.status,
                         self.step + 1,
                         err.iterations,
-                        f"dt={dt:g} s (floor {self.dt_min:g} s); results up to step "
-                        f"{self.step} are on disk; reduce dt or dt_min, or check the "
-                        "parameters",
+                        "; ".join(s for s in (advice, where) if s),
                     ) from err
                 dt /= 2.0
                 retries += 1
@@ -661,6 +790,11 @@ class Simulation:
             for k, v in r.timings.items():
                 phases[k] = phases.get(k, 0.0) + v
         its = [r.iterations for r in recs]
+        keys = sorted({k for r in recs for k in r.timings})
+        median = {
+            k: float(np.median([r.timings.get(k, 0.0) for r in recs])) for k in keys
+        }
+        step_times = [sum(r.timings.values()) for r in recs]
         return {
             "steps": len(recs),
             "time": self.time,
@@ -670,11 +804,68 @@ class Simulation:
             "statuses": sorted({r.status for r in recs}),
             "retries": int(sum(r.retries for r in recs)),
             "wall_time": phases,
+            "step_time_median": float(np.median(step_times)) if recs else 0.0,
+            "step_time_median_by_phase": median,
+            "n_particles": int(self.particles.n),
+            "mass_change": (
+                float(recs[-1].mass / self.initial["mass"] - 1.0) if recs else 0.0
+            ),
+            "volume_change": float(recs[-1].volume_change) if recs else 0.0,
+            "max_kinetic_energy": float(
+                max((r.kinetic_energy for r in recs), default=0.0)
+            ),
         }
 
 
+@dataclass
+class AtRest:
+    """Stop rule for :meth:`Simulation.run`: the flow has come to rest.
+
+    Stops once ``time >= min_time`` and the kinetic energy of the last step is
+    at most ``fraction`` times a reference energy:
+
+    * ``"max_kinetic"``: the largest kinetic energy of the run so far;
+    * ``"potential_drop"``: the potential energy released since the start,
+      ``E_p(0) - E_p(t)`` (never stops while nothing has fallen).
+
+    It reads only :attr:`Simulation.records`, so a resumed run stops at the same
+    step as an uninterrupted one.
+
+    Examples
+    --------
+    >>> rule = AtRest(fraction=0.01, min_time=0.2)
+    >>> rule.reference
+    'max_kinetic'
+    """
+
+    fraction: float = 1e-3
+    min_time: float = 0.0
+    reference: str = "max_kinetic"
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.fraction) and 0 < self.fraction < 1):
+            raise ParameterError("fraction", self.fraction, "a number in (0, 1)")
+        if not (math.isfinite(self.min_time) and self.min_time >= 0):
+            raise ParameterError("min_time", self.min_time, "a time >= 0 (s)")
+        if self.reference not in ("max_kinetic", "potential_drop"):
+            raise ParameterError(
+                "reference", self.reference, "'max_kinetic' or 'potential_drop'"
+            )
+
+    def __call__(self, sim: Simulation) -> bool:  # noqa: D102
+        recs = sim.records
+        if not recs or sim.time < self.min_time * (1 - 1e-12):
+            return False
+        if self.reference == "max_kinetic":
+            ref = max(r.kinetic_energy for r in recs)
+        else:
+            ref = sim.initial["potential_energy"] - recs[-1].potential_energy
+        return ref > 0 and recs[-1].kinetic_energy <= self.fraction * ref
+
+
 def _jsonable(obj: Any) -> Any:
-    """Convert numpy scalars in nested dicts/lists to plain Python."""
+    """Convert numpy scalars in nested dicts/lists to plain Python (NaN -> None)."""
     return json.loads(
-        json.dumps(obj, default=lambda o: o.item() if hasattr(o, "item") else str(o))
+        json.dumps(obj, default=lambda o: o.item() if hasattr(o, "item") else str(o)),
+        parse_constant=lambda _: None,
     )

@@ -585,11 +585,6 @@ def test_static_overload_is_infeasible_with_a_useful_message():
     assert sol.status in ("Solved", "AlmostSolved")
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="bug: Simulation._try_step re-raises SolverError with a dt hint that "
-    "replaces the 'use displacement control' advice of a static overload",
-)
 def test_static_overload_through_simulation_keeps_the_advice():
     # Through the public loop: a Tresca column (c = 2 kPa) under its own weight,
     # ρgH = 19.6 kPa ≈ 9.8 c, cannot stand unconfined (needs ρgH ≲ 2c).

@@ -24,8 +24,15 @@ def run_built(name: str, overrides: dict):
     scene = get_scene(name)
     values = scene.resolve(overrides)
     srun = scene.build(values, out=None, progress=False)
-    srun.simulation.run(**srun.run_kwargs)
-    return srun.simulation, srun.metrics(srun.simulation), srun.history
+    sim = srun.simulation
+    sim.run(**srun.run_kwargs)
+    # Per-step top settlement, as recorded by the scene on each step record.
+    history = [
+        (r.time, r.extra["settlement_top"])
+        for r in sim.records
+        if "settlement_top" in r.extra
+    ]
+    return sim, srun.metrics(sim), history
 
 
 def constrained_modulus(E: float, nu: float = NU) -> float:

@@ -7,12 +7,15 @@ from typing import Any
 
 from ..errors import ParameterError
 from .base import Param, Scene
+from .column_collapse import SCENE as COLUMN_COLLAPSE
 from .elastic_column import SCENE as ELASTIC_COLUMN
 from .strip_footing import SCENE as STRIP_FOOTING
 
 __all__ = ["SCENES", "Param", "Scene", "get_scene", "run_scene"]
 
-SCENES: dict[str, Scene] = {s.name: s for s in (ELASTIC_COLUMN, STRIP_FOOTING)}
+SCENES: dict[str, Scene] = {
+    s.name: s for s in (ELASTIC_COLUMN, STRIP_FOOTING, COLUMN_COLLAPSE)
+}
 
 
 def get_scene(name: str) -> Scene:

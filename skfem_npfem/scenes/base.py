@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import ParameterError
+from ..errors import CheckpointError, ParameterError
 
 __all__ = ["Param", "Scene", "SceneRun", "parse_value"]
 
@@ -184,13 +184,20 @@ class Scene:
         """Build and run the scene; return (and optionally write) the summary."""
         values = self.resolve(overrides)
         start = time.perf_counter()
+        checkpoint = self._resume_point(out, values) if resume else None
         if out is not None:  # lets `skfem-npfem plot DIR` find the scene scales
             write_json(
                 Path(out) / "scene.json", {"scene": self.name, "parameters": values}
             )
         srun = self.build(values, out=out, progress=progress, resume=resume)
         sim = srun.simulation
-        sim.run(**srun.run_kwargs)
+        run_kwargs = dict(srun.run_kwargs)
+        _attach_checkpoints(sim, out, values)
+        if checkpoint is not None:
+            sim.restore(checkpoint)
+            if run_kwargs.get("steps") is not None:  # steps counts from step 0
+                run_kwargs["steps"] = max(0, run_kwargs["steps"] - sim.step)
+        sim.run(**run_kwargs)
         result = {
             "scene": self.name,
             "parameters": values,
@@ -205,6 +212,56 @@ class Scene:
         if summary is not None:
             write_json(summary, result)
         return result
+
+    def _resume_point(self, out: str | Path | None, values: dict[str, Any]) -> Path:
+        """The latest checkpoint of ``out``, checked against this scene and values."""
+        from ..io import load_checkpoint
+        from .common import checkpoint_step
+
+        if out is None:
+            raise ParameterError("resume", True, "needs out (a folder)")
+        path, step = checkpoint_step(out)
+        _, meta = load_checkpoint(path)
+        if meta.get("scene", self.name) != self.name:
+            raise CheckpointError(
+                f"{path}: written by scene {meta['scene']!r}, not {self.name!r}"
+            )
+        saved = meta.get("parameters")
+        if saved is not None:
+            now = _clean(values)
+            changed = sorted(
+                k
+                for k in set(saved) | set(now)
+                if k not in RESUME_MAY_CHANGE and saved.get(k) != now.get(k)
+            )
+            if changed:
+                raise CheckpointError(
+                    f"{path}: parameters differ from the checkpointed run "
+                    f"({', '.join(changed)}); resume with the same --set values"
+                )
+        if meta.get("step") != step:
+            raise CheckpointError(f"{path}: holds step {meta.get('step')}, not {step}")
+        return path
+
+
+#: Parameters that may differ when a run is resumed (they do not change the
+#: steps already taken).
+RESUME_MAY_CHANGE = frozenset(
+    {"t_end", "steps", "output_every", "checkpoint_every", "threads"}
+)
+
+
+def _attach_checkpoints(sim: Any, out: str | Path | None, values: dict) -> None:
+    """Checkpoint into ``out`` unless the scene already chose a folder."""
+    if out is None or sim.checkpoint_dir is not None:
+        return
+    from .common import DEFAULT_CHECKPOINT_EVERY
+
+    sim.checkpoint_dir = Path(out)
+    if not sim.checkpoint_every:
+        sim.checkpoint_every = int(
+            values.get("checkpoint_every") or DEFAULT_CHECKPOINT_EVERY
+        )
 
 
 def write_json(path: str | Path, obj: dict) -> None:

@@ -8,7 +8,10 @@ from typing import Any
 from ..conic import LINEAR_SOLVERS, SolverOptions
 from .base import Param
 
-__all__ = ["make_writer", "solver_from", "solver_params"]
+__all__ = ["checkpoint_step", "make_writer", "solver_from", "solver_params"]
+
+#: Steps between checkpoints of scenes that do not choose (``checkpoint_every``).
+DEFAULT_CHECKPOINT_EVERY = 20
 
 
 def solver_params() -> list[Param]:
@@ -41,12 +44,37 @@ def solver_from(values: dict[str, Any]) -> SolverOptions:
     )
 
 
+def checkpoint_step(out: str | Path) -> tuple[Path, int]:
+    """Latest checkpoint in ``out`` and its step (from the file name).
+
+    Raises
+    ------
+    CheckpointError
+        If ``out`` holds no checkpoint.
+    """
+    from ..errors import CheckpointError
+    from ..io import latest_checkpoint
+
+    path = latest_checkpoint(out) if Path(out).is_dir() else None
+    if path is None:
+        raise CheckpointError(
+            f"{out}: no checkpoint_*.npz to resume from (run without --resume)"
+        )
+    return path, int(path.stem.rsplit("_", 1)[-1])
+
+
 def make_writer(
     out: str | Path | None, resume: bool = False, resume_after_step: int | None = None
 ):
-    """A :class:`~skfem_npfem.io.ResultWriter` for ``out`` (None: no output)."""
+    """A :class:`~skfem_npfem.io.ResultWriter` for ``out`` (None: no output).
+
+    With ``resume`` the steps up to the latest checkpoint in ``out`` are kept
+    (and later ones deleted), so the continued run appends to the series.
+    """
     if out is None:
         return None
     from ..io import ResultWriter
 
+    if resume and resume_after_step is None:
+        resume_after_step = checkpoint_step(out)[1]
     return ResultWriter(out, resume_after_step=resume_after_step)

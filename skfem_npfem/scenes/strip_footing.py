@@ -221,17 +221,22 @@ def build(
         progress=progress,
         meta={"scene": "strip-footing", "parameters": values},
     )
-    curve: list[list[float]] = []
 
     def record(sim_, p, rec) -> bool:
-        q = -float(rec.solution.reaction[foot, 1].sum()) / b
-        curve.append([float(-p.u[foot, 1].mean()), q])
+        # Stored on the step record so that it survives checkpoints (--resume).
+        rec.extra["settlement"] = float(-p.u[foot, 1].mean())
+        rec.extra["pressure"] = -float(rec.solution.reaction[foot, 1].sum()) / b
         return False
 
     sim.callbacks.append(record)
     ref = n_c(phi) if gamma == 0 and c > 0 else None
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
+        curve = [
+            [r.extra["settlement"], r.extra["pressure"]]
+            for r in sim_.records
+            if "pressure" in r.extra
+        ]
         q = curve[-1][1] if curve else float("nan")
         factor = q / c if c > 0 else q / (gamma * b)
         return {
@@ -243,7 +248,7 @@ def build(
             "n_particles": int(x.shape[0]),
         }
 
-    return SceneRun(sim, {"steps": n_steps}, metrics, curve)
+    return SceneRun(sim, {"steps": n_steps}, metrics)
 
 
 SCENE = Scene(

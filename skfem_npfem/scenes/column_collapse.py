@@ -1,0 +1,426 @@
+"""Scene ``column-collapse``: 2D (plane-strain) granular column collapse.
+
+A cohesionless column of width ``L0`` and height ``H0 = aspect * L0`` stands on a
+rough floor and is released at ``t = 0``.  With ``symmetric=true`` (default) the
+half column ``0 <= x <= L0`` leans against a smooth wall at ``x = 0`` (the
+symmetry plane, as in the channel experiments of Lube et al. 2005); otherwise a
+free-standing column ``-L0 <= x <= L0`` collapses to both sides.
+
+The particles start on a regular lattice of the given spacing (the remesher
+breaks the lattice ties), with masses ``rho V_i`` from the initial mesh (kept
+fixed: mass is conserved exactly), a geostatic stress ``s_yy = -rho g (H0 - y)``,
+``s_xx = s_zz = K0 s_yy``, and floor contact forces equal to the weight of the
+column over each base particle's tributary width (otherwise the first step is
+frictionless, formulation.md pitfall 8).  Every step the particles are
+re-triangulated (Delaunay plus alpha shape); the floor is a rigid wall with
+lagged Coulomb friction, the symmetry wall is frictionless.  The material is
+Mohr-Coulomb (exact in plane strain) or Drucker-Prager (plane-strain match),
+with ``psi < phi`` through frozen friction and a tension cut-off.
+
+The run stops at ``t_end`` or earlier, once the kinetic energy has fallen below
+``rest_fraction`` times its maximum (after ``min_time``).
+
+Run-out convention: ``runout`` (``L_inf``) is measured on the *main body*: the
+particles in an element of the step's mesh (not ballistic) that form the
+largest cluster with gaps below three spacings, so a sparse deposit tail is
+kept but grains that flew off are not.  It runs from the wall (``x = 0``) to the
+rightmost particle of the main body when symmetric, and is half the width
+``(x_max - x_min) / 2`` of the main body otherwise.  ``runout_tip`` is the same
+over all particles.  The front has stopped (``collapse_time``) once the run-out
+stays within one spacing of its final value.
+Lube et al. (2005) found ``(L_inf - L0) / L0 = 1.2 a`` for ``a < 2.3`` and
+``1.9 a^(2/3)`` above (``a`` = aspect ratio).
+
+Time integration: keep ``theta2 = 1``.  ``theta2`` sets the restitution of
+impacts, ``e = 1/theta2 - 1``: ``theta2 = 1/2`` makes the impact on the floor
+perfectly elastic and the collapse gains volume and then blows up
+(formulation.md pitfall 3).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..boundary import floor, wall_x
+from ..errors import ParameterError
+from ..materials import DruckerPrager, MohrCoulomb
+from ..particles import Particles
+from ..pfem import AlphaShapeMesher, main_body
+from ..simulation import AtRest, Model, Simulation
+from ..smoothing import nodal_integration
+from .base import Param, Scene, SceneRun
+from .common import make_writer, solver_from, solver_params
+
+MATERIALS = ("mohr-coulomb", "drucker-prager")
+
+PARAMS = [
+    Param("aspect", 2.0, "-", "aspect ratio a = H0/L0", float, lo=0, lo_open=True),
+    Param(
+        "length",
+        0.2,
+        "m",
+        "column half-width L0 (the width of the half column)",
+        float,
+        lo=0,
+        lo_open=True,
+    ),
+    Param(
+        "symmetric",
+        True,
+        "-",
+        "true: half column against a smooth wall at x = 0; false: free-standing "
+        "column of width 2 L0 centred at x = 0",
+        bool,
+    ),
+    Param(
+        "spacing",
+        None,
+        "m",
+        "particle (lattice) spacing (default L0/22: 1 035 particles at a = 2)",
+        float,
+        lo=0,
+        lo_open=True,
+    ),
+    Param("material", "mohr-coulomb", "-", "yield criterion", str, MATERIALS),
+    Param("rho", 1800.0, "kg/m^3", "density", float, lo=0, lo_open=True),
+    Param("E", 1.0e7, "Pa", "Young's modulus", float, lo=0, lo_open=True),
+    Param(
+        "nu",
+        0.3,
+        "-",
+        "Poisson's ratio",
+        float,
+        lo=-1,
+        hi=0.5,
+        lo_open=True,
+        hi_open=True,
+    ),
+    Param(
+        "phi",
+        30.0,
+        "deg",
+        "friction angle",
+        float,
+        lo=0,
+        hi=90,
+        lo_open=True,
+        hi_open=True,
+    ),
+    Param("psi", 0.0, "deg", "dilation angle (<= phi)", float, lo=0, hi=90),
+    Param("c", 0.0, "Pa", "cohesion", float, lo=0),
+    Param(
+        "floor_friction",
+        None,
+        "deg",
+        "floor friction angle (default: phi)",
+        float,
+        lo=0,
+        hi=90,
+        hi_open=True,
+    ),
+    Param(
+        "K0",
+        0.5,
+        "-",
+        "initial s_xx / s_yy (at-rest coefficient)",
+        float,
+        lo=0,
+        lo_open=True,
+    ),
+    Param(
+        "gravity",
+        9.81,
+        "m/s^2",
+        "gravitational acceleration",
+        float,
+        lo=0,
+        lo_open=True,
+    ),
+    Param(
+        "dt",
+        5e-3,
+        "s",
+        "time step (halved on solver failure)",
+        float,
+        lo=0,
+        lo_open=True,
+    ),
+    Param("t_end", 1.0, "s", "end time", float, lo=0, lo_open=True),
+    Param(
+        "rest_fraction",
+        1e-3,
+        "-",
+        "stop when the kinetic energy < rest_fraction * its maximum (0: never)",
+        float,
+        lo=0,
+        hi=1,
+        hi_open=True,
+    ),
+    Param(
+        "min_time",
+        None,
+        "s",
+        "earliest stop at rest (default 2 sqrt(H0/g))",
+        float,
+        lo=0,
+    ),
+    Param(
+        "alpha",
+        1.3,
+        "-",
+        "alpha-shape factor (circumradius < alpha h)",
+        float,
+        lo=1.0,
+        hi=3.0,
+    ),
+    Param(
+        "theta1",
+        1.0,
+        "-",
+        "time-integration parameter theta1",
+        float,
+        lo=0.5,
+        hi=1.0,
+    ),
+    Param(
+        "theta2",
+        1.0,
+        "-",
+        "time-integration parameter theta2 (impact restitution 1/theta2 - 1: "
+        "1/2 makes impacts elastic, keep 1)",
+        float,
+        lo=0.5,
+        hi=1.0,
+    ),
+    Param("output_every", 5, "-", "write a VTU every k steps", int, lo=1),
+    Param(
+        "checkpoint_every",
+        20,
+        "-",
+        "checkpoint every k steps (with --out)",
+        int,
+        lo=1,
+    ),
+    *solver_params(),
+]
+
+METRICS = {
+    "runout": "final run-out L_inf of the main body, m (from x = 0 when symmetric, "
+    "else half the deposit width)",
+    "normalised_runout": "(L_inf - L0) / L0",
+    "runout_tip": "as runout but over all particles (the farthest grain), m",
+    "reference_runout_lube": "Lube et al. 2005: 1.2 a (a < 2.3), else 1.9 a^(2/3)",
+    "final_height": "H_inf / L0 (highest particle of the main body)",
+    "height_ratio": "H_inf / H0",
+    "collapse_time": "time the front stops (stays within one spacing of its final "
+    "position), s",
+    "collapse_time_normalised": "collapse_time / sqrt(H0 / g)",
+    "at_rest": "the run ended by the at-rest rule (not t_end)",
+    "volume_change": "relative mesh-volume (area) change, end vs t = 0",
+    "mass_change": "relative change of the total particle mass (0: exact)",
+    "max_kinetic_energy": "largest kinetic energy, J (per metre of depth)",
+    "final_kinetic_energy": "kinetic energy at the end, J",
+    "n_inactive_final": "particles outside every element at the end (ballistic)",
+    "n_particles": "number of particles",
+}
+
+
+def lattice(x0: float, x1: float, height: float, spacing: float) -> np.ndarray:
+    """Regular lattice over ``[x0, x1] x [0, height]`` with about ``spacing``."""
+    nx = max(1, round((x1 - x0) / spacing))
+    ny = max(1, round(height / spacing))
+    X, Y = np.meshgrid(
+        np.linspace(x0, x1, nx + 1), np.linspace(0.0, height, ny + 1), indexing="ij"
+    )
+    return np.column_stack([X.ravel(), Y.ravel()])
+
+
+def lube_runout(aspect: float) -> float:
+    """Normalised run-out of Lube et al. (2005), 2D channel experiments."""
+    return 1.2 * aspect if aspect < 2.3 else 1.9 * aspect ** (2.0 / 3.0)
+
+
+def initial_particles(
+    x: np.ndarray,
+    mesher: AlphaShapeMesher,
+    *,
+    rho: float,
+    gravity: float,
+    height: float,
+    K0: float,
+    n_walls: int,
+    floor_id: int = 0,
+) -> Particles:
+    """Particles at rest with geostatic stress, mesh masses and floor forces.
+
+    Masses are ``rho V_i`` from the initial alpha-shape mesh; the floor force of
+    each base particle (``y = 0``) is the weight of the column over its tributary
+    width (half the distance to its neighbours), the lagged normal force of the
+    first step's Coulomb friction.
+    """
+    active, _ = mesher(x)
+    if active.size != x.shape[0]:
+        raise ParameterError("spacing", mesher.h, "all lattice particles meshed")
+    ni = nodal_integration(mesher.last.mesh())
+    volumes = np.zeros(x.shape[0])
+    volumes[active] = ni.volumes
+    stress = np.zeros((x.shape[0], 4))
+    stress[:, 1] = -rho * gravity * (height - x[:, 1])
+    stress[:, 0] = stress[:, 2] = K0 * stress[:, 1]
+    p = Particles.create(x, rho * volumes, stress=stress, n_walls=n_walls)
+    base = np.flatnonzero(np.isclose(x[:, 1], 0.0, atol=1e-9 * height))
+    xb = x[base, 0]
+    order = np.argsort(xb)
+    xs = xb[order]
+    width = np.diff(np.concatenate([xs[:1], 0.5 * (xs[1:] + xs[:-1]), xs[-1:]]))
+    wall_force = np.zeros((x.shape[0], n_walls))
+    wall_force[base[order], floor_id] = rho * gravity * height * width
+    return p.replace(wall_force=wall_force)
+
+
+def front(x: np.ndarray, body: np.ndarray, symmetric: bool) -> tuple[float, float]:
+    """Run-out and height of the main body (see the module notes)."""
+    xb = x[body]
+    if xb.shape[0] == 0:
+        return float("nan"), float("nan")
+    runout = xb[:, 0].max() if symmetric else 0.5 * (xb[:, 0].max() - xb[:, 0].min())
+    return float(runout), float(xb[:, 1].max())
+
+
+def collapse_time(times: np.ndarray, runout: np.ndarray, tol: float) -> float:
+    """First time after which the run-out stays within ``tol`` of its final value."""
+    if runout.size == 0:
+        return float("nan")
+    moving = np.flatnonzero(np.abs(runout - runout[-1]) > tol)
+    if moving.size == 0:
+        return float(times[0])
+    k = moving[-1] + 1
+    return float(times[min(k, times.size - 1)])
+
+
+def build(
+    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
+) -> SceneRun:
+    """Build the column-collapse simulation."""
+    L0, a = values["length"], values["aspect"]
+    H0 = a * L0
+    h = values["spacing"] if values["spacing"] is not None else L0 / 22.0
+    if h > L0 / 2 or h > H0 / 2:
+        raise ParameterError(
+            "spacing", h, f"at most min(L0, H0)/2 = {min(L0, H0) / 2:g} m"
+        )
+    rho, g, phi = values["rho"], values["gravity"], values["phi"]
+    psi, c, K0 = values["psi"], values["c"], values["K0"]
+    if psi > phi:
+        raise ParameterError("psi", psi, f"at most phi = {phi:g} degrees")
+    if values["material"] == "mohr-coulomb" and c == 0:
+        s = math.sin(math.radians(phi))
+        lo, hi = (1 - s) / (1 + s), (1 + s) / (1 - s)
+        if not lo <= K0 <= hi:
+            raise ParameterError(
+                "K0", K0, f"in [{lo:.4g}, {hi:.4g}] (inside the yield cone)"
+            )
+    if values["theta2"] < 1.0:
+        warnings.warn(
+            f"theta2={values['theta2']:g}: impacts on the floor have restitution "
+            f"{1 / values['theta2'] - 1:.2f}; theta2 = 1/2 makes them elastic and the "
+            "collapse unstable (formulation.md pitfall 3)",
+            stacklevel=2,
+        )
+    symmetric = values["symmetric"]
+    floor_phi = phi if values["floor_friction"] is None else values["floor_friction"]
+    walls = [floor(2, floor_phi)]
+    if symmetric:
+        walls.append(wall_x(2, 0.0, facing=1, friction_angle=0.0))
+    cls = MohrCoulomb if values["material"] == "mohr-coulomb" else DruckerPrager
+    mat = cls(
+        values["E"], values["nu"], rho, c=c, phi=phi, psi=psi, tension_cutoff=True
+    )
+    model = Model(
+        dim=2,
+        materials=[mat],
+        gravity=g,
+        mode="dynamic",
+        theta1=values["theta1"],
+        theta2=values["theta2"],
+        walls=walls,
+        solver=solver_from(values),
+    )
+    mesher = AlphaShapeMesher(h, values["alpha"], walls=walls)
+    x = lattice(0.0 if symmetric else -L0, L0, H0, h)
+    particles = initial_particles(
+        x, mesher, rho=rho, gravity=g, height=H0, K0=K0, n_walls=len(walls)
+    )
+    sim = Simulation(
+        particles,
+        model,
+        mesher,
+        values["dt"],
+        adaptive=True,
+        writer=make_writer(out, resume),
+        output_every=values["output_every"],
+        checkpoint_dir=out,
+        checkpoint_every=values["checkpoint_every"] if out is not None else 0,
+        progress=progress,
+        meta={"scene": "column-collapse", "parameters": values},
+    )
+    t_scale = math.sqrt(H0 / g)
+
+    def record_front(sim_: Simulation, p: Particles, rec) -> bool:
+        body = np.zeros(p.n, bool)
+        body[rec.active[main_body(p.x[rec.active], 3.0 * h)]] = True
+        runout, top = front(p.x, body, symmetric)
+        tip, _ = front(p.x, np.ones(p.n, bool), symmetric)
+        rec.extra.update(runout=runout, runout_tip=tip, max_height=top)
+        return False
+
+    sim.callbacks.append(record_front)
+    run_kwargs: dict[str, Any] = {"t_end": values["t_end"]}
+    if values["rest_fraction"] > 0:
+        min_time = values["min_time"]
+        run_kwargs["stop"] = AtRest(
+            values["rest_fraction"], 2 * t_scale if min_time is None else min_time
+        )
+
+    def metrics(sim_: Simulation) -> dict[str, Any]:
+        recs = sim_.records
+        times = np.array([r.time for r in recs])
+        runouts = np.array([r.extra.get("runout", np.nan) for r in recs])
+        runout = float(runouts[-1]) if recs else L0
+        top = float(recs[-1].extra.get("max_height", H0)) if recs else H0
+        t_c = collapse_time(times, runouts, h)
+        stop = run_kwargs.get("stop")
+        summ = sim_.summary()
+        return {
+            "runout": runout,
+            "normalised_runout": (runout - L0) / L0,
+            "runout_tip": float(recs[-1].extra.get("runout_tip", L0)) if recs else L0,
+            "reference_runout_lube": lube_runout(a),
+            "final_height": top / L0,
+            "height_ratio": top / H0,
+            "collapse_time": t_c,
+            "collapse_time_normalised": t_c / t_scale,
+            "at_rest": bool(stop is not None and stop(sim_)),
+            "volume_change": summ["volume_change"],
+            "mass_change": summ["mass_change"],
+            "max_kinetic_energy": summ["max_kinetic_energy"],
+            "final_kinetic_energy": float(recs[-1].kinetic_energy) if recs else 0.0,
+            "n_inactive_final": int(recs[-1].n_inactive) if recs else 0,
+            "n_particles": int(sim_.particles.n),
+        }
+
+    return SceneRun(sim, run_kwargs, metrics)
+
+
+SCENE = Scene(
+    name="column-collapse",
+    description=__doc__.strip().splitlines()[0].split(": ", 1)[1],
+    params=PARAMS,
+    build=build,
+    metrics_doc=METRICS,
+)
