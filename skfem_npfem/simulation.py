@@ -517,6 +517,13 @@ class Simulation:
         by 2x after ``grow_after`` consecutive successes.
     dt_min : float or None
         Smallest step allowed (default ``dt / 64``).
+    max_displacement : float or None
+        Displacement-based step control: keep the largest particle displacement
+        per step below ``max_displacement * h`` (h: the mean particle spacing of
+        the step's mesh).  The step that exceeds it is kept and the next step is
+        shortened to ``0.9 * dt * limit / max|du|`` (never below ``dt_min``); the
+        step grows back (at most 2x per step, never above the initial ``dt``)
+        while the displacement stays below the limit.  None: off.
     writer : ResultWriter or None
         Receives a VTU per output step.
     output_every : int
@@ -543,6 +550,7 @@ class Simulation:
         adaptive: bool = False,
         dt_min: float | None = None,
         grow_after: int = 4,
+        max_displacement: float | None = None,
         writer: Any = None,
         output_every: int = 1,
         checkpoint_dir: str | Path | None = None,
@@ -562,6 +570,15 @@ class Simulation:
         self.adaptive = adaptive
         self.dt_min = float(dt_min) if dt_min is not None else dt / 64.0
         self.grow_after = grow_after
+        if max_displacement is not None and not (
+            isinstance(max_displacement, int | float)
+            and math.isfinite(max_displacement)
+            and max_displacement > 0
+        ):
+            raise ParameterError(
+                "max_displacement", max_displacement, "a number > 0 (fraction of h)"
+            )
+        self.max_displacement = max_displacement
         self.writer = writer
         self.output_every = max(1, int(output_every))
         self.checkpoint_dir = Path(checkpoint_dir) if checkpoint_dir else None
@@ -762,7 +779,22 @@ class Simulation:
                 elif self._successes >= self.grow_after and self.dt < self.dt_max:
                     self.dt = min(2 * self.dt, self.dt_max)
                     self._successes = 0
+            if self.max_displacement is not None:
+                self._displacement_control(new, rec, dt)
+                if retries:  # do not grow straight after a failure
+                    self.dt = min(self.dt, dt)
             return new, rec
+
+    def _displacement_control(self, new: Particles, rec: StepRecord, dt: float):
+        """Set the next step from the largest displacement of this one."""
+        h = (rec.mesh_volume / max(rec.n_active, 1)) ** (1.0 / new.dim)
+        du = float(np.max(np.linalg.norm(new.x - self.particles.x, axis=1)))
+        limit = self.max_displacement * h
+        rec.extra["max_displacement_ratio"] = du / limit
+        if du > limit:
+            self.dt = max(0.9 * dt * limit / du, self.dt_min)
+        elif du > 0:
+            self.dt = min(self.dt_max, 2 * dt, 0.9 * dt * limit / du)
 
     def _advance(self, dt: float) -> tuple[Particles, StepRecord]:
         return advance(

@@ -150,6 +150,16 @@ PARAMS = [
         lo=0,
         lo_open=True,
     ),
+    Param(
+        "max_displacement",
+        None,
+        "-",
+        "adaptive dt: keep the largest particle displacement per step below this "
+        "fraction of the spacing (default: off, fixed dt)",
+        float,
+        lo=0,
+        lo_open=True,
+    ),
     Param("t_end", 1.0, "s", "end time", float, lo=0, lo_open=True),
     Param(
         "rest_fraction",
@@ -362,6 +372,7 @@ def build(
         mesher,
         values["dt"],
         adaptive=True,
+        max_displacement=values["max_displacement"],
         writer=make_writer(out, resume),
         output_every=values["output_every"],
         checkpoint_dir=out,
