@@ -12,9 +12,17 @@ The mixed (stress-based) step of ``formulation.md`` §3-§5:
 The displacement increment is the multiplier of the equilibrium rows:
 ``du_F = -z_eq`` (Clarabel's stationarity is ``P x + q + A^T z = 0``).  The static
 variant drops the inertial force ``r``.  The problem is non-dimensionalised with a
-stress scale ``s*``, a length ``h`` and ``U* = s* h / E`` before it is handed to
-Clarabel; without that the interior-point method needs several times the
-iterations or fails (pitfall 5).
+stress scale ``s*``, a length ``h`` and a displacement scale ``U*`` (``s* h / E``
+for static steps, smaller when inertia dominates: :func:`_displacement_scale`)
+before it is handed to Clarabel; without that the interior-point method needs
+several times the iterations or fails (pitfall 5).
+
+The stress unknowns are the *increments* ``ds_i = s_i - s_n,i``: the equilibrium
+right-hand side becomes the out-of-balance force ``f~ - G s_n`` and each cone is
+shifted by ``s_n``.  This is the same program (same feasible set and optimum),
+but the solver's relative tolerance then bounds the error of the increment
+rather than that of the total stress, which keeps a body at rest at rest and a
+small step accurate (docs/extremes.md).
 
 Pieces of the program are built by small named functions (``_objective``,
 ``_equilibrium``, ``_contact_rows``, ``_yield_rows``) so a reader finds each
@@ -24,6 +32,7 @@ physical ingredient by name.
 from __future__ import annotations
 
 import math
+import numbers
 import time
 from dataclasses import dataclass, field
 
@@ -103,6 +112,8 @@ class SolverOptions:
             raise ParameterError("tol", self.tol, "a number in (0, 1e-2)")
         if not (isinstance(self.max_iter, int) and self.max_iter > 0):
             raise ParameterError("max_iter", self.max_iter, "an integer > 0")
+        if not (isinstance(self.time_limit, numbers.Real) and self.time_limit > 0):
+            raise ParameterError("time_limit", self.time_limit, "seconds > 0 (or inf)")
 
     def resolved_linear_solver(self, n_variables: int, dim: int) -> str:
         """The backend actually used (``auto`` resolved by problem size).
@@ -498,6 +509,70 @@ def _tangents(normals: np.ndarray) -> np.ndarray:
     return np.stack([t1, t2], axis=1)
 
 
+def _check_step_data(data: StepData) -> None:
+    """Refuse inputs that would otherwise give NaN or silent garbage.
+
+    Raises
+    ------
+    ParameterError
+        For material ids outside ``materials``, a degenerate mesh element
+        (zero area/volume: its P1 gradients are infinite), a non-positive or
+        non-finite ``stress_scale``, or (dynamic steps) a time step, mass or
+        velocity that is not finite and positive where required.
+    """
+    ni = data.ni
+    n = ni.n_nodes
+    mat = np.asarray(data.material)
+    n_mat = len(data.materials)
+    if mat.shape != (n,) or mat.dtype.kind not in "iu":
+        raise ParameterError(
+            "material", f"{mat.dtype} array of shape {mat.shape}", f"ints, ({n},)"
+        )
+    bad = (mat < 0) | (mat >= n_mat)
+    if np.any(bad):
+        i = int(np.flatnonzero(bad)[0])
+        raise ParameterError(
+            "material",
+            int(mat[i]),
+            f"an index into the {n_mat} material(s), 0..{n_mat - 1} (node {i})",
+        )
+    degenerate = ~np.all(np.isfinite(ni.grads), axis=(1, 2))
+    if np.any(degenerate):
+        e = int(np.flatnonzero(degenerate)[0])
+        raise ParameterError(
+            "mesh",
+            f"{int(degenerate.sum())} degenerate element(s) of zero "
+            f"{'area' if ni.dim == 2 else 'volume'}, first {e} with nodes "
+            f"{ni.t[:, e].tolist()}",
+            "elements of nonzero size; drop them (remesh.alpha_shape does) or "
+            "separate coincident/collinear nodes (near-degenerate elements are fine)",
+        )
+    if data.stress_scale is not None:
+        s = data.stress_scale
+        if isinstance(s, bool) or not (
+            isinstance(s, numbers.Real) and math.isfinite(s) and s > 0
+        ):
+            raise ParameterError("stress_scale", s, "a finite stress > 0 (Pa) or None")
+    if data.dynamic:
+        dt = data.dt
+        if not (isinstance(dt, numbers.Real) and math.isfinite(dt) and dt > 0):
+            raise ParameterError("dt", dt, "a finite time step > 0 (s)")
+        if data.mass is None or data.v_n is None:
+            raise ParameterError(
+                "mass" if data.mass is None else "v_n", None, "needed by dynamic steps"
+            )
+        m = np.asarray(data.mass, float)
+        if m.shape != (n,) or not np.all(np.isfinite(m) & (m > 0)):
+            raise ParameterError(
+                "mass", f"array of shape {m.shape}", f"({n},) finite masses > 0 (kg)"
+            )
+        v = np.asarray(data.v_n, float)
+        if v.shape != (n, ni.dim) or not np.all(np.isfinite(v)):
+            raise ParameterError(
+                "v_n", f"array of shape {v.shape}", f"({n}, {ni.dim}), finite (m/s)"
+            )
+
+
 def _stress_scale(data: StepData) -> float:
     """Characteristic stress s* for scaling (user value or an automatic one).
 
@@ -570,6 +645,7 @@ def solve_step(
     """
     options = options or SolverOptions()
     t0 = time.perf_counter()
+    _check_step_data(data)
     prog = _Program(data)
     ni, d, N, ns = data.ni, prog.dim, prog.N, prog.ns
     P, q = prog.objective()

@@ -64,7 +64,18 @@ __all__ = [
 CHECKPOINT_FORMAT = "skfem-npfem-checkpoint/1"
 _KNOWN_FORMATS = (CHECKPOINT_FORMAT,)
 _BAD_NAME = re.compile(r"[<>&\"']")
-_LOAD_ERRORS = (OSError, ValueError, TypeError, EOFError, BadZipFile, zlib.error)
+# zipfile raises NotImplementedError (unknown compression/version) and
+# RuntimeError (encrypted flag) on corrupted headers.
+_LOAD_ERRORS = (
+    OSError,
+    ValueError,
+    TypeError,
+    EOFError,
+    BadZipFile,
+    zlib.error,
+    NotImplementedError,
+    RuntimeError,
+)
 
 
 def _step(name: str, value: Any) -> int:

@@ -84,31 +84,58 @@ class Particles:
         n_walls : int
             Number of rigid walls of the model.
 
+        Raises
+        ------
+        ParameterError
+            If an array cannot be read as numbers, has the wrong shape or holds
+            NaN/inf, a mass is <= 0, or a material id is not an integer >= 0.
+            The message names the argument, the offending value (or shape,
+            or the first bad entry) and what is allowed.
+
         Examples
         --------
         >>> p = Particles.create(np.zeros((3, 2)), np.ones(3))
         >>> p.stress.shape
         (3, 4)
         """
-        x = np.array(x, dtype=float)
+        x = _float_array("x", x, "positions of shape (N, 2|3)")
         if x.ndim != 2 or x.shape[1] not in (2, 3) or x.shape[0] < 1:
             raise ParameterError("x", x.shape, "positions must have shape (N, 2|3)")
         n, d = x.shape
         zeros = np.zeros((n, d))
+        m = _float_array("mass", mass, f"a number or an array of shape ({n},)")
+        if m.ndim == 0:
+            m = np.full(n, float(m))
+        elif m.shape != (n,):
+            raise ParameterError(
+                "mass",
+                m.shape,
+                f"a number or an array of shape ({n},) (one per particle)",
+            )
+        if material is None:
+            mat = np.zeros(n, int)
+        else:
+            mat = _index_array("material", material, n)
+        if isinstance(n_walls, bool) or not isinstance(n_walls, int | np.integer):
+            raise ParameterError("n_walls", n_walls, "an integer >= 0")
+        if n_walls < 0:
+            raise ParameterError("n_walls", n_walls, "an integer >= 0")
         p = cls(
             x=x,
-            v=zeros.copy() if v is None else np.array(v, float),
+            v=zeros.copy() if v is None else _float_array("v", v, f"shape ({n}, {d})"),
             a=zeros.copy(),
             u=zeros.copy(),
             stress=np.zeros((n, full_voigt_size(d)))
             if stress is None
-            else np.array(stress, float),
+            else _float_array("stress", stress, f"shape ({n}, {full_voigt_size(d)})"),
             eps_p=np.zeros(n),
-            mass=np.broadcast_to(np.asarray(mass, float), (n,)).copy(),
-            material=np.zeros(n, int) if material is None else np.array(material, int),
-            fixed=np.zeros((n, d), bool) if fixed is None else np.array(fixed, bool),
+            mass=m.copy(),
+            material=mat,
+            fixed=np.zeros((n, d), bool)
+            if fixed is None
+            else _bool_array("fixed", fixed, f"shape ({n}, {d})"),
             v_prescribed=zeros.copy(),
-            wall_force=np.zeros((n, n_walls)),
+            wall_force=np.zeros((n, int(n_walls))),
         )
         p.validate()
         return p
@@ -146,13 +173,22 @@ class Particles:
             arr = getattr(self, name)
             if arr.shape != shape:
                 raise ParameterError(name, arr.shape, f"expected shape {shape}")
-            if arr.dtype.kind == "f" and not np.all(np.isfinite(arr)):
-                raise ParameterError(name, "non-finite values", "all values finite")
-        if self.wall_force.shape[0] != n:
+            _check_finite(name, arr)
+        if self.wall_force.ndim != 2 or self.wall_force.shape[0] != n:
             raise ParameterError("wall_force", self.wall_force.shape, "(N, n_walls)")
+        _check_finite("wall_force", self.wall_force)
         if np.any(self.mass <= 0):
+            i = int(np.argmin(self.mass))
             raise ParameterError(
-                "mass", float(self.mass.min()), "particle masses must be > 0"
+                "mass",
+                float(self.mass[i]),
+                f"particle masses must be > 0 (particle {i})",
+            )
+        if self.material.dtype.kind not in "iu" or np.any(self.material < 0):
+            raise ParameterError(
+                "material",
+                f"{self.material.dtype} array, min {self.material.min(initial=0)}",
+                "integer indices >= 0 into the model's material list",
             )
 
     def arrays(self) -> dict[str, np.ndarray]:
@@ -168,3 +204,58 @@ class Particles:
             raise ParameterError("arrays", sorted(arrays), f"missing {err}") from None
         p.validate()
         return p
+
+
+def _describe(value: object) -> object:
+    """The value itself if its repr is short, else a truncated repr."""
+    text = repr(value)
+    return value if len(text) <= 60 else text[:57] + "..."
+
+
+def _float_array(name: str, value: object, allowed: str) -> np.ndarray:
+    """``np.array(value, float)`` that raises :class:`ParameterError`."""
+    try:
+        return np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(
+            name, _describe(value), f"real numbers, {allowed}"
+        ) from None
+
+
+def _bool_array(name: str, value: object, allowed: str) -> np.ndarray:
+    """``np.array(value, bool)`` that raises :class:`ParameterError`."""
+    try:
+        return np.array(value, dtype=bool)
+    except (TypeError, ValueError):
+        raise ParameterError(name, _describe(value), f"booleans, {allowed}") from None
+
+
+def _index_array(name: str, value: object, n: int) -> np.ndarray:
+    """Integer indices >= 0 of shape (n,); floats must be integral."""
+    allowed = f"integer indices >= 0, a number or shape ({n},)"
+    a = _float_array(name, value, allowed)
+    if a.ndim == 0:
+        a = np.full(n, float(a))
+    if a.shape != (n,):
+        raise ParameterError(name, a.shape, allowed)
+    bad = ~np.isfinite(a) | (a < 0) | (a != np.round(a))
+    if np.any(bad):
+        i = int(np.flatnonzero(bad)[0])
+        raise ParameterError(name, float(a[i]), f"{allowed} (particle {i})")
+    return a.astype(np.int64)
+
+
+def _check_finite(name: str, arr: np.ndarray) -> None:
+    """Raise :class:`ParameterError` naming the first NaN/inf entry of ``arr``."""
+    if arr.dtype.kind not in "fc":
+        return
+    bad = ~np.isfinite(arr)
+    if np.any(bad):
+        idx = np.argwhere(bad)[0]
+        where = ", ".join(str(int(k)) for k in idx)
+        first = arr[tuple(idx)]
+        raise ParameterError(
+            name,
+            f"{int(bad.sum())} non-finite value(s), first {first} at [{where}]",
+            "all values finite",
+        )

@@ -27,7 +27,7 @@ from skfem import MeshTet, MeshTri
 
 from .boundary import RigidWall
 from .conic import Contacts, SolverOptions, StepData, solve_step
-from .errors import ParameterError, SolverError
+from .errors import NpfemError, ParameterError, SolverError
 from .materials import Material
 from .particles import Particles
 from .smoothing import nodal_integration
@@ -101,6 +101,11 @@ class Model:
             val = getattr(self, name)
             if not (isinstance(val, int | float) and 0.5 <= val <= 1.0):
                 raise ParameterError(name, val, "a number in [0.5, 1]")
+        s = self.stress_scale
+        if s is not None and not (
+            isinstance(s, int | float) and math.isfinite(s) and s > 0
+        ):
+            raise ParameterError("stress_scale", s, "a stress > 0 (Pa) or None")
         g = self.gravity
         if not (isinstance(g, int | float) and math.isfinite(g) and g >= 0):
             raise ParameterError("gravity", g, "a finite number >= 0 (m/s^2)")
@@ -148,8 +153,36 @@ class FixedMesh:
     def __post_init__(self) -> None:
         self.t = np.asarray(self.t, dtype=np.int64)
         self._active = np.unique(self.t)
+        self._signs: np.ndarray | None = None
+
+    def _check_orientation(self, x: np.ndarray) -> None:
+        """Refuse a folded mesh: an element whose orientation has flipped."""
+        d = x.shape[1]
+        if self.t.shape[0] != d + 1:
+            return
+        v = x[self.t[1:]] - x[self.t[0]][None]  # (d, ne, d)
+        signs = np.sign(np.linalg.det(np.moveaxis(v, 0, 1)))
+        if self._signs is None:
+            self._signs = signs
+            return
+        flipped = (signs * self._signs) < 0
+        if np.any(flipped):
+            e = int(np.flatnonzero(flipped)[0])
+            raise NpfemError(
+                f"{int(flipped.sum())} element(s) of the fixed mesh turned inside "
+                f"out (first: element {e}); the deformation is too large for a "
+                "fixed connectivity: reduce dt or use remeshing (AlphaShapeMesher)"
+            )
 
     def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # noqa: D102
+        n = x.shape[0]
+        if self.t.size and (self.t.min() < 0 or self.t.max() >= n):
+            raise ParameterError(
+                "t",
+                f"indices {int(self.t.min())}..{int(self.t.max())}",
+                f"particle indices in 0..{n - 1}",
+            )
+        self._check_orientation(x)
         if self._active.size != x.shape[0]:
             local = np.searchsorted(self._active, self.t)
             return self._active, local
@@ -402,6 +435,10 @@ def advance(
     if not (math.isfinite(dt) and dt > 0):
         raise ParameterError("dt", dt, "a finite time step > 0 (s)")
     d = model.dim
+    if p.dim != d:
+        raise ParameterError(
+            "particles", f"{p.dim}D positions", f"{d}D positions for a {d}D model"
+        )
     t0 = time.perf_counter()
     active, local_t = mesh_source(p.x)
     xa = p.x[active]
@@ -463,8 +500,11 @@ def advance(
         v[inactive] = p.v[inactive] + dt * g
         a[inactive] = g
     if model.update_geometry:
-        x, v = project_to_walls(model.walls, p.x + du, v, friction=inactive)
-        u = p.u + (x - p.x)
+        moved = p.x + du
+        x, v = project_to_walls(model.walls, moved, v, friction=inactive)
+        # Accumulate du itself (x - p.x would lose increments below ~1e-16 |x|);
+        # only the wall projection goes through the positions.
+        u = p.u + du + (x - moved)
     else:
         x, u = p.x, p.u + du
     wall_force = np.zeros_like(p.wall_force)
@@ -846,7 +886,25 @@ class Simulation:
             "max_kinetic_energy": float(
                 max((r.kinetic_energy for r in recs), default=0.0)
             ),
+            "linear_solvers": sorted(
+                {
+                    r.solution.sizes.get("linear_solver", "")
+                    for r in recs
+                    if r.solution is not None
+                }
+            ),
+            "peak_memory_mb": peak_memory_mb(),
         }
+
+
+def peak_memory_mb() -> float:
+    """Peak resident memory of this process so far, MiB (0 where unknown)."""
+    try:
+        import resource
+    except ImportError:  # pragma: no cover - not on Windows
+        return 0.0
+    kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return float(kib) / (1024.0 if sys.platform != "darwin" else 1024.0**2)
 
 
 @dataclass

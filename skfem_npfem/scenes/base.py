@@ -184,6 +184,10 @@ class Scene:
         """Build and run the scene; return (and optionally write) the summary."""
         values = self.resolve(overrides)
         start = time.perf_counter()
+        if out is not None:
+            _check_writable_dir("out", Path(out))
+        if summary is not None:
+            _check_writable_dir("--summary", Path(summary).parent, Path(summary))
         checkpoint = self._resume_point(out, values) if resume else None
         if out is not None:  # lets `skfem-npfem plot DIR` find the scene scales
             write_json(
@@ -262,6 +266,28 @@ def _attach_checkpoints(sim: Any, out: str | Path | None, values: dict) -> None:
         sim.checkpoint_every = int(
             values.get("checkpoint_every") or DEFAULT_CHECKPOINT_EVERY
         )
+
+
+def _check_writable_dir(name: str, folder: Path, target: Path | None = None) -> None:
+    """Create ``folder`` if needed; raise ParameterError naming ``name`` if unusable.
+
+    Checked before a run starts, so a long run never ends in an unwritable path.
+    """
+    shown = target if target is not None else folder
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        probe = folder / ".skfem-npfem-write-test"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as err:
+        raise ParameterError(
+            name,
+            str(shown),
+            f"a writable {'file path' if target else 'directory'} "
+            f"({err.strerror or err})",
+        ) from None
+    if target is not None and target.is_dir():
+        raise ParameterError(name, str(target), "a file path, not a directory")
 
 
 def write_json(path: str | Path, obj: dict) -> None:

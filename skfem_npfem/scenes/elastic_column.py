@@ -133,7 +133,8 @@ def build(
         t_exact = 4 * H / np.sqrt(M / mat.rho)
         return {
             "sigma_v_rel_l2": _rel(sv, sv_ex),
-            "sigma_h_rel_l2": _rel(sh, nu / (1 - nu) * sv_ex),
+            # nu = 0: the exact s_h is 0; normalise by |s_v| instead of NaN.
+            "sigma_h_rel_l2": _rel(sh, nu / (1 - nu) * sv_ex, sv_ex),
             "settlement": float(-p.u[top, -1].mean()),
             "settlement_exact": mat.rho * g * H**2 / (2 * M),
             "base_sigma_v": float(sv[base].mean()),
@@ -151,8 +152,11 @@ def build(
     return SceneRun(sim, {"steps": values["steps"]}, metrics)
 
 
-def _rel(a: np.ndarray, b: np.ndarray) -> float:
+def _rel(a: np.ndarray, b: np.ndarray, scale: np.ndarray | None = None) -> float:
+    """``|a - b| / |b|``; if ``b`` is zero, ``|a - b| / |scale|`` (NaN without)."""
     nb = float(np.linalg.norm(b))
+    if nb == 0 and scale is not None:
+        nb = float(np.linalg.norm(scale))
     return float(np.linalg.norm(a - b) / nb) if nb > 0 else float("nan")
 
 
