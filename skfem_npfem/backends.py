@@ -34,8 +34,11 @@ __all__ = ["choose_linear_solver", "mkl_available", "mkl_library_dir"]
 
 # Problem sizes (number of cone-program variables) where the backends cross over,
 # measured on a 2-core machine by benchmarks/step_time.py (see docs/performance.md).
-QDLDL_MAX_VARIABLES_2D = 12_000
-MKL_MIN_VARIABLES = 3_000
+# qdldl beats faer on 2D problems up to ~24k variables (4k particles) and loses
+# by 1.8x at ~96k (16k particles); MKL Pardiso loses to qdldl at ~6k variables
+# (1k particles: 0.47 vs 0.18 s/step) and wins at ~24k (1.29 vs 1.84 s/step).
+QDLDL_MAX_VARIABLES_2D = 48_000
+MKL_MIN_VARIABLES = 15_000
 
 
 def _wheel_lib_dirs() -> list[Path]:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ..conic import LINEAR_SOLVERS, SolverOptions
+from ..conic import ACCURACY_PRESETS, LINEAR_SOLVERS, SolverOptions
 from .base import Param
 
 __all__ = ["checkpoint_step", "make_writer", "solver_from", "solver_params"]
@@ -32,6 +32,15 @@ def solver_params() -> list[Param]:
             lo_open=True,
             hi_open=True,
         ),
+        Param(
+            "accuracy",
+            None,
+            "-",
+            "solver preset (overrides tol): high = tol 1e-8; fast = tol 1e-6 and "
+            "no iterative refinement (default: use tol)",
+            str,
+            tuple(ACCURACY_PRESETS),
+        ),
     ]
 
 
@@ -41,6 +50,7 @@ def solver_from(values: dict[str, Any]) -> SolverOptions:
         linear_solver=values["linear_solver"],
         max_threads=values["threads"],
         tol=values["tol"],
+        accuracy=values.get("accuracy"),
     )
 
 
