@@ -52,12 +52,7 @@ C_FOOT = 1.0e4  # footing default cohesion, Pa
 PRANDTL = 2.0 + math.pi
 N_GAMMA_30 = {"smooth": 7.653, "rough": 14.75}  # benchmarks.md P3 (Martin 2005)
 
-# Column-collapse scene: being written by another engineer.  Cases to add here
-# once it is stable (NOT tested yet): phi in {0+c, 10, 30, 50} deg; E in {1e3,
-# 1e6, 1e10} Pa with dt scaled to the same CFL; dt in {1e-6, 1e-3, 5e-3} s
-# (runout and at-rest statistics independent of dt below the collapse time);
-# length scale L0 in {1 mm, 100 m} with dt ~ sqrt(L0/g) (runout/L0 equal).
-COLUMN_COLLAPSE_CASES: list[str] = []
+# The column-collapse part of the matrix is in tests/test_extremes_collapse.py.
 
 
 # --------------------------------------------------------------- framework ----
@@ -932,9 +927,3 @@ def test_iterations_stay_roughly_constant_across_the_matrix():
     assert max(peaks.values()) <= 30, peaks
     elastic = [outs[c.name] for c in DEFAULT if c.scene == "elastic-column"]
     assert all(it == 0 for o in elastic for it in o.iterations)
-
-
-def test_column_collapse_placeholder_is_empty():
-    # The column-collapse scene is tested elsewhere while it is being written;
-    # its extreme cases (see COLUMN_COLLAPSE_CASES) are not part of this matrix.
-    assert COLUMN_COLLAPSE_CASES == []
