@@ -25,3 +25,30 @@ def test_ci_runs_the_readme_test_command():
     assert len(lines) == 1
     assert lines[0].rstrip().endswith("&& pytest")
     assert "README.md" in (ROOT / ".ci" / "run").read_text()
+
+
+def _documented_keys(row_name: str) -> set[str]:
+    text = (ROOT / "docs" / "output.md").read_text()
+    row = next(ln for ln in text.splitlines() if ln.startswith(f"| `{row_name}`"))
+    cell = row.split("|")[2]
+    names = set(re.findall(r"`([a-z_]+)`", cell))
+    return {n.removesuffix("_") for n in names}
+
+
+def test_summary_keys_match_the_documented_contract():
+    # The JSON summary is a public contract: every key docs/output.md lists for
+    # `solver` and `history` must be present (names with a "/" expand).
+    from skfem_npfem import run_scene
+
+    s = run_scene("column-collapse", {"spacing": 0.2 / 6, "t_end": 0.01})
+    solver = set(s["solver"])
+    documented = _documented_keys("solver")
+    expanded = {"ipm_iterations_total", "ipm_iterations_max", "ipm_iterations_mean"}
+    documented = (documented - {"ipm_iterations_total"}) | expanded
+    documented -= {"mesh", "assembly", "setup", "solve", "update", "output"}
+    assert documented <= solver, documented - solver
+    phases = set(s["solver"]["wall_time"])
+    assert {"mesh", "assembly", "setup", "solve", "update", "output"} <= phases
+    history = set(s["history"][0])
+    assert (_documented_keys("history") - {"runout", "max_height"}) <= history
+    assert {"runout", "max_height"} <= history
