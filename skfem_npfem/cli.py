@@ -160,13 +160,19 @@ def cmd_plot(args: argparse.Namespace) -> int:
         raise NpfemError(
             f"plotting needs the viz extra (pip install 'skfem-npfem[viz]'): {err}"
         ) from None
-    written = plot_results(
-        args.dir,
-        times=args.times,
-        normalised=not args.absolute,
-        field=args.field,
-        animation=args.animation,
-    )
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        written = plot_results(
+            args.dir,
+            times=args.times,
+            normalised=not args.absolute,
+            field="stress_yy" if args.field is None else list(args.field),
+            animation=args.animation,
+        )
+    for w in caught:
+        print(f"note: {w.message}", file=sys.stderr)
     for path in written:
         print(path)
     return 0
@@ -222,8 +228,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p_plot.add_argument(
         "--field",
-        default="stress_yy",
-        help="stress_yy, plastic_strain_eq, velocity, ...",
+        nargs="+",
+        default=None,
+        help="fields to draw (default: the vertical stress and plastic_strain_eq); "
+        "stress_xx, stress_yy, stress_zz, stress_xy, pressure, plastic_strain_eq, "
+        "velocity, displacement",
     )
     p_plot.add_argument("--animation", default="gif", choices=("gif", "mp4", "none"))
     p_plot.add_argument(
