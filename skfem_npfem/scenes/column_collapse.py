@@ -54,7 +54,7 @@ from ..pfem import AlphaShapeMesher, main_body
 from ..simulation import AtRest, Model, Simulation
 from ..smoothing import nodal_integration
 from .base import Param, Scene, SceneRun
-from .common import make_writer, solver_from, solver_params
+from .common import elastic_params, make_writer, solver_from, solver_params
 
 MATERIALS = ("mohr-coulomb", "drucker-prager")
 
@@ -88,18 +88,7 @@ PARAMS = [
     ),
     Param("material", "mohr-coulomb", "-", "yield criterion", str, MATERIALS),
     Param("rho", 1800.0, "kg/m^3", "density", float, lo=0, lo_open=True),
-    Param("E", 1.0e7, "Pa", "Young's modulus", float, lo=0, lo_open=True),
-    Param(
-        "nu",
-        0.3,
-        "-",
-        "Poisson's ratio",
-        float,
-        lo=-1,
-        hi=0.5,
-        lo_open=True,
-        hi_open=True,
-    ),
+    *elastic_params(1.0e7),
     Param(
         "phi",
         30.0,

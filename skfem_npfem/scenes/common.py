@@ -8,10 +8,34 @@ from typing import Any
 from ..conic import ACCURACY_PRESETS, LINEAR_SOLVERS, SolverOptions
 from .base import Param
 
-__all__ = ["checkpoint_step", "make_writer", "solver_from", "solver_params"]
+__all__ = [
+    "checkpoint_step",
+    "elastic_params",
+    "make_writer",
+    "solver_from",
+    "solver_params",
+]
 
 #: Steps between checkpoints of scenes that do not choose (``checkpoint_every``).
 DEFAULT_CHECKPOINT_EVERY = 20
+
+
+def elastic_params(E: float) -> list[Param]:
+    """Young's modulus (default ``E``, Pa) and Poisson's ratio parameters."""
+    return [
+        Param("E", E, "Pa", "Young's modulus", float, lo=0, lo_open=True),
+        Param(
+            "nu",
+            0.3,
+            "-",
+            "Poisson's ratio",
+            float,
+            lo=-1,
+            hi=0.5,
+            lo_open=True,
+            hi_open=True,
+        ),
+    ]
 
 
 def solver_params() -> list[Param]:

@@ -19,22 +19,11 @@ from ..materials import LinearElastic
 from ..particles import Particles
 from ..simulation import FixedMesh, Model, Simulation
 from .base import Param, Scene, SceneRun
-from .common import make_writer, solver_from, solver_params
+from .common import elastic_params, make_writer, solver_from, solver_params
 
 PARAMS = [
     Param("dim", 2, "-", "spatial dimension (2: plane strain, 3: 3D)", int, (2, 3)),
-    Param("E", 1.0e7, "Pa", "Young's modulus", float, lo=0, lo_open=True),
-    Param(
-        "nu",
-        0.3,
-        "-",
-        "Poisson's ratio",
-        float,
-        lo=-1,
-        hi=0.5,
-        lo_open=True,
-        hi_open=True,
-    ),
+    *elastic_params(1.0e7),
     Param("rho", 2000.0, "kg/m^3", "density", float, lo=0, lo_open=True),
     Param("gravity", 9.81, "m/s^2", "gravitational acceleration", float, lo=0),
     Param("height", 4.0, "m", "column height H", float, lo=0, lo_open=True),

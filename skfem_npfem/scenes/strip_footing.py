@@ -26,24 +26,13 @@ from ..particles import Particles
 from ..simulation import FixedMesh, Model, Simulation
 from ..smoothing import nodal_integration
 from .base import Param, Scene, SceneRun
-from .common import make_writer, solver_from, solver_params
+from .common import elastic_params, make_writer, solver_from, solver_params
 
 MATERIALS = ("tresca", "mohr-coulomb", "drucker-prager")
 
 PARAMS = [
     Param("material", "tresca", "-", "yield criterion", str, MATERIALS),
-    Param("E", 1.0e8, "Pa", "Young's modulus", float, lo=0, lo_open=True),
-    Param(
-        "nu",
-        0.3,
-        "-",
-        "Poisson's ratio",
-        float,
-        lo=-1,
-        hi=0.5,
-        lo_open=True,
-        hi_open=True,
-    ),
+    *elastic_params(1.0e8),
     Param("c", 1.0e4, "Pa", "cohesion", float, lo=0),
     Param(
         "phi",
