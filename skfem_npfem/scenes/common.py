@@ -60,8 +60,8 @@ def solver_params() -> list[Param]:
             "accuracy",
             None,
             "-",
-            "solver preset (overrides tol): high = tol 1e-8; fast = tol 1e-6 and "
-            "no iterative refinement (default: use tol)",
+            "solver preset (overrides tol): high = tol 1e-8, fast = tol 1e-6 "
+            "(default: use tol)",
             str,
             tuple(ACCURACY_PRESETS),
         ),
