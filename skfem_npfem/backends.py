@@ -34,11 +34,14 @@ __all__ = ["choose_linear_solver", "mkl_available", "mkl_library_dir"]
 
 # Problem sizes (number of cone-program variables) where the backends cross over,
 # measured on a 2-core machine by benchmarks/step_time.py (see docs/performance.md).
-# qdldl beats faer on 2D problems up to ~24k variables (4k particles) and loses
-# by 1.8x at ~96k (16k particles); MKL Pardiso loses to qdldl at ~6k variables
-# (1k particles: 0.47 vs 0.18 s/step) and wins at ~24k (1.29 vs 1.84 s/step).
+# benchmarks/results/suite.md (2-core machine, s/step, high preset): qdldl beats
+# faer on 2D problems up to ~24k variables (4k particles) and loses by 1.8x at
+# ~96k; MKL Pardiso (2 threads, no iterative refinement) loses to qdldl on the
+# 1k-particle collapse (5.3k variables: 0.27 vs 0.23 s) and wins from the
+# 2k-particle collapse on (10k variables: 0.58 vs 0.67 s; 20k: 1.34 vs 2.42 s)
+# and on every 3D case (3k particles: 4.05 s vs faer 8.03 s).
 QDLDL_MAX_VARIABLES_2D = 48_000
-MKL_MIN_VARIABLES = 15_000
+MKL_MIN_VARIABLES = 8_000
 
 
 def _wheel_lib_dirs() -> list[Path]:
