@@ -1,0 +1,789 @@
+#!/usr/bin/env python
+"""Benchmark suite: time per N-PFEM step per case, linear-solver backend and preset.
+
+Cases (``--cases``; see ``benchmarks/README.md``):
+
+* ``collapse-1k``, ``collapse-4k``, ``collapse-16k`` (``collapse-2k`` optional):
+  steps of the ``column-collapse`` scene (a = 2, spacing L0/22, L0/44, L0/89,
+  L0/31), remeshed every step;
+* ``block3d-3k``, ``block3d-11k`` (``block3d-10k`` optional): the gravity-loaded
+  Drucker-Prager block of ``step_time.py`` (open variant) in 3D at 3 312,
+  10 692 (9 537) nodes;
+* ``footing-1.6k``, ``footing-4.8k``: the ``strip-footing`` scene at spacing
+  0.0625 and 0.03125 (all 8 settlement steps; q_ult is recorded).
+
+Every (case, backend, preset) runs in its own subprocess (this script called
+with ``--child``): the first step is a warm-up and is not timed (scene build,
+first factorisation symbolic work, imports), then ``steps`` steps are timed one
+``Simulation.run(steps=1)`` at a time.  With ``--repeat N`` every combination is
+run N times, interleaved (round robin, rotated order) so that ratios between
+backends and presets come from the same stretch of machine load.
+
+Usage::
+
+    PYTHONPATH=. python benchmarks/suite.py                          # default cases
+    PYTHONPATH=. python benchmarks/suite.py --cases collapse-4k --backends qdldl,mkl
+    PYTHONPATH=. python benchmarks/suite.py --compare A.json B.json
+    PYTHONPATH=. python benchmarks/suite.py --render results/suite.json
+
+Writes ``<out>/suite.json`` and ``<out>/suite.md`` (default ``benchmarks/results``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+if str(HERE) not in sys.path:
+    sys.path.insert(0, str(HERE))
+
+import step_time as st
+
+# --------------------------------------------------------------------------------
+# Cases
+# --------------------------------------------------------------------------------
+#: kind "collapse": column-collapse scene, spacing = L0 / div (a = 2, L0 = 0.2 m).
+#: kind "block3d": step_time.py's open DP block in 3D with nx x ny x nz elements.
+#: kind "footing": strip-footing scene with the given spacing (8 steps in all).
+#: ``steps``: timed steps after the untimed warm-up step.
+CASES: dict[str, dict] = {
+    "collapse-1k": {"kind": "collapse", "div": 22, "steps": 5},
+    "collapse-2k": {"kind": "collapse", "div": 31, "steps": 5},
+    "collapse-4k": {"kind": "collapse", "div": 44, "steps": 5},
+    "collapse-16k": {"kind": "collapse", "div": 89, "steps": 5},
+    "block3d-3k": {"kind": "block3d", "n": (22, 11, 11), "steps": 3},
+    "block3d-10k": {"kind": "block3d", "n": (32, 16, 16), "steps": 3},
+    "block3d-11k": {"kind": "block3d", "n": (32, 17, 17), "steps": 3},
+    "footing-1.6k": {"kind": "footing", "spacing": 0.0625, "steps": 7},
+    "footing-4.8k": {"kind": "footing", "spacing": 0.03125, "steps": 7},
+}
+DEFAULT_CASES = (
+    "collapse-1k",
+    "collapse-4k",
+    "collapse-16k",
+    "block3d-3k",
+    "block3d-11k",
+    "footing-1.6k",
+    "footing-4.8k",
+)
+BACKENDS = ("qdldl", "faer", "mkl")
+PRESETS = ("high", "fast")
+#: Solver variants: the two presets of SolverOptions plus two diagnostic
+#: combinations that separate the tolerance from the iterative refinement.
+PRESET_SPECS = {
+    "high": {"accuracy": "high"},
+    "fast": {"accuracy": "fast"},
+    "fast+ref": {"tol": 1e-6, "iterative_refinement": True},
+    "high-noref": {"tol": 1e-8, "iterative_refinement": False},
+}
+#: Combinations skipped by default, with the reason (printed in the notes).
+HOPELESS = {
+    ("block3d-10k", "qdldl"): "qdldl on 3D at ~10k nodes: a one-step probe of "
+    "step_time.py 3d-10k had not finished after 8.5 min (qdldl is ~5-9x slower "
+    "per IPM iteration than faer on 3D programs)",
+    ("block3d-11k", "qdldl"): "as block3d-10k / qdldl (larger still)",
+}
+#: Issue text, 2-core machine, straightforward implementation: s per step.
+#: (3D: a quarter cylinder of 3.4k / 10.7k nodes, not the block; indicative.)
+REFERENCE = {
+    "collapse-1k": {"qdldl": 0.2},
+    "collapse-4k": {"qdldl": 2.1, "mkl": 1.3},
+    "collapse-16k": {"faer": 17.0, "mkl": 8.2},
+    "block3d-3k": {"faer": 21.0, "mkl": 9.4},
+    "block3d-11k": {"mkl": 75.0},
+}
+#: Targets, s per step (best backend).
+TARGET = {"collapse-4k": 1.4, "collapse-16k": 9.0, "block3d-3k": 9.0, "block3d-11k": 75}
+PHASES = ("mesh", "assembly", "setup", "solve", "update", "output", "other")
+L0 = 0.2
+#: A step is "clean" when other processes used fewer cores than this meanwhile.
+CLEAN_OTHERS = 0.25
+_CLK_TCK = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
+
+
+def cpu_busy_s() -> float:
+    """Busy CPU seconds of all cores since boot (user..steal from /proc/stat)."""
+    try:
+        with open("/proc/stat") as f:
+            v = [int(x) for x in f.readline().split()[1:9]]
+    except OSError:
+        return math.nan
+    return (sum(v) - v[3] - v[4]) / _CLK_TCK
+
+
+def wait_for_idle(max_cores: float, max_wait: float, window: float = 3.0) -> dict:
+    """Wait until the other processes use fewer than ``max_cores`` cores.
+
+    Measured over ``window`` seconds from /proc/stat (not the 1-min load
+    average, which lags and includes our own previous run).  Returns the wait
+    and the last measured busy cores.
+    """
+    t0 = time.monotonic()
+    while True:
+        b0, w0 = cpu_busy_s(), time.monotonic()
+        time.sleep(window)
+        busy = (cpu_busy_s() - b0) / (time.monotonic() - w0)
+        if not busy >= max_cores or time.monotonic() - t0 >= max_wait:
+            return {"waited_s": time.monotonic() - t0, "busy_cores": busy}
+
+
+def case_size(name: str) -> int:
+    """Particles / nodes of a case (without building it)."""
+    c = CASES[name]
+    if c["kind"] == "collapse":
+        return (c["div"] + 1) * (2 * c["div"] + 1)
+    if c["kind"] == "block3d":
+        nx, ny, nz = c["n"]
+        return (nx + 1) * (ny + 1) * (nz + 1)
+    from skfem_npfem.scenes.strip_footing import graded_coordinates
+
+    return len(graded_coordinates(1.0, c["spacing"], 5.0, 1.15)) ** 2
+
+
+# --------------------------------------------------------------------------------
+# Child: build a case and time its steps
+# --------------------------------------------------------------------------------
+def solver_options(backend: str, preset: str, threads: int = 0):
+    """SolverOptions of a backend and a variant of PRESET_SPECS."""
+    from skfem_npfem.conic import SolverOptions
+
+    return SolverOptions(
+        linear_solver=backend, max_threads=threads, **PRESET_SPECS[preset]
+    )
+
+
+def build_block3d(n: tuple[int, int, int], backend: str, preset: str, threads: int):
+    """Simulation of step_time.py's open 3D Drucker-Prager block (nx x ny x nz)."""
+    import numpy as np
+    from skfem import MeshTet
+
+    from skfem_npfem.materials import DruckerPrager
+    from skfem_npfem.particles import Particles
+    from skfem_npfem.simulation import FixedMesh, Model, Simulation
+    from skfem_npfem.smoothing import nodal_integration
+
+    nx, ny, nz = n
+    W, D, H = st.WIDTH, st.DEPTH, st.HEIGHT
+    mesh = MeshTet.init_tensor(
+        np.linspace(0, W, nx + 1), np.linspace(0, D, ny + 1), np.linspace(0, H, nz + 1)
+    )
+    mat = DruckerPrager(
+        st.E, st.NU, st.RHO, c=st.COHESION, phi=st.PHI, psi=st.PSI, match="compression"
+    )
+    x = mesh.p.T.copy()
+    vol = nodal_integration(mesh).volumes
+    sv = -st.RHO * st.GRAV * (H - x[:, -1])
+    stress = np.zeros((x.shape[0], 6))
+    stress[:, :3] = st.K0 * sv[:, None]
+    stress[:, 2] = sv
+    fixed = np.zeros((x.shape[0], 3), bool)
+    fixed[np.isclose(x[:, 2], 0.0)] = True
+    for k, ext in ((0, W), (1, D)):
+        fixed[np.isclose(x[:, k], 0.0) | np.isclose(x[:, k], ext), k] = True
+    # Open variant: the face x = W is free (the block starts to collapse).
+    fixed[np.isclose(x[:, 0], W) & ~np.isclose(x[:, 2], 0.0), 0] = False
+    particles = Particles.create(x, st.RHO * vol, stress=stress, fixed=fixed)
+    model = Model(
+        dim=3,
+        materials=[mat],
+        gravity=st.GRAV,
+        mode="dynamic",
+        theta1=1.0,
+        theta2=1.0,
+        solver=solver_options(backend, preset, threads),
+    )
+    return Simulation(particles, model, FixedMesh(mesh.t), st.DT)
+
+
+def build(case: str, backend: str, preset: str, threads: int):
+    """(simulation, metrics function or None) of a case."""
+    c = CASES[case]
+    if c["kind"] == "block3d":
+        return build_block3d(c["n"], backend, preset, threads), None
+    from skfem_npfem.scenes import get_scene
+
+    scene_preset = preset if preset in ("high", "fast") else "high"
+    common = {"linear_solver": backend, "accuracy": scene_preset, "threads": threads}
+    if c["kind"] == "collapse":
+        scene = get_scene("column-collapse")
+        values = scene.resolve({"spacing": L0 / c["div"], "t_end": 10.0, **common})
+    else:
+        scene = get_scene("strip-footing")
+        values = scene.resolve({"spacing": c["spacing"], **common})
+    srun = scene.build(values, out=None, progress=False)
+    if preset != scene_preset:
+        srun.simulation.model.solver = solver_options(backend, preset, threads)
+    return srun.simulation, srun.metrics
+
+
+def run_child(case: str, backend: str, preset: str, threads: int, steps: int) -> dict:
+    """Warm-up step, then ``steps`` timed steps; a JSON-able record."""
+    t0 = time.perf_counter()
+    import numpy as np
+
+    from skfem_npfem.errors import SolverError
+
+    t_import = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    sim, metrics = build(case, backend, preset, threads)
+    t_build = time.perf_counter() - t0
+    out = {
+        "case": case,
+        "kind": CASES[case]["kind"],
+        "backend": backend,
+        "preset": preset,
+        "threads": threads,
+        "particles": int(sim.particles.n),
+        "import_s": t_import,
+        "build_s": t_build,
+        "source_sha1": st.source_hash(),
+        "steps": [],
+        "note": "",
+    }
+    for k in range(steps + 1):
+        load = os.getloadavg()[0]
+        b0 = cpu_busy_s()
+        c0 = time.process_time()
+        t0 = time.perf_counter()
+        try:
+            sim.run(steps=1)
+        except SolverError as err:
+            out["note"] = f"solver failed at step {k + 1}: {err}"
+            break
+        wall = time.perf_counter() - t0
+        cpu = time.process_time() - c0
+        others = max((cpu_busy_s() - b0 - cpu) / wall, 0.0)
+        rec = sim.records[-1]
+        if k == 0:
+            out["warmup_s"] = wall
+            out["warmup_iterations"] = int(rec.iterations)
+            continue
+        phases = {ph: float(rec.timings.get(ph, 0.0)) for ph in PHASES[:-1]}
+        phases["other"] = max(wall - sum(phases.values()), 0.0)
+        sizes = rec.solution.sizes
+        out["steps"].append(
+            {
+                "step": rec.step,
+                "dt": rec.dt,
+                "status": rec.status,
+                "iterations": int(rec.iterations),
+                "retries": int(rec.retries),
+                "phases": phases,
+                "wall": wall,
+                "cpu": cpu,
+                "loadavg_1min": load,
+                # Cores used by other processes during the step (/proc/stat).
+                "other_cores": others,
+                "variables": int(sizes["variables"]),
+                "rows": int(sizes["rows"]),
+                "nnz_A": int(sizes["nnz_A"]),
+                "linear_solver": sizes.get("linear_solver", backend),
+                "n_active": int(rec.n_active),
+                "peak_rss_mb": st.peak_rss_mb(),
+            }
+        )
+    out["peak_rss_mb"] = st.peak_rss_mb()
+    if metrics is not None and not out["note"]:
+        if CASES[case]["kind"] == "footing":
+            sim.run(steps=max(0, 8 - sim.step))  # all settlement steps
+            m = metrics(sim)
+            out["metrics"] = {
+                "q_ult": m["q_ult"],
+                "bearing_factor": m["bearing_factor"],
+                "relative_error": m["relative_error"],
+            }
+    out["final_max_speed"] = float(np.max(np.linalg.norm(sim.particles.v, axis=1)))
+    return out
+
+
+# --------------------------------------------------------------------------------
+# Parent
+# --------------------------------------------------------------------------------
+def run_subprocess(case, backend, preset, args, repeat: int) -> dict:
+    """One (case, backend, preset) run in a fresh interpreter."""
+    waited_load = None
+    t_wait = time.monotonic()
+    if args.wait_load > 0:
+        waited_load = st.wait_for_quiet(args.wait_load, args.wait_max)
+    idle = None
+    if args.wait_idle > 0:
+        idle = wait_for_idle(args.wait_idle, args.wait_max)
+    waited = time.monotonic() - t_wait
+    steps = args.steps or CASES[case]["steps"]
+    cmd = [
+        sys.executable,
+        str(Path(__file__).resolve()),
+        "--child",
+        f"{case}:{backend}:{preset}",
+        "--threads",
+        str(args.threads),
+        "--steps",
+        str(steps),
+    ]
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(
+        [str(ROOT), *filter(None, [env.get("PYTHONPATH")])]
+    )
+    timeout = (steps + 3) * args.step_limit + 300.0
+    base = {"case": case, "backend": backend, "preset": preset, "repeat": repeat}
+    load0 = os.getloadavg()[0]
+    t0 = time.perf_counter()
+    try:
+        proc = subprocess.run(
+            cmd, env=env, capture_output=True, text=True, timeout=timeout
+        )
+    except subprocess.TimeoutExpired:
+        return {**base, "steps": [], "note": f"killed after {timeout:.0f} s"}
+    elapsed = time.perf_counter() - t0
+    for line in reversed(proc.stdout.splitlines()):
+        if line.startswith("@@RESULT@@ "):
+            res = json.loads(line[len("@@RESULT@@ ") :])
+            res.update(base)
+            res["subprocess_s"] = elapsed
+            res["loadavg_before"] = load0
+            res["waited_s"] = waited
+            res["waited_to_load"] = waited_load
+            res["idle_before"] = idle
+            return res
+    return {
+        **base,
+        "steps": [],
+        "note": f"subprocess failed (rc={proc.returncode}): "
+        + proc.stderr.strip()[-1500:],
+    }
+
+
+def summarise(runs: list[dict]) -> dict:
+    """Pool the timed steps of the repeats of one (case, backend, preset)."""
+    steps_all = [s for r in runs for s in r.get("steps", []) if "phases" in s]
+    if not steps_all:
+        return {}
+    clean = [s for s in steps_all if s.get("other_cores", 0.0) < CLEAN_OTHERS]
+    # Clean steps only when there are enough of them (else all, flagged).
+    steps = clean if len(clean) >= max(2, len(steps_all) // 3) else steps_all
+    runs = [{**r, "steps": [s for s in r.get("steps", []) if s in steps]} for r in runs]
+    walls = [s["wall"] for s in steps]
+    phase_sum = {ph: sum(s["phases"][ph] for s in steps) for ph in PHASES}
+    tot = sum(phase_sum.values()) or 1.0
+    per_run = [
+        statistics.median(s["wall"] for s in r["steps"]) for r in runs if r["steps"]
+    ]
+    solver_pct = 100.0 * (phase_sum["setup"] + phase_sum["solve"]) / tot
+    its = [s["iterations"] for s in steps]
+    metrics = [r["metrics"] for r in runs if r.get("metrics")]
+    return {
+        "median_s": statistics.median(walls),
+        "min_s": min(walls),
+        "per_run_median_s": per_run,
+        "median_cpu_s": statistics.median(s["cpu"] for s in steps),
+        "median_phase_s": {
+            ph: statistics.median(s["phases"][ph] for s in steps) for ph in PHASES
+        },
+        "split_pct": {ph: 100.0 * v / tot for ph, v in phase_sum.items()},
+        "solver_pct": solver_pct,
+        "non_solver_pct": 100.0 - solver_pct,
+        "iterations": its,
+        "iterations_mean": statistics.fmean(its),
+        "s_per_iteration": statistics.median(
+            s["phases"]["solve"] / max(s["iterations"], 1) for s in steps
+        ),
+        "statuses": sorted({s["status"] for s in steps}),
+        "linear_solvers": sorted({s["linear_solver"] for s in steps}),
+        "variables": statistics.median(s["variables"] for s in steps),
+        "particles": runs[0].get("particles"),
+        "peak_rss_mb": max(r.get("peak_rss_mb", 0.0) for r in runs),
+        "max_loadavg": max(s["loadavg_1min"] for s in steps),
+        "min_loadavg": min(s["loadavg_1min"] for s in steps),
+        "repeats": len(per_run),
+        "steps_used": len(steps),
+        "steps_total": len(steps_all),
+        "steps_clean": len(clean),
+        "only_clean": steps is clean,
+        "other_cores_median": statistics.median(
+            s.get("other_cores", math.nan) for s in steps
+        ),
+        "metrics": metrics[0] if metrics else None,
+        "metrics_all": metrics,
+    }
+
+
+def fmt_s(x: float) -> str:
+    return st.fmt_s(x) if x == x else "—"
+
+
+def _index(report: dict) -> dict:
+    """(case, backend, preset) -> list of runs."""
+    idx: dict[tuple, list] = {}
+    for r in report["runs"]:
+        idx.setdefault((r["case"], r["backend"], r["preset"]), []).append(r)
+    return idx
+
+
+def summaries(report: dict) -> dict:
+    return {k: summarise(v) for k, v in _index(report).items()}
+
+
+def markdown(report: dict) -> str:
+    """Tables of a suite report."""
+    m = report["machine"]
+    sm = summaries(report)
+    code = m.get("code", {})
+    lines = [
+        "# N-PFEM benchmark suite",
+        "",
+        f"Machine: {m['cpu']} ({m['cores_available']} of {m['cores']} cores, "
+        f"{m['memory_gb']} GB), Python {m['python']}, numpy {m['numpy']}, scipy "
+        f"{m['scipy']}, clarabel {m['clarabel']}, mkl {m.get('mkl', '?')}, "
+        f"scikit-fem {m['scikit-fem']}; {m['date']}.  Code: git "
+        f"{code.get('git_head', '?')}, library source hash "
+        f"{code.get('source_sha1', '?')}"
+        + (
+            f" (locally modified: {', '.join(code['git_modified'])})"
+            if code.get("git_modified")
+            else ""
+        )
+        + ".",
+        "",
+        f"Settings: {json.dumps(report['settings'])}",
+        "",
+        "`s/step`: median wall time of the timed steps (warm-up step excluded) "
+        "pooled over the repeats; `runs`: median of each repeat; `cpu`: median "
+        "process CPU time per step (all threads); `solver %`: Clarabel setup + "
+        "solve share of the summed step time, `non-solver %` the rest (remeshing "
+        "and smoothing cells, assembly, particle update, callbacks); `load`: 1-min "
+        "load average before the steps (min-max).  `others`: median number of "
+        "cores used by other processes during a timed step (from /proc/stat minus "
+        "our CPU time); a step is clean when others < 0.25, and only clean steps "
+        "enter the statistics when at least max(2, 1/3) of them are clean (`clean "
+        "steps`; otherwise all steps are used and the row is contaminated by "
+        "other jobs on this 2-core machine).  `ref`: issue-text number for a "
+        "straightforward implementation with the same backend (3D: a quarter cylinder, "
+        "indicative); `ratio` = s/step / ref.",
+        "",
+        "| case | particles | variables | backend | preset | s/step | runs | cpu s "
+        "| IPM it. | s/iter | solver % | non-solver % | peak MB | clean steps | others "
+        "| load | ref | ratio |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for (case, backend, preset), s in sm.items():
+        if not s:
+            note = "; ".join(
+                r.get("note", "") for r in _index(report)[(case, backend, preset)]
+            )
+            lines.append(
+                f"| {case} | | | {backend} | {preset} | — ({note[:60]}) |" + " |" * 10
+            )
+            continue
+        ref = REFERENCE.get(case, {}).get(backend)
+        used = "/".join(s["linear_solvers"])
+        bname = backend if used == backend else f"{backend}→{used}"
+        lines.append(
+            f"| {case} | {s['particles']} | {s['variables']:.0f} | {bname} | {preset} "
+            f"| {fmt_s(s['median_s'])} | "
+            + ", ".join(fmt_s(x) for x in s["per_run_median_s"])
+            + f" | {fmt_s(s['median_cpu_s'])} | {s['iterations_mean']:.1f} | "
+            f"{fmt_s(s['s_per_iteration'])} | {s['solver_pct']:.1f} | "
+            f"{s['non_solver_pct']:.1f} | {s['peak_rss_mb']:.0f} | "
+            f"{s['steps_clean']}/{s['steps_total']}"
+            + ("" if s["only_clean"] else " (all used)")
+            + f" | {s['other_cores_median']:.2f} | "
+            f"{s['min_loadavg']:.1f}-{s['max_loadavg']:.1f} | "
+            + (f"{ref:g} | {s['median_s'] / ref:.2f} |" if ref else "— | — |")
+        )
+    # Best backend per case and preset, fast/high ratios.
+    lines += [
+        "",
+        "## Best backend per case",
+        "",
+        "Ratios are of medians measured in the same (interleaved) run.  `fast/high`: "
+        "s/step and IPM iterations of the fast preset over the high preset, same "
+        "backend.",
+        "",
+        "| case | particles | best (high) | s/step | 2nd (high) | s/step | best/2nd "
+        "| best (fast) | s/step | fast/high time (best) | fast/high iterations "
+        "| target | met |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    cases = list(dict.fromkeys(k[0] for k in sm))
+    for case in cases:
+        row = {}
+        for preset in PRESETS:
+            cand = sorted(
+                (s["median_s"], b)
+                for (c, b, p), s in sm.items()
+                if c == case and p == preset and s and b != "auto"
+            )
+            row[preset] = cand
+        hi, fa = row.get("high", []), row.get("fast", [])
+        if not hi:
+            continue
+        b1 = hi[0]
+        b2 = hi[1] if len(hi) > 1 else (math.nan, "—")
+        s_hi = sm[(case, b1[1], "high")]
+        s_fa = sm.get((case, b1[1], "fast")) or {}
+        tfh = s_fa["median_s"] / s_hi["median_s"] if s_fa else math.nan
+        ifh = s_fa["iterations_mean"] / s_hi["iterations_mean"] if s_fa else math.nan
+        tgt = TARGET.get(case)
+        best = min(b1[0], fa[0][0] if fa else math.inf)
+        lines.append(
+            f"| {case} | {s_hi['particles']} | {b1[1]} | {fmt_s(b1[0])} | {b2[1]} | "
+            f"{fmt_s(b2[0])} | {b1[0] / b2[0]:.2f} | "
+            + (f"{fa[0][1]} | {fmt_s(fa[0][0])} | " if fa else "— | — | ")
+            + f"{tfh:.2f} | {ifh:.2f} | "
+            + (f"≤ {tgt:g} | {'yes' if best <= tgt else 'no'} |" if tgt else "— | — |")
+        )
+    # Footing q_ult per backend / preset.
+    foot = [(k, s) for k, s in sm.items() if s and s.get("metrics")]
+    if foot:
+        lines += [
+            "",
+            "## Strip footing: q_ult per backend and preset",
+            "",
+            "| case | backend | preset | q_ult (Pa) | N_c = q/c | error vs 2+pi "
+            "| vs high (same backend) |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for (case, backend, preset), s in foot:
+            q = s["metrics"]["q_ult"]
+            hi = sm.get((case, backend, "high")) or {}
+            qh = (hi.get("metrics") or {}).get("q_ult")
+            rel = f"{q / qh - 1:+.2e}" if qh else "—"
+            lines.append(
+                f"| {case} | {backend} | {preset} | {q:.6g} | "
+                f"{s['metrics']['bearing_factor']:.5f} | "
+                f"{s['metrics']['relative_error']:+.4f} | {rel} |"
+            )
+    notes = [
+        f"* {r['case']} / {r['backend']} / {r['preset']}: {r['note']}"
+        for r in report["runs"]
+        if r.get("note")
+    ]
+    hashes = {r.get("source_sha1") for r in report["runs"] if r.get("source_sha1")}
+    if len(hashes) > 1:
+        notes.append(
+            f"* **warning**: the library sources changed during the sweep "
+            f"(hashes {', '.join(sorted(hashes))}); runs are not strictly comparable"
+        )
+    if notes:
+        lines += ["", "Notes:", "", *notes]
+    lines.append("")
+    return "\n".join(lines)
+
+
+def compare(path_a: str, path_b: str) -> str:
+    """Before/after table of two suite reports (B/A ratios)."""
+    a = json.loads(Path(path_a).read_text())
+    b = json.loads(Path(path_b).read_text())
+    sa, sb = summaries(a), summaries(b)
+    keys = [k for k in sa if k in sb] + [k for k in sb if k not in sa]
+    rows = [
+        f"A = {path_a} ({a['machine'].get('date', '?')})",
+        f"B = {path_b} ({b['machine'].get('date', '?')})",
+        "",
+        "| case | backend | preset | A s/step | B s/step | B/A | A solve | B solve "
+        "| B/A solve | A non-solver | B non-solver | A it. | B it. | A load | B load |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+
+    def nonsolve(s):
+        return sum(v for k, v in s["median_phase_s"].items() if k not in ("solve",))
+
+    for key in keys:
+        x, y = sa.get(key) or {}, sb.get(key) or {}
+        if not x or not y:
+            rows.append(f"| {' | '.join(key)} |" + " |" * 12)
+            continue
+        xs, ys = x["median_phase_s"]["solve"], y["median_phase_s"]["solve"]
+        rows.append(
+            f"| {' | '.join(key)} | {fmt_s(x['median_s'])} | {fmt_s(y['median_s'])} "
+            f"| {y['median_s'] / x['median_s']:.2f} | {fmt_s(xs)} | {fmt_s(ys)} | "
+            f"{ys / xs:.2f} | {fmt_s(nonsolve(x))} | {fmt_s(nonsolve(y))} | "
+            f"{x['iterations_mean']:.1f} | {y['iterations_mean']:.1f} | "
+            f"{x['max_loadavg']:.1f} | {y['max_loadavg']:.1f} |"
+        )
+    return "\n".join(rows)
+
+
+def machine_info() -> dict:
+    info = st.machine_info()
+    try:
+        from importlib.metadata import version
+
+        info["mkl"] = version("mkl")
+    except Exception:
+        info["mkl"] = None
+    try:
+        from skfem_npfem.backends import mkl_available
+
+        info["mkl_available"] = bool(mkl_available())
+    except Exception:
+        info["mkl_available"] = False
+    return info
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--cases", default=",".join(DEFAULT_CASES), help=f"{list(CASES)}")
+    ap.add_argument(
+        "--backends", default=",".join(BACKENDS), help="qdldl,faer,mkl (or auto)"
+    )
+    ap.add_argument("--presets", default=",".join(PRESETS), help="high,fast")
+    ap.add_argument(
+        "--steps", type=int, default=0, help="timed steps (0: the case's default)"
+    )
+    ap.add_argument("--repeat", type=int, default=1, help="runs per combination")
+    ap.add_argument("--threads", type=int, default=0, help="Clarabel max_threads")
+    ap.add_argument(
+        "--skip",
+        default="",
+        help="extra case:backend pairs to skip (hopeless 3D qdldl is always skipped "
+        "unless --no-default-skips)",
+    )
+    ap.add_argument("--no-default-skips", action="store_true")
+    ap.add_argument(
+        "--step-limit",
+        type=float,
+        default=300.0,
+        help="a child is killed after (steps + 3) * this + 300 s",
+    )
+    ap.add_argument(
+        "--wait-idle",
+        type=float,
+        default=0.0,
+        help="before each run wait (up to --wait-max s) until other processes "
+        "use fewer than this many cores (3 s /proc/stat window); e.g. 0.15",
+    )
+    ap.add_argument("--wait-load", type=float, default=0.0)
+    ap.add_argument("--wait-max", type=float, default=300.0)
+    ap.add_argument("--out", default=str(HERE / "results"))
+    ap.add_argument("--name", default="suite", help="output file stem")
+    ap.add_argument(
+        "--append", action="store_true", help="add runs to <out>/<name>.json"
+    )
+    ap.add_argument("--compare", nargs=2, metavar=("A.json", "B.json"))
+    ap.add_argument("--render", metavar="FILE.json")
+    ap.add_argument("--child", help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+
+    if args.compare:
+        print(compare(*args.compare))
+        return 0
+    if args.render:
+        path = Path(args.render)
+        rep = json.loads(path.read_text())
+        path.with_suffix(".md").write_text(markdown(rep))
+        print(markdown(rep))
+        return 0
+    if args.child:
+        case, backend, preset = args.child.split(":")
+        res = run_child(case, backend, preset, args.threads, args.steps)
+        print("@@RESULT@@ " + json.dumps(res), flush=True)
+        return 0
+
+    cases = [c for c in args.cases.split(",") if c]
+    for c in cases:
+        if c not in CASES:
+            ap.error(f"unknown case {c!r}; choose from {list(CASES)}")
+    backends = [b for b in args.backends.split(",") if b]
+    presets = [p for p in args.presets.split(",") if p]
+    skip = {tuple(x.split(":")) for x in args.skip.split(",") if x}
+    reasons = {} if args.no_default_skips else dict(HOPELESS)
+    skip |= set(reasons)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    jpath = out / f"{args.name}.json"
+    if args.append and jpath.exists():
+        report = json.loads(jpath.read_text())
+        report.setdefault("appended", []).append(
+            {"date": time.strftime("%Y-%m-%dT%H:%M:%S"), "argv": sys.argv[1:]}
+        )
+    else:
+        report = {
+            "machine": machine_info(),
+            "settings": {
+                "repeat": args.repeat,
+                "threads": args.threads,
+                "wait_load": args.wait_load,
+                "wait_idle": args.wait_idle,
+                # Scheduling priority of the runs (negative: favoured over the
+                # other jobs of a shared machine; `nice -n -10 python ...`).
+                "niceness": os.nice(0),
+                "steps": args.steps or "case default",
+                "loadavg_at_start": os.getloadavg(),
+                "argv": sys.argv[1:],
+            },
+            "cases": {c: CASES[c] for c in CASES},
+            "reference_s_per_step": REFERENCE,
+            "targets_s_per_step": TARGET,
+            "runs": [],
+        }
+
+    def save():
+        jpath.write_text(json.dumps(report, indent=1))
+        jpath.with_suffix(".md").write_text(markdown(report))
+
+    for case in cases:
+        combos = []
+        for backend in backends:
+            if (case, backend) in skip:
+                for p in presets:
+                    report["runs"].append(
+                        {
+                            "case": case,
+                            "backend": backend,
+                            "preset": p,
+                            "steps": [],
+                            "note": "skipped"
+                            + (
+                                f": {reasons[(case, backend)]}"
+                                if (case, backend) in reasons
+                                else ""
+                            ),
+                        }
+                    )
+                continue
+            combos += [(backend, p) for p in presets]
+        for rep in range(args.repeat):
+            k = rep % max(len(combos), 1)
+            order = combos[k:] + combos[:k]
+            if rep % 2:
+                order = order[::-1]
+            for backend, preset in order:
+                print(
+                    f"{case:13s} {backend:5s} {preset:4s} #{rep + 1} "
+                    f"({time.strftime('%H:%M:%S')}, load {os.getloadavg()[0]:.2f}) ...",
+                    end=" ",
+                    flush=True,
+                )
+                run = run_subprocess(case, backend, preset, args, rep)
+                s = summarise([run])
+                if s:
+                    print(
+                        f"{s['median_s']:.3f} s/step, it {s['iterations']}, "
+                        f"solver {s['solver_pct']:.1f} %, "
+                        f"peak {s['peak_rss_mb']:.0f} MB, "
+                        f"load {s['min_loadavg']:.1f}-{s['max_loadavg']:.1f}, "
+                        f"others {s['other_cores_median']:.2f} "
+                        f"({s['steps_clean']}/{s['steps_total']} clean)",
+                        flush=True,
+                    )
+                else:
+                    print(run.get("note", "no result"), flush=True)
+                report["runs"].append(run)
+                save()
+    save()
+    print(markdown(report))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
