@@ -77,13 +77,16 @@ DEFAULT_CASES = (
 )
 BACKENDS = ("qdldl", "faer", "mkl")
 PRESETS = ("high", "fast")
-#: Solver variants: the two presets of SolverOptions plus two diagnostic
-#: combinations that separate the tolerance from the iterative refinement.
+#: Solver variants: the two presets of SolverOptions plus diagnostic
+#: combinations that separate the tolerance from the iterative refinement
+#: (``fast-noref`` is the ``fast`` preset before 2026-11-22 01:58, which also
+#: turned the refinement off for qdldl and faer).
 PRESET_SPECS = {
     "high": {"accuracy": "high"},
     "fast": {"accuracy": "fast"},
     "fast+ref": {"tol": 1e-6, "iterative_refinement": True},
     "high-noref": {"tol": 1e-8, "iterative_refinement": False},
+    "fast-noref": {"tol": 1e-6, "iterative_refinement": False},
 }
 #: Combinations skipped by default, with the reason (printed in the notes).
 HOPELESS = {
@@ -424,7 +427,10 @@ def _index(report: dict) -> dict:
     """(case, backend, preset) -> list of runs."""
     idx: dict[tuple, list] = {}
     for r in report["runs"]:
-        idx.setdefault((r["case"], r["backend"], r["preset"]), []).append(r)
+        # Runs with an explicit thread count (--threads N) are kept apart.
+        t = r.get("threads") or 0
+        backend = r["backend"] + (f" ({t} thr.)" if t else "")
+        idx.setdefault((r["case"], backend, r["preset"]), []).append(r)
     return idx
 
 
@@ -483,9 +489,9 @@ def markdown(report: dict) -> str:
                 f"| {case} | | | {backend} | {preset} | — ({note[:60]}) |" + " |" * 10
             )
             continue
-        ref = REFERENCE.get(case, {}).get(backend)
+        ref = REFERENCE.get(case, {}).get(backend) if " " not in backend else None
         used = "/".join(s["linear_solvers"])
-        bname = backend if used == backend else f"{backend}→{used}"
+        bname = backend if used == backend.split()[0] else f"{backend}→{used}"
         lines.append(
             f"| {case} | {s['particles']} | {s['variables']:.0f} | {bname} | {preset} "
             f"| {fmt_s(s['median_s'])} | "
