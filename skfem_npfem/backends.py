@@ -19,18 +19,26 @@ that asks for ``mkl``.
 
 from __future__ import annotations
 
+import ctypes
 import functools
 import glob
 import hashlib
 import os
 import shutil
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["choose_linear_solver", "mkl_available", "mkl_library_dir"]
+__all__ = [
+    "choose_linear_solver",
+    "mkl_available",
+    "mkl_library_dir",
+    "pardiso_threads",
+]
 
 # Problem sizes (number of cone-program variables) where the backends cross over,
 # measured on a 2-core machine by benchmarks/step_time.py (see docs/performance.md).
@@ -124,6 +132,72 @@ def mkl_available() -> bool:
         return str(solver.solve().status) == "Solved"
     except Exception:  # Clarabel reports an unavailable backend as Exception
         return False
+
+
+#: ``MKL_DOMAIN_PARDISO`` of mkl_types.h: MKL's thread setting for Pardiso only.
+_MKL_DOMAIN_PARDISO = 4
+
+
+@functools.cache
+def _mkl_runtime() -> ctypes.CDLL | None:
+    """The ``libmkl_rt`` that Clarabel loaded into this process (None: no MKL).
+
+    Found in ``/proc/self/maps`` after :func:`mkl_available` has made Clarabel
+    load it, so that thread settings reach the very library Pardiso runs in.
+    """
+    if not mkl_available():
+        return None
+    path = None
+    try:
+        with open("/proc/self/maps") as f:
+            for line in f:
+                name = line.rsplit(None, 1)[-1]
+                if os.path.basename(name).startswith("libmkl_rt.so"):
+                    path = name
+                    break
+    except OSError:
+        pass
+    if path is None:
+        path = str(Path(os.environ.get("MKL_PARDISO_PATH", "")) / "libmkl_rt.so")
+    try:
+        return ctypes.CDLL(path)
+    except OSError:
+        return None
+
+
+def pardiso_thread_count(requested: int = 0) -> int:
+    """Threads MKL Pardiso runs with: ``requested`` if > 0, else MKL's own setting.
+
+    Returns 0 when MKL is not available.
+    """
+    lib = _mkl_runtime()
+    if lib is None:
+        return 0
+    if requested > 0:
+        return int(requested)
+    return int(lib.MKL_Domain_Get_Max_Threads(_MKL_DOMAIN_PARDISO))
+
+
+@contextmanager
+def pardiso_threads(n: int) -> Iterator[None]:
+    """Run MKL Pardiso with ``n`` threads inside the block (0: MKL's setting).
+
+    Clarabel 0.11 applies its ``max_threads`` to Pardiso only *after* the
+    symbolic analysis, and MKL 2026.2 then crashes (SIGSEGV) in 3D programs when
+    the count drops to 1 (a 225-node block already).  Setting MKL's Pardiso
+    thread count before the solver is built avoids that; the previous setting
+    is restored afterwards.
+    """
+    lib = _mkl_runtime() if n > 0 else None
+    if lib is None:
+        yield
+        return
+    old = int(lib.MKL_Domain_Get_Max_Threads(_MKL_DOMAIN_PARDISO))
+    lib.MKL_Domain_Set_Num_Threads(int(n), _MKL_DOMAIN_PARDISO)
+    try:
+        yield
+    finally:
+        lib.MKL_Domain_Set_Num_Threads(old, _MKL_DOMAIN_PARDISO)
 
 
 def choose_linear_solver(n_variables: int, dim: int) -> str:

@@ -40,7 +40,12 @@ import clarabel
 import numpy as np
 import scipy.sparse as sp
 
-from .backends import choose_linear_solver, mkl_available
+from .backends import (
+    choose_linear_solver,
+    mkl_available,
+    pardiso_thread_count,
+    pardiso_threads,
+)
 from .errors import ParameterError, SolverError
 from .materials import Material
 from .smoothing import NodalIntegration
@@ -69,7 +74,9 @@ class SolverOptions:
         dimension and size (:func:`skfem_npfem.backends.choose_linear_solver`):
         MKL Pardiso when installed, else qdldl for small 2D and faer otherwise.
     max_threads : int
-        Threads for faer (0: Clarabel decides).
+        Threads of the linear solver, faer or MKL Pardiso (0: the library's own
+        choice, all physical cores).  qdldl is single-threaded.  Measured on 2
+        cores in docs/performance.md: 1 thread is faster for faer in 2D.
     tol : float
         Gap and feasibility tolerances (Clarabel default 1e-8).
     max_iter : int
@@ -91,6 +98,12 @@ class SolverOptions:
         Preset that overrides ``tol``: ``"high"`` = 1e-8 (Clarabel's default),
         ``"fast"`` = 1e-6 (fewer interior-point iterations; its cost in accuracy
         is measured in docs/performance.md).
+    reproducible : bool
+        MKL Pardiso only: run in MKL's conditional numerical reproducibility
+        mode, so that identical runs and resumed runs give bit-identical
+        results.  False saves ~20-25 % of an MKL step, but round-off then
+        varies from run to run (a full column collapse differs in the 3rd-4th
+        digit of the run-out).  qdldl and faer are always reproducible.
     """
 
     linear_solver: str = "auto"
@@ -102,6 +115,7 @@ class SolverOptions:
     scaling: bool = True
     accuracy: str | None = None
     iterative_refinement: bool | None = None
+    reproducible: bool = True
 
     def __post_init__(self) -> None:
         if self.accuracy is not None:
@@ -114,6 +128,8 @@ class SolverOptions:
             raise ParameterError(
                 "linear_solver", self.linear_solver, f"one of {LINEAR_SOLVERS}"
             )
+        if not isinstance(self.reproducible, bool):
+            raise ParameterError("reproducible", self.reproducible, "True or False")
         if not (isinstance(self.max_threads, int) and self.max_threads >= 0):
             raise ParameterError("max_threads", self.max_threads, "an integer >= 0")
         if not (math.isfinite(self.tol) and 0 < self.tol < 1e-2):
@@ -147,13 +163,17 @@ class SolverOptions:
         s = clarabel.DefaultSettings()
         s.verbose = bool(self.verbose)
         s.direct_solve_method = linear_solver or self.linear_solver
-        if s.direct_solve_method == "mkl":
-            # Conditional numerical reproducibility: identical runs (and resumed
-            # runs) give bit-identical results with any thread count.
-            iparm = list(s.pardiso_iparm)
-            iparm[33] = 2
-            s.pardiso_iparm = iparm
         s.max_threads = int(self.max_threads)
+        if s.direct_solve_method == "mkl":
+            # Pardiso's threads are set by solve_step (backends.pardiso_threads):
+            # Clarabel would change them after the analysis, which crashes MKL.
+            s.max_threads = 0
+            if self.reproducible:
+                # Conditional numerical reproducibility for this thread count:
+                # identical runs and resumed runs give bit-identical results.
+                iparm = list(s.pardiso_iparm)
+                iparm[33] = max(1, pardiso_thread_count(self.max_threads))
+                s.pardiso_iparm = iparm
         s.max_iter = int(self.max_iter)
         s.time_limit = float(self.time_limit)
         s.tol_gap_abs = s.tol_gap_rel = s.tol_feas = self.tol
@@ -737,25 +757,24 @@ def solve_step(
     q_hat = col_scale * q / J_star
     t1 = time.perf_counter()
     backend = options.resolved_linear_solver(prog.nx, d)
-    solver = clarabel.DefaultSolver(
-        P_hat, q_hat, A_hat, b_hat, cones, options.clarabel_settings(backend)
-    )
-    t2 = time.perf_counter()
-    sol = solver.solve()
-    status = str(sol.status)
-    iters = int(sol.iterations)
-    settings = options.clarabel_settings(backend)
-    if status in ("InsufficientProgress", "NumericalError") and not (
-        settings.iterative_refinement_enable
-    ):
-        # Without iterative refinement the KKT solves can be too inaccurate near
-        # the optimum (seen in 3D at tol 1e-6): repeat once with refinement.
-        settings.iterative_refinement_enable = True
-        sol = clarabel.DefaultSolver(
-            P_hat, q_hat, A_hat, b_hat, cones, settings
-        ).solve()
+    with pardiso_threads(options.max_threads if backend == "mkl" else 0):
+        settings = options.clarabel_settings(backend)
+        solver = clarabel.DefaultSolver(P_hat, q_hat, A_hat, b_hat, cones, settings)
+        t2 = time.perf_counter()
+        sol = solver.solve()
         status = str(sol.status)
-        iters += int(sol.iterations)
+        iters = int(sol.iterations)
+        if status in ("InsufficientProgress", "NumericalError") and not (
+            settings.iterative_refinement_enable
+        ):
+            # Without iterative refinement the KKT solves can be too inaccurate
+            # near the optimum (seen in 3D at tol 1e-6): repeat once with it.
+            settings.iterative_refinement_enable = True
+            sol = clarabel.DefaultSolver(
+                P_hat, q_hat, A_hat, b_hat, cones, settings
+            ).solve()
+            status = str(sol.status)
+            iters += int(sol.iterations)
     t3 = time.perf_counter()
     if status not in ACCEPTED:
         raise SolverError(status, step, iters, _hint(status, data))

@@ -102,3 +102,93 @@ def test_private_cache_folder_works(tmp_path):
     status, values = res.split(" ", 1)
     assert status == "Solved"
     assert np.allclose(ast.literal_eval(values), [-1.0, 1.0], atol=1e-4)
+
+
+# A gravity-loaded Drucker-Prager block (8 x 4 x 4 tets, 225 nodes) whose face
+# x = W is free: one dynamic step with many active yield cones.  Run in a child
+# process because a crash inside MKL would take pytest down with it.
+_BLOCK3D_CHILD = """
+import sys
+import numpy as np
+from skfem import MeshTet
+import skfem_npfem as npfem
+from skfem_npfem import backends
+from skfem_npfem.simulation import FixedMesh, Model, Simulation
+from skfem_npfem.smoothing import nodal_integration
+
+W, D, H, rho, g = 2.0, 1.0, 1.0, 1800.0, 9.81
+mesh = MeshTet.init_tensor(
+    np.linspace(0, W, 9), np.linspace(0, D, 5), np.linspace(0, H, 5)
+)
+x = mesh.p.T.copy()
+sv = -rho * g * (H - x[:, 2])
+stress = np.zeros((x.shape[0], 6))
+stress[:, :3] = 0.5 * sv[:, None]
+stress[:, 2] = sv
+fixed = np.zeros((x.shape[0], 3), bool)
+fixed[np.isclose(x[:, 2], 0.0)] = True
+for k, ext in ((0, W), (1, D)):
+    fixed[np.isclose(x[:, k], 0.0) | np.isclose(x[:, k], ext), k] = True
+fixed[np.isclose(x[:, 0], W) & ~np.isclose(x[:, 2], 0.0), 0] = False
+mat = npfem.DruckerPrager(10e6, 0.3, rho, c=1e3, phi=30.0, psi=0.0,
+                          match="compression")
+out = {}
+for solver, threads in (("faer", 0), ("mkl", 1), ("mkl", 2)):
+    p = npfem.Particles.create(
+        x, rho * nodal_integration(mesh).volumes, stress=stress, fixed=fixed
+    )
+    model = Model(dim=3, materials=[mat], gravity=g, mode="dynamic",
+                  theta1=1.0, theta2=1.0,
+                  solver=npfem.SolverOptions(linear_solver=solver,
+                                             max_threads=threads))
+    sim = Simulation(p, model, FixedMesh(mesh.t), 5e-3)
+    sim.run(steps=1)
+    out[(solver, threads)] = sim.particles.x - x
+    assert sim.records[-1].iterations > 5  # the yield cones are active
+ref = out[("faer", 0)]
+for key in (("mkl", 1), ("mkl", 2)):
+    print(key[1], np.abs(out[key] - ref).max() / np.abs(ref).max())
+print("restored", backends.pardiso_thread_count(0))
+"""
+
+
+@pytest.mark.skipif(not _has_mkl_wheel(), reason="mkl extra not installed")
+def test_mkl_thread_count_is_honoured_in_3d():
+    # Clarabel 0.11 sets Pardiso's threads after the symbolic analysis, and MKL
+    # crashed (SIGSEGV) on this 225-node 3D step with max_threads = 1; the
+    # library now sets the thread count first.  Same displacement as faer to
+    # 1e-6 of the largest one, and MKL's own thread setting is restored.
+    before = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "from skfem_npfem import backends; print(backends.pardiso_thread_count(0))",
+        ],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.strip()
+    res = subprocess.run(
+        [sys.executable, "-c", _BLOCK3D_CHILD], capture_output=True, text=True
+    )
+    assert res.returncode == 0, res.stderr[-2000:]
+    lines = res.stdout.split("\n")
+    rel = {ln.split()[0]: float(ln.split()[1]) for ln in lines if ln[:1].isdigit()}
+    assert set(rel) == {"1", "2"}
+    assert max(rel.values()) < 1e-6, rel
+    assert f"restored {before}" in res.stdout
+
+
+@pytest.mark.skipif(not _has_mkl_wheel(), reason="mkl extra not installed")
+def test_mkl_reruns_are_bit_identical():
+    # Pardiso runs in MKL's conditional-reproducibility mode by default: the same
+    # collapse run twice (remeshing every step) ends with identical positions.
+    def run():
+        scene = npfem.get_scene("column-collapse")
+        values = scene.resolve({"linear_solver": "mkl"})
+        sim = scene.build(values, out=None, progress=False).simulation
+        sim.run(steps=10)
+        return sim.particles.x
+
+    a, b = run(), run()
+    assert np.array_equal(a, b)

@@ -33,6 +33,7 @@ from skfem_npfem import (
     ParameterError,
     Particles,
     Simulation,
+    SolverOptions,
     Tresca,
     advance,
     get_scene,
@@ -576,3 +577,25 @@ def test_cli_resume_from_corrupted_checkpoint(tmp_path):
         ["run", "elastic-column", "--out", str(out), "--resume", "--quiet"]
     )
     check_cli_error(code, err, "checkpoint", "checkpoint_000001.npz")
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"reproducible": "yes"}, "reproducible"),
+        ({"reproducible": 1}, "reproducible"),
+        ({"max_threads": -1}, "max_threads"),
+        ({"max_threads": 1.5}, "max_threads"),
+    ],
+)
+def test_solver_options_name_the_bad_setting(kwargs, name):
+    with pytest.raises(ParameterError) as info:
+        SolverOptions(**kwargs)
+    assert info.value.name == name
+
+
+def test_cli_rejects_a_non_boolean_reproducible():
+    code, err = run_cli(
+        ["run", "elastic-column", "--set", "reproducible=maybe", "--quiet"]
+    )
+    check_cli_error(code, err, "reproducible", "maybe")
