@@ -33,20 +33,17 @@ import argparse
 import json
 import math
 import os
-import resource
 import statistics
-import subprocess
 import sys
 import time
 from dataclasses import replace
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parent
 if str(HERE) not in sys.path:
     sys.path.insert(0, str(HERE))
 
-import step_time as st
+import _harness as harness
 import suite
 
 #: Warm-up steps (with the default settings) before the compared step.
@@ -269,14 +266,8 @@ def full_child(run: str, variant: str) -> dict:
 
     scene, ov = run_overrides(run)
     ov.update(variant_overrides(variant))
-    load0 = os.getloadavg()[0]
-    b0 = suite.cpu_busy_s()
-    c0 = time.process_time()
-    t0 = time.perf_counter()
-    res = run_scene(scene, ov)
-    wall = time.perf_counter() - t0
-    cpu = time.process_time() - c0
-    others = max((suite.cpu_busy_s() - b0 - cpu) / wall, 0.0)
+    with harness.Meter() as meter:
+        res = run_scene(scene, ov)
     metrics = {
         k: v for k, v in res["metrics"].items() if not isinstance(v, list | dict)
     }
@@ -298,12 +289,12 @@ def full_child(run: str, variant: str) -> dict:
         "step_time_median": solver["step_time_median"],
         "phase_total_s": solver["wall_time"],
         "wall_time_total": res["wall_time_total"],
-        "wall_s": wall,
-        "cpu_s": cpu,
+        "wall_s": meter.wall,
+        "cpu_s": meter.cpu,
         "peak_memory_mb": solver["peak_memory_mb"],
-        "loadavg_before": load0,
+        "loadavg_before": meter.load_before,
         "loadavg_after": os.getloadavg()[0],
-        "other_cores": others,
+        "other_cores": meter.others,
         "n_particles": solver["n_particles"],
         "dt_last": hist[-1]["dt"] if hist else None,
     }
@@ -311,46 +302,20 @@ def full_child(run: str, variant: str) -> dict:
 
 def run_full_subprocess(run: str, variant: str, args) -> dict:
     if args.wait_load > 0:
-        st.wait_for_quiet(args.wait_load, args.wait_max)
+        harness.wait_for_quiet(args.wait_load, args.wait_max)
     if args.wait_idle > 0:
-        suite.wait_for_idle(args.wait_idle, args.wait_max)
-    cmd = [
-        sys.executable,
-        str(Path(__file__).resolve()),
-        "--full-child",
-        f"{run}|{variant}",
-    ]
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(
-        [str(ROOT), *filter(None, [env.get("PYTHONPATH")])]
+        harness.wait_for_idle(args.wait_idle, args.wait_max)
+    res, note, wall, cpu = harness.run_child(
+        Path(__file__).resolve(),
+        ["--full-child", f"{run}|{variant}"],
+        args.timeout,
+        killed="killed after {timeout} s",
     )
-    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.perf_counter()
-    try:
-        proc = subprocess.run(
-            cmd, env=env, capture_output=True, text=True, timeout=args.timeout
-        )
-    except subprocess.TimeoutExpired:
-        return {
-            "run": run,
-            "variant": variant,
-            "note": f"killed after {args.timeout} s",
-        }
-    elapsed = time.perf_counter() - t0
-    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    for line in reversed(proc.stdout.splitlines()):
-        if line.startswith("@@RESULT@@ "):
-            res = json.loads(line[len("@@RESULT@@ ") :])
-            res["subprocess_s"] = elapsed
-            res["subprocess_cpu_s"] = (r1.ru_utime - r0.ru_utime) + (
-                r1.ru_stime - r0.ru_stime
-            )
-            return res
-    return {
-        "run": run,
-        "variant": variant,
-        "note": f"failed (rc={proc.returncode}): {proc.stderr.strip()[-1500:]}",
-    }
+    if res is None:
+        return {"run": run, "variant": variant, "note": note}
+    res["subprocess_s"] = wall
+    res["subprocess_cpu_s"] = cpu
+    return res
 
 
 FULL_KEYS = {
@@ -448,6 +413,13 @@ def markdown_full(report: dict) -> str:
     return "\n".join(lines)
 
 
+def markdown(report: dict) -> str:
+    """Tables of a ``--step`` or a ``--full`` report."""
+    return (
+        markdown_full(report) if report.get("kind") == "full" else markdown_step(report)
+    )
+
+
 def machine_line(m: dict) -> str:
     code = m.get("code", {})
     return (
@@ -490,18 +462,13 @@ def main(argv: list[str] | None = None) -> int:
 
     if args.full_child:
         run, variant = args.full_child.split("|")
-        print("@@RESULT@@ " + json.dumps(full_child(run, variant)), flush=True)
+        harness.emit_result(full_child(run, variant))
         return 0
     if args.render:
-        path = Path(args.render)
-        rep = json.loads(path.read_text())
-        md = markdown_full(rep) if rep.get("kind") == "full" else markdown_step(rep)
-        path.with_suffix(".md").write_text(md)
-        print(md)
-        return 0
+        return harness.render(args.render, markdown)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    machine = suite.machine_info()
+    machine = harness.machine_info()
     if args.step:
         path = out / f"{args.name or 'presets_step'}.json"
         rep = (
@@ -514,8 +481,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{case} ...", flush=True)
             res = step_accuracy(case, args.backends.split(","), args.presets.split(","))
             rep["cases"] = [c for c in rep["cases"] if c["case"] != case] + [res]
-            path.write_text(json.dumps(rep, indent=1))
-            path.with_suffix(".md").write_text(markdown_step(rep))
+            harness.write_report(path, rep, markdown_step(rep))
         print(markdown_step(rep))
     if args.full:
         path = out / f"{args.name or 'presets_full'}.json"
@@ -552,8 +518,7 @@ def main(argv: list[str] | None = None) -> int:
                         )
                     else:
                         print(res.get("note"), flush=True)
-                    path.write_text(json.dumps(rep, indent=1))
-                    path.with_suffix(".md").write_text(markdown_full(rep))
+                    harness.write_report(path, rep, markdown_full(rep))
         print(markdown_full(rep))
     return 0
 

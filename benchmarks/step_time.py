@@ -22,21 +22,20 @@ See ``benchmarks/README.md``.
 from __future__ import annotations
 
 import argparse
-import datetime as _dt
-import hashlib
 import json
 import math
 import os
-import platform
-import resource
 import statistics
-import subprocess
 import sys
 import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parent
+if str(HERE) not in sys.path:
+    sys.path.insert(0, str(HERE))
+
+import _harness as harness
+from _harness import fmt_s
 
 # --------------------------------------------------------------------------------
 # Cases
@@ -166,49 +165,6 @@ def yield_active_fraction(model, p_old, rec) -> float:
     return float(np.mean(norm >= (1.0 - 1e-3) * rhs))
 
 
-def source_hash() -> str:
-    """SHA-1 (12 hex digits) of the library sources, to tell code versions apart."""
-    h = hashlib.sha1()
-    for f in sorted((ROOT / "skfem_npfem").rglob("*.py")):
-        h.update(str(f.relative_to(ROOT)).encode())
-        h.update(f.read_bytes())
-    return h.hexdigest()[:12]
-
-
-def code_info() -> dict:
-    """Git HEAD, locally modified library files and the source hash (read-only)."""
-    info = {"source_sha1": source_hash()}
-    # No optional locks: `git status` must not even refresh the index.
-    env = {**os.environ, "GIT_OPTIONAL_LOCKS": "0"}
-    try:
-        info["git_head"] = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"],
-            cwd=ROOT,
-            env=env,
-            capture_output=True,
-            text=True,
-            timeout=30,
-        ).stdout.strip()
-        status = subprocess.run(
-            ["git", "status", "--porcelain", "--", "skfem_npfem"],
-            cwd=ROOT,
-            env=env,
-            capture_output=True,
-            text=True,
-            timeout=30,
-        ).stdout
-        info["git_modified"] = [ln[3:] for ln in status.splitlines() if ln.strip()]
-    except (OSError, subprocess.SubprocessError):
-        pass
-    return info
-
-
-def peak_rss_mb() -> float:
-    """Peak resident set size of this process, MB (Linux: ru_maxrss in kB)."""
-    r = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    return r / 1024.0 if sys.platform != "darwin" else r / 2**20
-
-
 def run_child(args) -> dict:
     """Run one case with one solver; return a JSON-able record."""
     t_import = time.perf_counter()
@@ -218,7 +174,7 @@ def run_child(args) -> dict:
     from skfem_npfem.simulation import advance
 
     t_import = time.perf_counter() - t_import
-    rss0 = peak_rss_mb()
+    rss0 = harness.peak_rss_mb()
     t0 = time.perf_counter()
     p, model, mesh_source = build_case(
         args.case, args.solver, args.threads, args.time_limit
@@ -233,7 +189,7 @@ def run_child(args) -> dict:
         "threads": args.threads,
         "steps_requested": args.steps,
         "dt": DT,
-        "source_sha1": source_hash(),
+        "source_sha1": harness.source_hash(),
         "init_s": t_init,
         "import_s": t_import,
         "rss_after_import_mb": rss0,
@@ -260,7 +216,7 @@ def run_child(args) -> dict:
                     "status": err.status,
                     "iterations": err.iterations,
                     "wall": time.perf_counter() - t0,
-                    "peak_rss_mb": peak_rss_mb(),
+                    "peak_rss_mb": harness.peak_rss_mb(),
                 }
             )
             out["note"] = f"solver failed at step {k}: {err.status}"
@@ -292,7 +248,7 @@ def run_child(args) -> dict:
             "n_cones": int(rec.n_active),
             "yield_active_fraction": yield_active_fraction(model, p, rec),
             "max_speed": float(np.max(np.linalg.norm(new.v, axis=1))),
-            "peak_rss_mb": peak_rss_mb(),
+            "peak_rss_mb": harness.peak_rss_mb(),
         }
         out["steps"].append(step)
         p = new
@@ -302,7 +258,7 @@ def run_child(args) -> dict:
                 f"{args.step_limit:g} s"
             )
             break
-    out["peak_rss_mb"] = peak_rss_mb()
+    out["peak_rss_mb"] = harness.peak_rss_mb()
     if profiler is not None:
         import pstats
 
@@ -316,72 +272,11 @@ def run_child(args) -> dict:
 # --------------------------------------------------------------------------------
 # Parent: drive subprocesses, summarise
 # --------------------------------------------------------------------------------
-def machine_info() -> dict:
-    """CPU, cores, memory and package versions."""
-    import clarabel
-    import numpy
-    import scipy
-    import skfem
-
-    cpu = platform.processor() or "unknown"
-    flags_bits = ""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name") and cpu in ("unknown", "", "x86_64"):
-                cpu = line.split(":", 1)[1].strip()
-            if line.startswith("flags") and not flags_bits:
-                fl = line.split(":", 1)[1].split()
-                flags_bits = " ".join(f for f in ("avx2", "avx512f", "fma") if f in fl)
-    except OSError:
-        pass
-    mem_gb = None
-    try:
-        for line in Path("/proc/meminfo").read_text().splitlines():
-            if line.startswith("MemTotal"):
-                mem_gb = round(int(line.split()[1]) / 2**20, 1)
-    except OSError:
-        pass
-    try:
-        affinity = len(os.sched_getaffinity(0))
-    except AttributeError:
-        affinity = os.cpu_count()
-    try:
-        from skfem_npfem import __version__ as npfem_version
-    except ImportError:
-        npfem_version = "unknown"
-    return {
-        "cpu": cpu,
-        "cpu_flags": flags_bits,
-        "cores": os.cpu_count(),
-        "cores_available": affinity,
-        "memory_gb": mem_gb,
-        "platform": platform.platform(),
-        "python": platform.python_version(),
-        "numpy": numpy.__version__,
-        "scipy": scipy.__version__,
-        "clarabel": clarabel.__version__,
-        "scikit-fem": getattr(skfem, "__version__", "unknown"),
-        "skfem-npfem": npfem_version,
-        "date": _dt.datetime.now().astimezone().isoformat(timespec="seconds"),
-        "code": code_info(),
-    }
-
-
-def wait_for_quiet(max_load: float, max_wait: float) -> float:
-    """Sleep until the 1-min load average is below ``max_load`` (or time out)."""
-    t0 = time.monotonic()
-    while os.getloadavg()[0] > max_load and time.monotonic() - t0 < max_wait:
-        time.sleep(5.0)
-    return os.getloadavg()[0]
-
-
 def run_subprocess(case: str, solver: str, args) -> dict:
     """Run one (case, solver) pair in a fresh interpreter."""
     if args.wait_load > 0:
-        wait_for_quiet(args.wait_load, args.wait_max)
-    cmd = [
-        sys.executable,
-        str(Path(__file__).resolve()),
+        harness.wait_for_quiet(args.wait_load, args.wait_max)
+    child_args = [
         "--case",
         case,
         "--solver",
@@ -395,38 +290,25 @@ def run_subprocess(case: str, solver: str, args) -> dict:
         "--time-limit",
         str(args.time_limit),
     ]
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(
-        [str(ROOT), *filter(None, [env.get("PYTHONPATH")])]
-    )
     timeout = args.steps * (args.time_limit + 120.0) + 300.0
-    t0 = time.perf_counter()
-    try:
-        proc = subprocess.run(
-            cmd, env=env, capture_output=True, text=True, timeout=timeout
-        )
-    except subprocess.TimeoutExpired:
+    res, note, wall, _ = harness.run_child(
+        Path(__file__).resolve(),
+        child_args,
+        timeout,
+        failed="subprocess failed",
+        killed="subprocess killed after {timeout:.0f} s",
+        tail=2000,
+    )
+    if res is None:
         return {
             "case": case,
             "solver": solver,
             "nodes": case_nodes(case),
             "steps": [],
-            "note": f"subprocess killed after {timeout:.0f} s",
+            "note": note,
         }
-    elapsed = time.perf_counter() - t0
-    for line in reversed(proc.stdout.splitlines()):
-        if line.startswith("@@RESULT@@ "):
-            res = json.loads(line[len("@@RESULT@@ ") :])
-            res["subprocess_s"] = elapsed
-            return res
-    return {
-        "case": case,
-        "solver": solver,
-        "nodes": case_nodes(case),
-        "steps": [],
-        "note": f"subprocess failed (rc={proc.returncode}): "
-        + proc.stderr.strip()[-2000:],
-    }
+    res["subprocess_s"] = wall
+    return res
 
 
 def summarise(run: dict) -> dict:
@@ -459,16 +341,6 @@ def summarise(run: dict) -> dict:
     }
 
 
-def fmt_s(x: float) -> str:
-    if x >= 100:
-        return f"{x:.0f}"
-    if x >= 10:
-        return f"{x:.1f}"
-    if x >= 1:
-        return f"{x:.2f}"
-    return f"{x:.3f}"
-
-
 def markdown(report: dict) -> str:
     """Summary table of a report."""
     m = report["machine"]
@@ -480,14 +352,7 @@ def markdown(report: dict) -> str:
         f"scipy {m['scipy']}, clarabel {m['clarabel']}, scikit-fem {m['scikit-fem']}; "
         f"{m['date']}.",
         "",
-        f"Code: git {m.get('code', {}).get('git_head', '?')}, library source hash "
-        f"{m.get('code', {}).get('source_sha1', '?')}"
-        + (
-            f" (locally modified: {', '.join(m['code']['git_modified'])})"
-            if m.get("code", {}).get("git_modified")
-            else ""
-        )
-        + ".",
+        harness.code_line(m.get("code", {})),
         "",
         f"Problem: {report['problem']}",
         "",
@@ -537,12 +402,9 @@ def markdown(report: dict) -> str:
             f"{s['median_cpu_s'] / s['median_wall_s']:.2f} | "
             f"{s['max_loadavg']:.1f} | {ratio} |"
         )
-    by_hash: dict[str, list[str]] = {}
-    for r in report["runs"]:
-        if r.get("source_sha1"):
-            by_hash.setdefault(r["source_sha1"], []).append(
-                f"{r['case']}/{r['solver']}"
-            )
+    by_hash = harness.runs_by_hash(
+        report["runs"], lambda r: f"{r['case']}/{r['solver']}"
+    )
     changed = (
         [
             "",
@@ -559,27 +421,19 @@ def markdown(report: dict) -> str:
         for r in report["runs"]
         if r.get("note")
     ]
-    lines += changed
-    if notes:
-        lines += ["", "Notes:", "", *notes]
-    lines.append("")
-    return "\n".join(lines)
+    return harness.finish_markdown(lines + changed, notes)
 
 
 def compare(path_a: str, path_b: str) -> str:
     """Before/after table of two JSON reports."""
-    a = json.loads(Path(path_a).read_text())
-    b = json.loads(Path(path_b).read_text())
+    a, b, rows = harness.load_pair(path_a, path_b)
 
     def index(rep):
         return {(r["case"], r["solver"]): r.get("summary") or {} for r in rep["runs"]}
 
     ia, ib = index(a), index(b)
     keys = [k for k in ia if k in ib] + [k for k in ib if k not in ia]
-    rows = [
-        f"A = {path_a} ({a['machine'].get('date', '?')})",
-        f"B = {path_b} ({b['machine'].get('date', '?')})",
-        "",
+    rows += [
         "| case | solver | A s/step | B s/step | B/A | A solve | B solve | B/A solve "
         "| A non-solve | B non-solve | B/A non-solve | A iters | B iters |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
@@ -670,15 +524,13 @@ def main(argv: list[str] | None = None) -> int:
             key = (run["case"], run["solver"])
             if not run.get("steps") and key in SKIP_REASONS:
                 run["note"] = f"skipped (--skip): {SKIP_REASONS[key]}"
-        path.write_text(json.dumps(report, indent=1))
-        path.with_suffix(".md").write_text(markdown(report))
+        harness.write_report(path, report, markdown(report))
         print(markdown(report))
         return 0
     if args.case:
         if args.case not in CASES:
             ap.error(f"unknown case {args.case!r}; choose from {list(CASES)}")
-        res = run_child(args)
-        print("@@RESULT@@ " + json.dumps(res), flush=True)
+        harness.emit_result(run_child(args))
         return 0
 
     cases = [c for c in args.cases.split(",") if c]
@@ -688,7 +540,7 @@ def main(argv: list[str] | None = None) -> int:
             ap.error(f"unknown case {c!r}; choose from {list(CASES)}")
     skip = {tuple(x.split(":")) for x in args.skip.split(",") if x}
     report = {
-        "machine": machine_info(),
+        "machine": harness.machine_info(),
         "problem": (
             f"Drucker-Prager block {WIDTH:g} x {HEIGHT:g} m (3D: {WIDTH:g} x "
             f"{DEPTH:g} x {HEIGHT:g} m) under gravity, geostatic initial stress "
@@ -745,8 +597,7 @@ def main(argv: list[str] | None = None) -> int:
                 print(run.get("note", "no result"), flush=True)
             report["runs"].append(run)
             # Write after every run so that partial results survive.
-            (out / "step_time.json").write_text(json.dumps(report, indent=1))
-            (out / "step_time.md").write_text(markdown(report))
+            harness.write_report(out / "step_time.json", report, markdown(report))
     print(markdown(report))
     return 0
 

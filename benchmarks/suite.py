@@ -36,16 +36,15 @@ import json
 import math
 import os
 import statistics
-import subprocess
 import sys
 import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parent
 if str(HERE) not in sys.path:
     sys.path.insert(0, str(HERE))
 
+import _harness as harness
 import step_time as st
 
 # --------------------------------------------------------------------------------
@@ -110,33 +109,6 @@ PHASES = ("mesh", "assembly", "setup", "solve", "update", "output", "other")
 L0 = 0.2
 #: A step is "clean" when other processes used fewer cores than this meanwhile.
 CLEAN_OTHERS = 0.25
-_CLK_TCK = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
-
-
-def cpu_busy_s() -> float:
-    """Busy CPU seconds of all cores since boot (user..steal from /proc/stat)."""
-    try:
-        with open("/proc/stat") as f:
-            v = [int(x) for x in f.readline().split()[1:9]]
-    except OSError:
-        return math.nan
-    return (sum(v) - v[3] - v[4]) / _CLK_TCK
-
-
-def wait_for_idle(max_cores: float, max_wait: float, window: float = 3.0) -> dict:
-    """Wait until the other processes use fewer than ``max_cores`` cores.
-
-    Measured over ``window`` seconds from /proc/stat (not the 1-min load
-    average, which lags and includes our own previous run).  Returns the wait
-    and the last measured busy cores.
-    """
-    t0 = time.monotonic()
-    while True:
-        b0, w0 = cpu_busy_s(), time.monotonic()
-        time.sleep(window)
-        busy = (cpu_busy_s() - b0) / (time.monotonic() - w0)
-        if not busy >= max_cores or time.monotonic() - t0 >= max_wait:
-            return {"waited_s": time.monotonic() - t0, "busy_cores": busy}
 
 
 def case_size(name: str) -> int:
@@ -248,23 +220,18 @@ def run_child(case: str, backend: str, preset: str, threads: int, steps: int) ->
         "particles": int(sim.particles.n),
         "import_s": t_import,
         "build_s": t_build,
-        "source_sha1": st.source_hash(),
+        "source_sha1": harness.source_hash(),
         "steps": [],
         "note": "",
     }
     for k in range(steps + 1):
-        load = os.getloadavg()[0]
-        b0 = cpu_busy_s()
-        c0 = time.process_time()
-        t0 = time.perf_counter()
         try:
-            sim.run(steps=1)
+            with harness.Meter() as meter:
+                sim.run(steps=1)
         except SolverError as err:
             out["note"] = f"solver failed at step {k + 1}: {err}"
             break
-        wall = time.perf_counter() - t0
-        cpu = time.process_time() - c0
-        others = max((cpu_busy_s() - b0 - cpu) / wall, 0.0)
+        wall = meter.wall
         rec = sim.records[-1]
         if k == 0:
             out["warmup_s"] = wall
@@ -282,19 +249,19 @@ def run_child(case: str, backend: str, preset: str, threads: int, steps: int) ->
                 "retries": int(rec.retries),
                 "phases": phases,
                 "wall": wall,
-                "cpu": cpu,
-                "loadavg_1min": load,
+                "cpu": meter.cpu,
+                "loadavg_1min": meter.load_before,
                 # Cores used by other processes during the step (/proc/stat).
-                "other_cores": others,
+                "other_cores": meter.others,
                 "variables": int(sizes["variables"]),
                 "rows": int(sizes["rows"]),
                 "nnz_A": int(sizes["nnz_A"]),
                 "linear_solver": sizes.get("linear_solver", backend),
                 "n_active": int(rec.n_active),
-                "peak_rss_mb": st.peak_rss_mb(),
+                "peak_rss_mb": harness.peak_rss_mb(),
             }
         )
-    out["peak_rss_mb"] = st.peak_rss_mb()
+    out["peak_rss_mb"] = harness.peak_rss_mb()
     if metrics is not None and not out["note"]:
         if CASES[case]["kind"] == "footing":
             sim.run(steps=max(0, 8 - sim.step))  # all settlement steps
@@ -316,15 +283,13 @@ def run_subprocess(case, backend, preset, args, repeat: int) -> dict:
     waited_load = None
     t_wait = time.monotonic()
     if args.wait_load > 0:
-        waited_load = st.wait_for_quiet(args.wait_load, args.wait_max)
+        waited_load = harness.wait_for_quiet(args.wait_load, args.wait_max)
     idle = None
     if args.wait_idle > 0:
-        idle = wait_for_idle(args.wait_idle, args.wait_max)
+        idle = harness.wait_for_idle(args.wait_idle, args.wait_max)
     waited = time.monotonic() - t_wait
     steps = args.steps or CASES[case]["steps"]
-    cmd = [
-        sys.executable,
-        str(Path(__file__).resolve()),
+    child_args = [
         "--child",
         f"{case}:{backend}:{preset}",
         "--threads",
@@ -332,37 +297,21 @@ def run_subprocess(case, backend, preset, args, repeat: int) -> dict:
         "--steps",
         str(steps),
     ]
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(
-        [str(ROOT), *filter(None, [env.get("PYTHONPATH")])]
-    )
     timeout = (steps + 3) * args.step_limit + 300.0
     base = {"case": case, "backend": backend, "preset": preset, "repeat": repeat}
     load0 = os.getloadavg()[0]
-    t0 = time.perf_counter()
-    try:
-        proc = subprocess.run(
-            cmd, env=env, capture_output=True, text=True, timeout=timeout
-        )
-    except subprocess.TimeoutExpired:
-        return {**base, "steps": [], "note": f"killed after {timeout:.0f} s"}
-    elapsed = time.perf_counter() - t0
-    for line in reversed(proc.stdout.splitlines()):
-        if line.startswith("@@RESULT@@ "):
-            res = json.loads(line[len("@@RESULT@@ ") :])
-            res.update(base)
-            res["subprocess_s"] = elapsed
-            res["loadavg_before"] = load0
-            res["waited_s"] = waited
-            res["waited_to_load"] = waited_load
-            res["idle_before"] = idle
-            return res
-    return {
-        **base,
-        "steps": [],
-        "note": f"subprocess failed (rc={proc.returncode}): "
-        + proc.stderr.strip()[-1500:],
-    }
+    res, note, wall, _ = harness.run_child(
+        Path(__file__).resolve(), child_args, timeout, failed="subprocess failed"
+    )
+    if res is None:
+        return {**base, "steps": [], "note": note}
+    res.update(base)
+    res["subprocess_s"] = wall
+    res["loadavg_before"] = load0
+    res["waited_s"] = waited
+    res["waited_to_load"] = waited_load
+    res["idle_before"] = idle
+    return res
 
 
 def summarise(runs: list[dict]) -> dict:
@@ -420,7 +369,7 @@ def summarise(runs: list[dict]) -> dict:
 
 
 def fmt_s(x: float) -> str:
-    return st.fmt_s(x) if x == x else "—"
+    return harness.fmt_s(x) if x == x else "—"
 
 
 def _index(report: dict) -> dict:
@@ -442,22 +391,14 @@ def markdown(report: dict) -> str:
     """Tables of a suite report."""
     m = report["machine"]
     sm = summaries(report)
-    code = m.get("code", {})
     lines = [
         "# N-PFEM benchmark suite",
         "",
         f"Machine: {m['cpu']} ({m['cores_available']} of {m['cores']} cores, "
         f"{m['memory_gb']} GB), Python {m['python']}, numpy {m['numpy']}, scipy "
         f"{m['scipy']}, clarabel {m['clarabel']}, mkl {m.get('mkl', '?')}, "
-        f"scikit-fem {m['scikit-fem']}; {m['date']}.  Code: git "
-        f"{code.get('git_head', '?')}, library source hash "
-        f"{code.get('source_sha1', '?')}"
-        + (
-            f" (locally modified: {', '.join(code['git_modified'])})"
-            if code.get("git_modified")
-            else ""
-        )
-        + ".",
+        f"scikit-fem {m['scikit-fem']}; {m['date']}.  "
+        + harness.code_line(m.get("code", {})),
         "",
         f"Settings: {json.dumps(report['settings'])}",
         "",
@@ -573,28 +514,21 @@ def markdown(report: dict) -> str:
         for r in report["runs"]
         if r.get("note")
     ]
-    hashes = {r.get("source_sha1") for r in report["runs"] if r.get("source_sha1")}
+    hashes = harness.runs_by_hash(report["runs"], lambda r: r["case"])
     if len(hashes) > 1:
         notes.append(
             f"* **warning**: the library sources changed during the sweep "
             f"(hashes {', '.join(sorted(hashes))}); runs are not strictly comparable"
         )
-    if notes:
-        lines += ["", "Notes:", "", *notes]
-    lines.append("")
-    return "\n".join(lines)
+    return harness.finish_markdown(lines, notes)
 
 
 def compare(path_a: str, path_b: str) -> str:
     """Before/after table of two suite reports (B/A ratios)."""
-    a = json.loads(Path(path_a).read_text())
-    b = json.loads(Path(path_b).read_text())
+    a, b, rows = harness.load_pair(path_a, path_b)
     sa, sb = summaries(a), summaries(b)
     keys = [k for k in sa if k in sb] + [k for k in sb if k not in sa]
-    rows = [
-        f"A = {path_a} ({a['machine'].get('date', '?')})",
-        f"B = {path_b} ({b['machine'].get('date', '?')})",
-        "",
+    rows += [
         "| case | backend | preset | A s/step | B s/step | B/A | A solve | B solve "
         "| B/A solve | A non-solver | B non-solver | A it. | B it. | A load | B load |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
@@ -617,23 +551,6 @@ def compare(path_a: str, path_b: str) -> str:
             f"{x['max_loadavg']:.1f} | {y['max_loadavg']:.1f} |"
         )
     return "\n".join(rows)
-
-
-def machine_info() -> dict:
-    info = st.machine_info()
-    try:
-        from importlib.metadata import version
-
-        info["mkl"] = version("mkl")
-    except Exception:
-        info["mkl"] = None
-    try:
-        from skfem_npfem.backends import mkl_available
-
-        info["mkl_available"] = bool(mkl_available())
-    except Exception:
-        info["mkl_available"] = False
-    return info
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -684,15 +601,10 @@ def main(argv: list[str] | None = None) -> int:
         print(compare(*args.compare))
         return 0
     if args.render:
-        path = Path(args.render)
-        rep = json.loads(path.read_text())
-        path.with_suffix(".md").write_text(markdown(rep))
-        print(markdown(rep))
-        return 0
+        return harness.render(args.render, markdown)
     if args.child:
         case, backend, preset = args.child.split(":")
-        res = run_child(case, backend, preset, args.threads, args.steps)
-        print("@@RESULT@@ " + json.dumps(res), flush=True)
+        harness.emit_result(run_child(case, backend, preset, args.threads, args.steps))
         return 0
 
     cases = [c for c in args.cases.split(",") if c]
@@ -714,7 +626,7 @@ def main(argv: list[str] | None = None) -> int:
         )
     else:
         report = {
-            "machine": machine_info(),
+            "machine": harness.machine_info(),
             "settings": {
                 "repeat": args.repeat,
                 "threads": args.threads,
@@ -734,8 +646,7 @@ def main(argv: list[str] | None = None) -> int:
         }
 
     def save():
-        jpath.write_text(json.dumps(report, indent=1))
-        jpath.with_suffix(".md").write_text(markdown(report))
+        harness.write_report(jpath, report, markdown(report))
 
     for case in cases:
         combos = []

@@ -57,6 +57,12 @@ from pathlib import Path
 
 import numpy as np
 
+_BENCHMARKS = str(Path(__file__).resolve().parents[1] / "benchmarks")
+if _BENCHMARKS not in sys.path:
+    sys.path.insert(0, _BENCHMARKS)
+
+import _harness as harness
+
 SCENE = "column-collapse"
 G = 9.81
 
@@ -154,29 +160,16 @@ def library_fingerprint() -> dict:
     Other people edit the library while long sweeps run; every case stores the
     hash at its start and end so that a sweep run across a code change shows up.
     """
-    import hashlib
-
     import skfem_npfem
 
+    # File names relative to the package folder (not to the repository as in
+    # harness.source_hash), so that the hashes stored with earlier cases match.
     root = Path(skfem_npfem.__file__).resolve().parent
-    h = hashlib.sha1()
-    for f in sorted(root.rglob("*.py")):
-        h.update(str(f.relative_to(root)).encode())
-        h.update(f.read_bytes())
-    head = None
-    try:
-        head = (
-            subprocess.run(
-                ["git", "-C", str(root.parent), "rev-parse", "HEAD"],
-                capture_output=True,
-                text=True,
-                timeout=10,
-            ).stdout.strip()
-            or None
-        )
-    except (OSError, subprocess.SubprocessError):
-        pass
-    return {"git_head": head, "source_sha1": h.hexdigest()[:12]}
+    head = harness.git("rev-parse", "HEAD", cwd=root.parent, timeout=10)
+    return {
+        "git_head": (head or "").strip() or None,
+        "source_sha1": harness.tree_sha1(root, root),
+    }
 
 
 def run_case(

@@ -37,13 +37,17 @@ import argparse
 import json
 import math
 import os
-import subprocess
 import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+if str(ROOT / "benchmarks") not in sys.path:
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import _harness as harness
+
 DEFAULT_CONFIGS = "dt=0.001,dt=0.002,dt=0.005,dt=0.01,md=0.25,md=0.5"
 L0, ASPECT = 0.2, 2.0
 
@@ -73,26 +77,6 @@ def overrides(config: str, args) -> dict:
     return ov
 
 
-def cpu_busy_s() -> float:
-    """Busy CPU seconds of all cores since boot (Linux /proc/stat; nan elsewhere)."""
-    try:
-        with open("/proc/stat") as f:
-            v = [int(x) for x in f.readline().split()[1:9]]
-    except OSError:
-        return math.nan
-    return (sum(v) - v[3] - v[4]) / os.sysconf("SC_CLK_TCK")
-
-
-def wait_for_idle(max_cores: float, max_wait: float) -> None:
-    """Sleep until other processes use fewer than ``max_cores`` cores (3 s window)."""
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < max_wait:
-        b0, w0 = cpu_busy_s(), time.monotonic()
-        time.sleep(3.0)
-        if not (cpu_busy_s() - b0) / (time.monotonic() - w0) >= max_cores:
-            return
-
-
 def child(config: str, ov: dict) -> dict:
     """Run one configuration in this process."""
     import numpy as np
@@ -101,16 +85,10 @@ def child(config: str, ov: dict) -> dict:
 
     scene = get_scene("column-collapse")
     values = scene.resolve(ov)
-    load0 = os.getloadavg()[0]
-    b0 = cpu_busy_s()
-    c0 = time.process_time()
-    t0 = time.perf_counter()
-    srun = scene.build(values, out=None, progress=False)
-    sim = srun.simulation
-    sim.run(**srun.run_kwargs)
-    wall = time.perf_counter() - t0
-    cpu = time.process_time() - c0
-    others = max((cpu_busy_s() - b0 - cpu) / wall, 0.0)
+    with harness.Meter() as meter:
+        srun = scene.build(values, out=None, progress=False)
+        sim = srun.simulation
+        sim.run(**srun.run_kwargs)
     m = srun.metrics(sim)
     summ = sim.summary()
     p = sim.particles
@@ -150,43 +128,28 @@ def child(config: str, ov: dict) -> dict:
         "statuses": summ["statuses"],
         "linear_solvers": summ["linear_solvers"],
         "step_time_median": summ["step_time_median"],
-        "wall_s": wall,
-        "cpu_s": cpu,
+        "wall_s": meter.wall,
+        "cpu_s": meter.cpu,
         "peak_memory_mb": summ["peak_memory_mb"],
-        "loadavg_before": load0,
+        "loadavg_before": meter.load_before,
         "loadavg_after": os.getloadavg()[0],
-        "other_cores": others,
+        "other_cores": meter.others,
     }
 
 
 def run_one(config: str, args) -> dict:
     ov = overrides(config, args)
     if args.wait_idle > 0:
-        wait_for_idle(args.wait_idle, args.wait_max)
-    cmd = [
-        sys.executable,
-        __file__,
-        "--child",
-        json.dumps({"config": config, "ov": ov}),
-    ]
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(
-        [str(ROOT), *filter(None, [env.get("PYTHONPATH")])]
+        harness.wait_for_idle(args.wait_idle, args.wait_max)
+    res, note, wall, _ = harness.run_child(
+        Path(__file__).resolve(),
+        ["--child", json.dumps({"config": config, "ov": ov})],
+        args.timeout,
     )
-    t0 = time.perf_counter()
-    proc = subprocess.run(
-        cmd, env=env, capture_output=True, text=True, timeout=args.timeout
-    )
-    for line in reversed(proc.stdout.splitlines()):
-        if line.startswith("@@RESULT@@ "):
-            res = json.loads(line[len("@@RESULT@@ ") :])
-            res["subprocess_s"] = time.perf_counter() - t0
-            return res
-    return {
-        "config": config,
-        "overrides": ov,
-        "note": f"failed (rc={proc.returncode}): {proc.stderr.strip()[-1500:]}",
-    }
+    if res is None:
+        return {"config": config, "overrides": ov, "note": note}
+    res["subprocess_s"] = wall
+    return res
 
 
 def label(config: str) -> str:
@@ -276,14 +239,10 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if args.child:
         d = json.loads(args.child)
-        print("@@RESULT@@ " + json.dumps(child(d["config"], d["ov"])), flush=True)
+        harness.emit_result(child(d["config"], d["ov"]))
         return 0
     if args.render:
-        path = Path(args.render)
-        rep = json.loads(path.read_text())
-        path.with_suffix(".md").write_text(markdown(rep))
-        print(markdown(rep))
-        return 0
+        return harness.render(args.render, markdown)
     import platform
 
     import clarabel
@@ -319,8 +278,7 @@ def main(argv=None) -> int:
         r = run_one(c, args)
         results[c] = r
         report["runs"] = [results[k] for k in configs if k in results]
-        path.write_text(json.dumps(report, indent=1))
-        path.with_suffix(".md").write_text(markdown(report))
+        harness.write_report(path, report, markdown(report))
         if "note" in r:
             print(f"{c}: {r['note']}", flush=True)
         else:
