@@ -86,6 +86,8 @@ PRESET_SPECS = {
     "fast+ref": {"tol": 1e-6, "iterative_refinement": True},
     "high-noref": {"tol": 1e-8, "iterative_refinement": False},
     "fast-noref": {"tol": 1e-6, "iterative_refinement": False},
+    "high-nocnr": {"accuracy": "high", "reproducible": False},
+    "fast-nocnr": {"accuracy": "fast", "reproducible": False},
 }
 #: Combinations skipped by default, with the reason (printed in the notes).
 HOPELESS = {
@@ -372,6 +374,11 @@ def fmt_s(x: float) -> str:
     return harness.fmt_s(x) if x == x else "—"
 
 
+def fmt_ratio(x: float) -> str:
+    """A ratio to 2 decimals, "—" when it is undefined (NaN)."""
+    return f"{x:.2f}" if x == x else "—"
+
+
 def _index(report: dict) -> dict:
     """(case, backend, preset) -> list of runs."""
     idx: dict[tuple, list] = {}
@@ -483,9 +490,9 @@ def markdown(report: dict) -> str:
         best = min(b1[0], fa[0][0] if fa else math.inf)
         lines.append(
             f"| {case} | {s_hi['particles']} | {b1[1]} | {fmt_s(b1[0])} | {b2[1]} | "
-            f"{fmt_s(b2[0])} | {b1[0] / b2[0]:.2f} | "
+            f"{fmt_s(b2[0])} | {fmt_ratio(b1[0] / b2[0])} | "
             + (f"{fa[0][1]} | {fmt_s(fa[0][0])} | " if fa else "— | — | ")
-            + f"{tfh:.2f} | {ifh:.2f} | "
+            + f"{fmt_ratio(tfh)} | {fmt_ratio(ifh)} | "
             + (f"≤ {tgt:g} | {'yes' if best <= tgt else 'no'} |" if tgt else "— | — |")
         )
     # Footing q_ult per backend / preset.
