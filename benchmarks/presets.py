@@ -234,6 +234,9 @@ VARIANTS = {
     "default": {},
     "high": {"accuracy": "high"},
     "fast": {"accuracy": "fast"},
+    # MKL Pardiso without its conditional numerical reproducibility mode.
+    "nocnr": {"reproducible": False},
+    "fast-nocnr": {"accuracy": "fast", "reproducible": False},
 }
 
 

@@ -34,21 +34,27 @@ import numpy as np
 import scipy.sparse as sp
 
 __all__ = [
+    "available_cores",
     "choose_linear_solver",
+    "faer_threads",
     "mkl_available",
     "mkl_library_dir",
     "pardiso_threads",
 ]
 
 # Problem sizes (number of cone-program variables) where the backends cross over,
-# measured on a 2-core machine by benchmarks/step_time.py (see docs/performance.md).
-# benchmarks/results/suite.md (2-core machine, s/step, high preset): qdldl beats
-# faer on 2D problems up to ~24k variables (4k particles) and loses by 1.8x at
-# ~96k; MKL Pardiso (2 threads, no iterative refinement) loses to qdldl on the
-# 1k-particle collapse (5.3k variables: 0.27 vs 0.23 s) and wins from the
-# 2k-particle collapse on (10k variables: 0.58 vs 0.67 s; 20k: 1.34 vs 2.42 s)
-# and on every 3D case (3k particles: 4.05 s vs faer 8.03 s).
-QDLDL_MAX_VARIABLES_2D = 48_000
+# measured on a 2-core machine (s/step, high preset; docs/performance.md).
+# Without MKL (benchmarks/results/crossover_2d.md, faer single-threaded as it runs
+# there by default): qdldl beats faer on the 2D collapse at 5.3k and 10.3k
+# variables (0.221 vs 0.359 s, 0.623 vs 0.836 s) and loses at 20.3k (2.16 vs
+# 1.83 s); on the structured strip-footing mesh faer wins already at 4.8k (0.35 vs
+# 0.48 s) -- the crossover follows the fill-in, not only the size, and is placed
+# for the remeshed PFEM case.  MKL Pardiso (2 threads, no iterative refinement;
+# benchmarks/results/suite.md) loses to qdldl on the 1k-particle collapse (5.3k
+# variables: 0.27 vs 0.23 s) and wins from the 2k-particle collapse on (10k
+# variables: 0.58 vs 0.67 s; 20k: 1.34 vs 2.42 s) and on every 3D case (3k
+# particles: 4.05 s vs faer 8.03 s).
+QDLDL_MAX_VARIABLES_2D = 15_000
 MKL_MIN_VARIABLES = 8_000
 
 
@@ -132,6 +138,32 @@ def mkl_available() -> bool:
         return str(solver.solve().status) == "Solved"
     except Exception:  # Clarabel reports an unavailable backend as Exception
         return False
+
+
+#: faer with its default thread count (all cores) was 17-22 % slower than with one
+#: thread on a 2-core machine in every case measured (2D 4k / 16k, 3D 3k:
+#: benchmarks/results/threads.md); machines with this many cores or fewer run faer
+#: single-threaded unless ``max_threads`` says otherwise.
+FAER_SERIAL_MAX_CORES = 2
+
+
+def available_cores() -> int:
+    """Cores this process may run on (CPU affinity where the OS reports it)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+def faer_threads(requested: int = 0) -> int:
+    """Threads to give faer: ``requested`` if > 0, else 1 on small machines.
+
+    0 (Clarabel's automatic choice) is returned on machines with more than
+    :data:`FAER_SERIAL_MAX_CORES` cores, where no measurement says otherwise.
+    """
+    if requested > 0:
+        return int(requested)
+    return 1 if available_cores() <= FAER_SERIAL_MAX_CORES else 0
 
 
 #: ``MKL_DOMAIN_PARDISO`` of mkl_types.h: MKL's thread setting for Pardiso only.

@@ -42,6 +42,7 @@ import scipy.sparse as sp
 
 from .backends import (
     choose_linear_solver,
+    faer_threads,
     mkl_available,
     pardiso_thread_count,
     pardiso_threads,
@@ -74,9 +75,11 @@ class SolverOptions:
         dimension and size (:func:`skfem_npfem.backends.choose_linear_solver`):
         MKL Pardiso when installed, else qdldl for small 2D and faer otherwise.
     max_threads : int
-        Threads of the linear solver, faer or MKL Pardiso (0: the library's own
-        choice, all physical cores).  qdldl is single-threaded.  Measured on 2
-        cores in docs/performance.md: 1 thread is faster for faer in 2D.
+        Threads of the linear solver, faer or MKL Pardiso.  0 (default): MKL's
+        own choice (all physical cores) for Pardiso; for faer one thread on
+        machines with at most 2 cores (17-22 % faster than two there, in 2D and
+        3D: docs/performance.md), else Clarabel's choice.  qdldl is
+        single-threaded.
     tol : float
         Gap and feasibility tolerances (Clarabel default 1e-8).
     max_iter : int
@@ -164,6 +167,8 @@ class SolverOptions:
         s.verbose = bool(self.verbose)
         s.direct_solve_method = linear_solver or self.linear_solver
         s.max_threads = int(self.max_threads)
+        if s.direct_solve_method == "faer":
+            s.max_threads = faer_threads(self.max_threads)
         if s.direct_solve_method == "mkl":
             # Pardiso's threads are set by solve_step (backends.pardiso_threads):
             # Clarabel would change them after the analysis, which crashes MKL.

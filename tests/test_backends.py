@@ -192,3 +192,16 @@ def test_mkl_reruns_are_bit_identical():
 
     a, b = run(), run()
     assert np.array_equal(a, b)
+
+
+def test_faer_thread_default_follows_the_core_count(monkeypatch):
+    # 0 = automatic: one faer thread on <= 2 cores (measured faster there),
+    # Clarabel's own choice on bigger machines; an explicit count always wins.
+    opts = npfem.SolverOptions(linear_solver="faer")
+    monkeypatch.setattr(backends, "available_cores", lambda: 2)
+    assert opts.clarabel_settings("faer").max_threads == 1
+    assert opts.clarabel_settings("qdldl").max_threads == 0
+    monkeypatch.setattr(backends, "available_cores", lambda: 16)
+    assert opts.clarabel_settings("faer").max_threads == 0
+    explicit = npfem.SolverOptions(linear_solver="faer", max_threads=3)
+    assert explicit.clarabel_settings("faer").max_threads == 3
