@@ -183,15 +183,18 @@ def test_mkl_thread_count_is_honoured_in_3d():
 def test_mkl_reruns_are_bit_identical():
     # Pardiso runs in MKL's conditional-reproducibility mode by default: the same
     # collapse run twice (remeshing every step) ends with identical positions.
-    def run():
+    # Also with one Pardiso thread instead of all cores: resuming with another
+    # ``threads`` value is allowed and must not change the result.
+    def run(threads=0):
         scene = npfem.get_scene("column-collapse")
-        values = scene.resolve({"linear_solver": "mkl"})
+        values = scene.resolve({"linear_solver": "mkl", "threads": threads})
         sim = scene.build(values, out=None, progress=False).simulation
         sim.run(steps=10)
         return sim.particles.x
 
-    a, b = run(), run()
+    a, b, c = run(), run(), run(threads=1)
     assert np.array_equal(a, b)
+    assert np.array_equal(a, c)
 
 
 def test_faer_thread_default_follows_the_core_count(monkeypatch):
