@@ -104,7 +104,7 @@ class SolverOptions:
     reproducible : bool
         MKL Pardiso only: run in MKL's conditional numerical reproducibility
         mode, so that identical runs and resumed runs give bit-identical
-        results.  False saves ~20-25 % of an MKL step, but round-off then
+        results.  False saves 20-24 % of an MKL step, but round-off then
         varies from run to run (a full column collapse differs in the 3rd-4th
         digit of the run-out).  qdldl and faer are always reproducible.
     """

@@ -48,7 +48,7 @@ def solver_params() -> list[Param]:
             "threads",
             0,
             "-",
-            "threads of the faer / MKL Pardiso solver (0: all cores)",
+            "threads of the faer / MKL Pardiso solver (0: automatic)",
             int,
             lo=0,
         ),
