@@ -251,7 +251,7 @@ class Scene:
 #: Parameters that may differ when a run is resumed (they do not change the
 #: steps already taken).
 RESUME_MAY_CHANGE = frozenset(
-    {"t_end", "steps", "output_every", "checkpoint_every", "threads"}
+    {"t_end", "steps", "output_every", "checkpoint_every", "threads", "reproducible"}
 )
 
 
