@@ -429,9 +429,20 @@ def _regular_triangulation(
     lift = np.einsum("ij,ij->i", xs, xs)
     if jitter > 0.0:
         lift = lift + jitter * np.random.default_rng(seed).uniform(-1.0, 1.0, n)
-    try:
-        hull = ConvexHull(np.column_stack([xs, lift]), qhull_options="Qt Qbb")
-    except (QhullError, ValueError):
+    lifted = np.column_stack([xs, lift])
+    hull = None
+    # "Qt" (triangulated output) can stop with a precision error ("twisted
+    # facet") on near-lattice 3D point sets, e.g. a cubic lattice after one small
+    # step (tests/data/qhull_twisted_facet_3d.npz); qhull's joggled input "QJ"
+    # always gives simplicial facets.  It is only the fallback, so that runs that
+    # never need it are unchanged.
+    for options in ("Qt Qbb", "QJ Qbb"):
+        try:
+            hull = ConvexHull(lifted, qhull_options=options)
+            break
+        except (QhullError, ValueError):
+            continue
+    if hull is None:
         return np.empty((0, d + 1), dtype=np.intp)
     # Lower hull facets (outward normal pointing down the lifted axis) project
     # onto the triangulation; vertical facets project to flat simplices, which

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -539,3 +540,26 @@ def test_property_reference_delaunay() -> None:
         np.unique(np.sort(tri.simplices, axis=1), axis=0),
         np.unique(np.sort(ref, axis=1), axis=0),
     )
+
+
+def test_near_lattice_3d_positions_that_break_qhull_triangulated_mode():
+    # Quarter-cylinder lattice (R = 0.2 m, 13 spacings over R, 3 942 particles)
+    # after one small PFEM step (displacements <= 3.2e-5 m = 0.2 % of h): qhull's
+    # "Qt" mode stops with a "twisted facet" precision error on these positions,
+    # which used to leave the alpha shape with no simplex at all.  The joggled
+    # fallback must mesh every particle, reproducibly, with the lattice's volume
+    # (to 1e-3: the displacements change it by ~1e-4).
+    data = np.load(Path(__file__).parent / "data" / "qhull_twisted_facet_3d.npz")
+    x, h = data["x"], float(data["h"])
+    tri = alpha_shape(x, h)
+    assert tri.active.all()
+    again = alpha_shape(x, h)
+    np.testing.assert_array_equal(tri.simplices, again.simplices)
+    nr, radius = 13, 0.2
+    g = np.arange(nr + 1) * h
+    gz = np.arange(round(0.4 / h) + 1) * h
+    lat = np.stack(np.meshgrid(g, g, gz, indexing="ij"), axis=-1).reshape(-1, 3)
+    lat = lat[lat[:, 0] ** 2 + lat[:, 1] ** 2 <= radius**2 * (1 + 1e-9)]
+    assert lat.shape == x.shape and np.abs(x - lat).max() < 3.2e-5
+    ref = alpha_shape(lat, h).volume
+    assert abs(tri.volume / ref - 1) < 1e-3
