@@ -25,7 +25,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-import suite  # noqa: E402
+import suite
 
 
 def main(argv: list[str] | None = None) -> int:
