@@ -378,6 +378,27 @@ def run_child(
 # --------------------------------------------------------------------------------
 # Reports
 # --------------------------------------------------------------------------------
+#: Phases of ``StepRecord.timings`` that belong to the cone solver (Clarabel's
+#: constructor, which includes the symbolic analysis, and the solve).
+SOLVER_PHASES = ("setup", "solve")
+
+
+def non_solver_s(phase_s: dict) -> float:
+    """Seconds of a step outside the cone solver, from a phase -> seconds dict.
+
+    Parameters
+    ----------
+    phase_s : dict
+        Seconds per phase (e.g. ``median_phase_s`` of a summary).
+
+    Returns
+    -------
+    float
+        The sum over every phase but :data:`SOLVER_PHASES`.
+    """
+    return sum(v for k, v in phase_s.items() if k not in SOLVER_PHASES)
+
+
 def fmt_s(x: float) -> str:
     """Seconds for a table: 3 decimals below 1 s, 2 below 10, 1 below 100, else 0."""
     if x >= 100:

@@ -439,9 +439,6 @@ def compare(path_a: str, path_b: str) -> str:
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
 
-    def nonsolve(s):
-        return sum(v for k, v in s["median_phase_s"].items() if k != "solve")
-
     for key in keys:
         sa, sb = ia.get(key, {}), ib.get(key, {})
         if not sa or not sb:
@@ -449,7 +446,10 @@ def compare(path_a: str, path_b: str) -> str:
             continue
         ta, tb = sa["median_s"], sb["median_s"]
         xa, xb = sa["median_phase_s"]["solve"], sb["median_phase_s"]["solve"]
-        na, nb = nonsolve(sa), nonsolve(sb)
+        na, nb = (
+            harness.non_solver_s(sa["median_phase_s"]),
+            harness.non_solver_s(sb["median_phase_s"]),
+        )
         rows.append(
             f"| {key[0]} | {key[1]} | {fmt_s(ta)} | {fmt_s(tb)} | {tb / ta:.2f} | "
             f"{fmt_s(xa)} | {fmt_s(xb)} | {xb / xa:.2f} | {fmt_s(na)} | {fmt_s(nb)} | "

@@ -627,19 +627,18 @@ def compare(path_a: str, path_b: str) -> str:
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
 
-    def nonsolve(s):
-        return sum(v for k, v in s["median_phase_s"].items() if k not in ("solve",))
-
     for key in keys:
         x, y = sa.get(key) or {}, sb.get(key) or {}
         if not x or not y:
             rows.append(f"| {' | '.join(key)} |" + " |" * 12)
             continue
         xs, ys = x["median_phase_s"]["solve"], y["median_phase_s"]["solve"]
+        xn = harness.non_solver_s(x["median_phase_s"])
+        yn = harness.non_solver_s(y["median_phase_s"])
         rows.append(
             f"| {' | '.join(key)} | {fmt_s(x['median_s'])} | {fmt_s(y['median_s'])} "
             f"| {y['median_s'] / x['median_s']:.2f} | {fmt_s(xs)} | {fmt_s(ys)} | "
-            f"{ys / xs:.2f} | {fmt_s(nonsolve(x))} | {fmt_s(nonsolve(y))} | "
+            f"{ys / xs:.2f} | {fmt_s(xn)} | {fmt_s(yn)} | "
             f"{x['iterations_mean']:.1f} | {y['iterations_mean']:.1f} | "
             f"{x['max_loadavg']:.1f} | {y['max_loadavg']:.1f} |"
         )
