@@ -1,24 +1,19 @@
 """Shared harness of the benchmark and demo scripts.
 
-``benchmarks/step_time.py``, ``suite.py``, ``presets.py`` and
-``demos/dt_sweep.py`` measure in the same way: they wait for a quiet machine,
-time a block of work (wall, process CPU, cores used by other processes),
-fingerprint the library sources, run every case in a fresh interpreter that
-prints its record as one tagged JSON line, and write a JSON report with a
-Markdown table next to it (``demos/collapse_validation.py`` uses the
-fingerprint).  This module holds the one copy of that code, so that the
-scripts cannot drift apart.
-
-Import it with the ``benchmarks`` folder on ``sys.path``::
-
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    import _harness as harness
+``step_time.py``, ``suite.py``, ``presets.py`` and ``dt_sweep.py`` measure in
+the same way: they wait for a quiet machine, time a block of work (wall,
+process CPU, cores used by other processes), fingerprint the library sources
+(:mod:`skfem_npfem.cases.provenance`), run every case in a fresh interpreter
+that prints its record as one tagged JSON line, and write a JSON report with a
+Markdown table next to it.  This module holds the one copy of that code, so
+that the scripts cannot drift apart.  The scripts import it as a sibling
+(``import _harness as harness``): Python puts a script's folder on
+``sys.path``.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
-import hashlib
 import json
 import math
 import os
@@ -30,6 +25,8 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import NamedTuple
+
+from skfem_npfem.cases.provenance import git, source_sha1
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -149,63 +146,9 @@ def peak_rss_mb() -> float:
 # --------------------------------------------------------------------------------
 # Code version and machine
 # --------------------------------------------------------------------------------
-def tree_sha1(folder: Path, relative_to: Path) -> str:
-    """SHA-1 (12 hex digits) of the ``*.py`` files below ``folder``.
-
-    Parameters
-    ----------
-    folder : Path
-        Folder whose Python files are hashed (names and contents).
-    relative_to : Path
-        The file names enter the hash relative to this folder.
-
-    Returns
-    -------
-    str
-        The first 12 hex digits of the digest.
-    """
-    h = hashlib.sha1()
-    for f in sorted(folder.rglob("*.py")):
-        h.update(str(f.relative_to(relative_to)).encode())
-        h.update(f.read_bytes())
-    return h.hexdigest()[:12]
-
-
 def source_hash() -> str:
     """SHA-1 (12 hex digits) of the library sources, to tell code versions apart."""
-    return tree_sha1(ROOT / "skfem_npfem", ROOT)
-
-
-def git(*args: str, cwd: Path = ROOT, timeout: float = 30.0) -> str | None:
-    """Stdout of a read-only ``git`` command (None if git cannot be run).
-
-    Parameters
-    ----------
-    *args : str
-        The git arguments, e.g. ``"rev-parse", "HEAD"``.
-    cwd : Path
-        Folder to run git in.
-    timeout : float
-        Seconds before git is given up.
-
-    Returns
-    -------
-    str or None
-        Its stdout, or None when git is missing or timed out.
-    """
-    # No optional locks: `git status` must not even refresh the index.
-    env = {**os.environ, "GIT_OPTIONAL_LOCKS": "0"}
-    try:
-        return subprocess.run(
-            ["git", *args],
-            cwd=cwd,
-            env=env,
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-        ).stdout
-    except (OSError, subprocess.SubprocessError):
-        return None
+    return source_sha1(ROOT)
 
 
 def code_info() -> dict:

@@ -34,14 +34,11 @@ import json
 import math
 import os
 import statistics
-import sys
 import time
 from dataclasses import replace
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-if str(HERE) not in sys.path:
-    sys.path.insert(0, str(HERE))
 
 import _harness as harness
 import suite
@@ -94,8 +91,8 @@ def step_accuracy(case: str, backends: list[str], presets: list[str]) -> dict:
     def solve(opts):
         m = replace(model, solver=opts)
         t0 = time.perf_counter()
-        _, rec = advance(p, m, dt, sim.mesh_source, step=k)
-        return rec, time.perf_counter() - t0
+        _, step = advance(p, m, dt, sim.mesh_source, step=k)
+        return step, time.perf_counter() - t0
 
     ref_opts = SolverOptions(
         linear_solver=base_backend, tol=REF_TOL, iterative_refinement=True
@@ -113,9 +110,9 @@ def step_accuracy(case: str, backends: list[str], presets: list[str]) -> dict:
         "reference": {
             "backend": base_backend,
             "tol": REF_TOL,
-            "iterations": ref.iterations,
-            "status": ref.status,
-            "solve_s": ref.timings["solve"],
+            "iterations": ref.record.iterations,
+            "status": ref.record.status,
+            "solve_s": ref.record.timings["solve"],
         },
         "du_ref_max": float(abs(ref.solution.du).max()),
         "rows": [],
@@ -151,16 +148,16 @@ def step_accuracy(case: str, backends: list[str], presets: list[str]) -> dict:
                 "refinement": opts.clarabel_settings(
                     backend
                 ).iterative_refinement_enable,
-                "status": rec.status,
-                "iterations": rec.iterations,
-                "solve_s": rec.timings["solve"],
+                "status": rec.record.status,
+                "iterations": rec.record.iterations,
+                "solve_s": rec.record.timings["solve"],
                 "step_wall_s": wall,
                 "loadavg": os.getloadavg()[0],
                 **_norms(rec.solution, ref.solution, sigma_n),
             }
             out["rows"].append(row)
             print(
-                f"  {case} {backend:5s} {preset:4s}: it {rec.iterations:3d}, du "
+                f"  {case} {backend:5s} {preset:4s}: it {rec.record.iterations:3d}, du "
                 f"{row['du_rel']:.2e}, sigma/inc {row['sigma_rel_increment']:.2e}",
                 flush=True,
             )

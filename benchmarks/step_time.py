@@ -31,8 +31,6 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-if str(HERE) not in sys.path:
-    sys.path.insert(0, str(HERE))
 
 import _harness as harness
 from _harness import fmt_s
@@ -151,14 +149,14 @@ def build_case(name: str, linear_solver: str, threads: int, time_limit: float):
     return particles, model, FixedMesh(mesh.t)
 
 
-def yield_active_fraction(model, p_old, rec) -> float:
+def yield_active_fraction(model, p_old, result) -> float:
     """Fraction of nodes on the yield surface at the end of the step."""
     import numpy as np
 
-    sol = rec.solution
+    sol = result.solution
     mat = model.materials[0]
     comp = tuple(model.components)
-    cone = mat.cone(model.dim, comp, p_old.stress[rec.active])
+    cone = mat.cone(model.dim, comp, p_old.stress[result.active])
     s = sol.sigma[:, list(comp)]
     rhs = cone.k - np.einsum("ni,ni->n", cone.a, s)
     norm = np.linalg.norm(s @ cone.M.T, axis=1)
@@ -208,7 +206,7 @@ def run_child(args) -> dict:
         try:
             if profiler is not None:
                 profiler.enable()
-            new, rec = advance(p, model, DT, mesh_source, step=k)
+            new, result = advance(p, model, DT, mesh_source, step=k)
         except SolverError as err:
             out["steps"].append(
                 {
@@ -226,6 +224,7 @@ def run_child(args) -> dict:
                 profiler.disable()
         wall = time.perf_counter() - t0
         cpu = time.process_time() - c0
+        rec = result.record
         phases = {ph: float(rec.timings.get(ph, 0.0)) for ph in PHASES}
         phases["other"] = max(wall - sum(phases.values()), 0.0)
         step = {
@@ -243,10 +242,10 @@ def run_child(args) -> dict:
             "loadavg_1min": load,
             "sizes": {
                 k2: int(v) if isinstance(v, int | float) else v
-                for k2, v in rec.solution.sizes.items()
+                for k2, v in result.solution.sizes.items()
             },
             "n_cones": int(rec.n_active),
-            "yield_active_fraction": yield_active_fraction(model, p, rec),
+            "yield_active_fraction": yield_active_fraction(model, p, result),
             "max_speed": float(np.max(np.linalg.norm(new.v, axis=1))),
             "peak_rss_mb": harness.peak_rss_mb(),
         }

@@ -41,8 +41,6 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-if str(HERE) not in sys.path:
-    sys.path.insert(0, str(HERE))
 
 import _harness as harness
 import step_time as st
@@ -299,6 +297,9 @@ def run_child(case: str, backend: str, preset: str, threads: int, steps: int) ->
     t0 = time.perf_counter()
     sim, metrics = build(case, backend, preset, threads)
     t_build = time.perf_counter() - t0
+    # The program sizes of each step reach the callbacks (records keep scalars).
+    sizes_of_step: dict = {}
+    sim.callbacks.append(lambda s, p, step: sizes_of_step.update(step.solution.sizes))
     out = {
         "case": case,
         "kind": CASES[case]["kind"],
@@ -327,7 +328,7 @@ def run_child(case: str, backend: str, preset: str, threads: int, steps: int) ->
             continue
         phases = {ph: float(rec.timings.get(ph, 0.0)) for ph in PHASES[:-1]}
         phases["other"] = max(wall - sum(phases.values()), 0.0)
-        sizes = rec.solution.sizes
+        sizes = dict(sizes_of_step)
         out["steps"].append(
             {
                 "step": rec.step,

@@ -57,12 +57,6 @@ from pathlib import Path
 
 import numpy as np
 
-_BENCHMARKS = str(Path(__file__).resolve().parents[1] / "benchmarks")
-if _BENCHMARKS not in sys.path:
-    sys.path.insert(0, _BENCHMARKS)
-
-import _harness as harness
-
 SCENE = "column-collapse"
 G = 9.81
 
@@ -160,16 +154,12 @@ def library_fingerprint() -> dict:
     Other people edit the library while long sweeps run; every case stores the
     hash at its start and end so that a sweep run across a code change shows up.
     """
-    import skfem_npfem
+    from skfem_npfem.cases.provenance import git, source_sha1
 
     # File names relative to the package folder (not to the repository as in
-    # harness.source_hash), so that the hashes stored with earlier cases match.
-    root = Path(skfem_npfem.__file__).resolve().parent
-    head = harness.git("rev-parse", "HEAD", cwd=root.parent, timeout=10)
-    return {
-        "git_head": (head or "").strip() or None,
-        "source_sha1": harness.tree_sha1(root, root),
-    }
+    # the benchmarks), so that the hashes stored with earlier cases match.
+    head = git("rev-parse", "HEAD", timeout=10)
+    return {"git_head": (head or "").strip() or None, "source_sha1": source_sha1()}
 
 
 def run_case(
@@ -196,12 +186,14 @@ def run_case(
     srun = scene.build(values, out=None, progress=False)
     sim = srun.simulation
     x0 = sim.particles.x.copy()
+    last: dict = {}  # the mesh of the last step (records keep scalars only)
 
-    def mass_front(sim_, p, rec) -> bool:
+    def mass_front(sim_, p, step) -> bool:
         order = np.argsort(p.x[:, 0])
         cm = np.cumsum(p.mass[order]) / p.mass.sum()
         xs = p.x[order, 0]
-        rec.extra.update(
+        last["active"] = step.active
+        step.record.extra.update(
             front_q99=float(xs[np.searchsorted(cm, 0.99)]),
             front_q95=float(xs[np.searchsorted(cm, 0.95)]),
         )
@@ -210,7 +202,6 @@ def run_case(
     sim.callbacks.append(mass_front)
     sim.run(**srun.run_kwargs)
     p = sim.particles
-    last = sim.records[-1]
     s = {
         "scene": SCENE,
         "parameters": values,
@@ -224,7 +215,7 @@ def run_case(
             "x": p.x.round(6).tolist(),
             "eps_p": p.eps_p.round(6).tolist(),
             "mass": p.mass.tolist(),
-            "active": np.asarray(last.active).tolist(),
+            "active": np.asarray(last["active"]).tolist(),
         },
     }
     s["case"] = {"aspect": a, "N": n, "params": params, "variant": variant}
@@ -240,7 +231,7 @@ def run_case(
 
 def write_compact_json(path: Path, obj: dict) -> None:
     """Write JSON without indentation, floats to 7 significant digits (NaN -> null)."""
-    from skfem_npfem.scenes.base import _clean
+    from skfem_npfem.io import to_jsonable, write_bytes
 
     def short(o):
         if isinstance(o, float):
@@ -253,9 +244,8 @@ def write_compact_json(path: Path, obj: dict) -> None:
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".tmp_{path.name}")
-    tmp.write_text(json.dumps(short(_clean(obj)), separators=(",", ":")))
-    tmp.replace(path)
+    text = json.dumps(short(to_jsonable(obj)), separators=(",", ":"))
+    write_bytes(path, text.encode())
 
 
 def launch(
@@ -1000,7 +990,7 @@ def main(argv=None) -> int:
         "variants": var_rows,
         "wall_time_this_invocation": wall_all,
     }
-    from skfem_npfem.scenes.base import write_json
+    from skfem_npfem.io import write_json
 
     write_json(out / "collapse_validation.json", result)
     if sweep:

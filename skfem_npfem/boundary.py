@@ -2,19 +2,31 @@
 
 Fixed and roller supports and prescribed displacements are particle flags
 (:attr:`Particles.fixed`, :attr:`Particles.v_prescribed`); this module holds the
-rigid walls that particles may touch and leave.
+rigid walls that particles may touch and leave: the contact candidates of one
+step (:func:`wall_contacts`, handed to the cone program as :class:`Contacts`)
+and the projection of particles that ended behind a wall
+(:func:`project_to_walls`).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from .errors import ParameterError
+from .particles import Particles
 
-__all__ = ["RigidWall", "floor", "wall_x"]
+__all__ = [
+    "Contacts",
+    "RigidWall",
+    "floor",
+    "project_to_walls",
+    "wall_contacts",
+    "wall_x",
+]
 
 
 @dataclass(frozen=True)
@@ -108,3 +120,165 @@ def wall_x(
     p = np.zeros(dim)
     p[0] = x0
     return RigidWall(point=p, normal=n, friction_angle=friction_angle, name="wall")
+
+
+@dataclass
+class Contacts:
+    """Contact candidates of one step (node against a rigid plane).
+
+    Attributes
+    ----------
+    node : ndarray (nc,) int
+        Local node index.
+    normal : ndarray (nc, d)
+        Unit wall normal pointing into the body.
+    gap : ndarray (nc,)
+        Current gap (>= 0), m, plus ``normal . du_prescribed`` for a node with
+        prescribed dofs (the program only sees the free dofs; non-penetration is
+        ``gap + normal . du_free >= 0``).
+    mu_lambda : ndarray (nc,)
+        Friction bound ``mu * lambda_bar_n`` (N) from the previous step; values
+        <= 0 mean frictionless (no tangential variable).
+
+    Notes
+    -----
+    Sign conventions (``formulation.md`` §4.3): the wall pushes on the body, so
+    the equilibrium rows read ``G s + r - N lambda_n - T lambda_t = f~`` with
+    ``lambda_n >= 0``; the normal dual gives ``gap + n . du >= 0`` and is zero
+    where ``lambda_n > 0``.  Tangential forces ``lambda_t`` act along
+    :func:`~skfem_npfem.families.tangents` of the normal and oppose the slip ``t . du``.
+    """
+
+    node: np.ndarray
+    normal: np.ndarray
+    gap: np.ndarray
+    mu_lambda: np.ndarray
+
+    def __post_init__(self) -> None:
+        self.node = np.asarray(self.node, dtype=np.int64).reshape(-1)
+        nc = self.node.size
+        self.normal = np.asarray(self.normal, dtype=float)
+        self.gap = np.asarray(self.gap, dtype=float).reshape(-1)
+        self.mu_lambda = np.asarray(self.mu_lambda, dtype=float).reshape(-1)
+        if (
+            self.normal.ndim != 2
+            or self.normal.shape[0] != nc
+            or self.gap.size != nc
+            or self.mu_lambda.size != nc
+        ):
+            raise ParameterError(
+                "contacts",
+                (nc, self.normal.shape, self.gap.size, self.mu_lambda.size),
+                "node (nc,), normal (nc, d), gap (nc,) and mu_lambda (nc,)",
+            )
+        if not (np.all(np.isfinite(self.gap)) and np.all(np.isfinite(self.mu_lambda))):
+            raise ParameterError(
+                "contacts", "non-finite values", "finite gap, mu_lambda"
+            )
+
+    @classmethod
+    def empty(cls, dim: int) -> Contacts:
+        """No contacts."""
+        return cls(np.zeros(0, int), np.zeros((0, dim)), np.zeros(0), np.zeros(0))
+
+    @property
+    def size(self) -> int:
+        """Number of candidates."""
+        return int(self.node.shape[0])
+
+
+def wall_contacts(
+    walls: Sequence[RigidWall],
+    p: Particles,
+    active: np.ndarray,
+    dt: float,
+    h: float,
+    gravity: float,
+) -> tuple[Contacts, np.ndarray]:
+    """Contact candidates of the active particles against every wall.
+
+    A particle is a candidate when its gap is below ``h + 2|v| dt + g dt^2`` so
+    that fast particles cannot tunnel through a wall within one step.  The gap
+    handed to the cone program includes the normal part of any prescribed
+    displacement increment of the particle (the program only sees the free dofs).
+    The friction bound is ``mu`` times the particle's lagged normal force
+    :attr:`Particles.wall_force` of the wall.
+
+    Returns
+    -------
+    Contacts
+        Candidates, with node indices local to ``active``.
+    ndarray (nc,) int
+        The wall of each candidate.
+    """
+    d = p.dim
+    if p.wall_force.shape[1] < len(walls):
+        raise ParameterError(
+            "wall_force",
+            p.wall_force.shape,
+            f"one column per wall ({len(walls)}): create the particles with "
+            "Particles.create(..., n_walls=len(walls))",
+        )
+    nodes, normals, gaps, bounds, wall_ids = [], [], [], [], []
+    x, v = p.x[active], p.v[active]
+    fixed = p.fixed[active]
+    du_pres = np.where(fixed, p.v_prescribed[active] * dt, 0.0)
+    reach = h + 2.0 * np.linalg.norm(v, axis=1) * dt + gravity * dt**2
+    for w_id, wall in enumerate(walls):
+        g = wall.gap(x)
+        cand = np.flatnonzero(g < reach)
+        # A particle whose dofs along the normal are all fixed needs no contact row.
+        cand = cand[~np.all(fixed[cand][:, np.abs(wall.normal) > 0], axis=1)]
+        nodes.append(cand)
+        normals.append(np.broadcast_to(wall.normal, (cand.size, d)))
+        gaps.append(np.maximum(g[cand], 0.0) + du_pres[cand] @ wall.normal)
+        # Lagged normal force; values at the solver's noise level (a node that
+        # was only a candidate, lambda_n ~ +-1e-8 of the load) give no friction
+        # rather than a near-degenerate |lambda_t| <= tiny constraint.
+        lam = p.wall_force[active[cand], w_id]
+        noise = 1e-8 * np.max(np.abs(p.wall_force[:, w_id]), initial=0.0)
+        bounds.append(np.where(lam > noise, wall.mu * lam, 0.0))
+        wall_ids.append(np.full(cand.size, w_id))
+    if not nodes:
+        return Contacts.empty(d), np.zeros(0, int)
+    c = Contacts(
+        node=np.concatenate(nodes),
+        normal=np.concatenate(normals),
+        gap=np.concatenate(gaps),
+        mu_lambda=np.concatenate(bounds),
+    )
+    return c, np.concatenate(wall_ids)
+
+
+def project_to_walls(
+    walls: Sequence[RigidWall],
+    x: np.ndarray,
+    v: np.ndarray,
+    friction: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Put particles behind a wall back on it (:meth:`RigidWall.project`).
+
+    For the particles flagged in ``friction`` (the ballistic ones, which have no
+    contact rows) the wall also applies a Coulomb impulse: the tangential
+    velocity shrinks by ``mu`` times the normal velocity the wall removed (an
+    impact, or ``g dt`` per step while resting), never past zero.  Without it a
+    grain that left the body would slide on a rough floor for ever.
+    """
+    for wall in walls:
+        vn_old = v @ wall.normal
+        x, v_new = wall.project(x, v)
+        if friction is not None and wall.mu > 0 and v_new is not v:
+            dvn = (v_new @ wall.normal - vn_old) * friction
+            hit = np.flatnonzero(dvn > 0)
+            if hit.size:
+                vt = v_new[hit] - (v_new[hit] @ wall.normal)[:, None] * wall.normal
+                speed = np.linalg.norm(vt, axis=1)
+                keep = np.zeros_like(speed)
+                moving = speed > 0
+                keep[moving] = (
+                    np.maximum(speed[moving] - wall.mu * dvn[hit][moving], 0.0)
+                    / speed[moving]
+                )
+                v_new[hit] -= (1.0 - keep)[:, None] * vt
+        v = v_new
+    return x, v

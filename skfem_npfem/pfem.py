@@ -1,9 +1,11 @@
-"""The PFEM mesh source: a fresh alpha-shape triangulation of the particles every step.
+"""Mesh sources: how the particles become a mesh for one step.
 
-:class:`AlphaShapeMesher` is a mesh source for :func:`~skfem_npfem.simulation.advance`
-and :class:`~skfem_npfem.simulation.Simulation`: called with the particle positions
-at the start of a step it runs :func:`~skfem_npfem.remesh.alpha_shape` and returns
-the active particles and the (local) connectivity of that step's mesh.  Nothing is
+A mesh source (:class:`MeshSource`) is called by :func:`~skfem_npfem.step.advance`
+with the particle positions at the start of a step and returns the active
+particles and the (local) connectivity of that step's mesh.
+:class:`FixedMesh` keeps one connectivity (small deformations);
+:class:`AlphaShapeMesher` is the PFEM one: it runs
+:func:`~skfem_npfem.remesh.alpha_shape` afresh every step.  Nothing is
 mapped between meshes: every state variable lives on the particles, so the mesh is
 thrown away after the step.  The last triangulation is kept for output (cells,
 free-surface flags).  :func:`main_body` finds the main body of a flow for
@@ -14,6 +16,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 import scipy.sparse as sp
@@ -21,10 +25,69 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from .boundary import RigidWall
-from .errors import ParameterError
+from .errors import NpfemError, ParameterError
 from .remesh import Triangulation, alpha_shape, free_surface
 
-__all__ = ["AlphaShapeMesher", "main_body"]
+__all__ = ["AlphaShapeMesher", "FixedMesh", "MeshSource", "main_body"]
+
+
+class MeshSource(Protocol):
+    """Turns particle positions into a mesh for one step."""
+
+    def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return ``(active_index (N_a,), local_t (d+1, ne))`` for positions x."""
+        ...
+
+
+@dataclass
+class FixedMesh:
+    """Keep the initial connectivity (small-deformation problems, no remeshing).
+
+    Parameters
+    ----------
+    t : ndarray (d+1, ne)
+        Connectivity over all particles (every particle in an element).
+    """
+
+    t: np.ndarray
+
+    def __post_init__(self) -> None:
+        self.t = np.asarray(self.t, dtype=np.int64)
+        self._active = np.unique(self.t)
+        self._signs: np.ndarray | None = None
+
+    def _check_orientation(self, x: np.ndarray) -> None:
+        """Refuse a folded mesh: an element whose orientation has flipped."""
+        d = x.shape[1]
+        if self.t.shape[0] != d + 1:
+            return
+        v = x[self.t[1:]] - x[self.t[0]][None]  # (d, ne, d)
+        signs = np.sign(np.linalg.det(np.moveaxis(v, 0, 1)))
+        if self._signs is None:
+            self._signs = signs
+            return
+        flipped = (signs * self._signs) < 0
+        if np.any(flipped):
+            e = int(np.flatnonzero(flipped)[0])
+            raise NpfemError(
+                f"{int(flipped.sum())} element(s) of the fixed mesh turned inside "
+                f"out (first: element {e}); the deformation is too large for a "
+                "fixed connectivity: reduce dt or use remeshing (AlphaShapeMesher)"
+            )
+
+    def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # noqa: D102
+        n = x.shape[0]
+        if self.t.size and (self.t.min() < 0 or self.t.max() >= n):
+            raise ParameterError(
+                "t",
+                f"indices {int(self.t.min())}..{int(self.t.max())}",
+                f"particle indices in 0..{n - 1}",
+            )
+        self._check_orientation(x)
+        if self._active.size != x.shape[0]:
+            local = np.searchsorted(self._active, self.t)
+            return self._active, local
+        return self._active, self.t
 
 
 class AlphaShapeMesher:

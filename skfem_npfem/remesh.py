@@ -55,6 +55,7 @@ __all__ = [
     "alpha_shape",
     "boundary_normals",
     "free_surface",
+    "p1_mesh",
 ]
 
 #: Simplices with volume below ``VOLUME_TOL * h**d`` are treated as degenerate.
@@ -82,6 +83,25 @@ def _face_table(d: int) -> NDArray[np.intp]:
 
 
 _FACES = {2: _face_table(2), 3: _face_table(3)}
+
+
+def p1_mesh(points: np.ndarray, t: np.ndarray) -> MeshTri | MeshTet:
+    """The scikit-fem P1 mesh of one step: nodes ``points`` (N, d), cells ``t``.
+
+    ``t`` is (d+1, ne) with node numbers ``0 .. N-1``, every node in a cell
+    (scikit-fem takes ``nvertices = max(t) + 1``).  Cells keep their vertex
+    order (``sort_t=False``: scikit-fem would otherwise reorder, and flip,
+    them).
+
+    Examples
+    --------
+    >>> x = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    >>> mesh = p1_mesh(x, np.array([[0], [1], [2]]))
+    >>> type(mesh).__name__, mesh.nvertices, mesh.t[:, 0].tolist()
+    ('MeshTri1', 3, [0, 1, 2])
+    """
+    cls = MeshTri if points.shape[1] == 2 else MeshTet
+    return cls(np.ascontiguousarray(points.T), np.ascontiguousarray(t), sort_t=False)
 
 
 @dataclass(frozen=True, eq=False)
@@ -166,10 +186,7 @@ class Triangulation:
                 "the triangulation has no simplices (every candidate failed the "
                 "alpha-shape or quality test); increase alpha or h"
             )
-        p = self.points[self.active_index].T.copy()
-        t = self.local_simplices.T.copy()
-        cls = MeshTri if self.dim == 2 else MeshTet
-        return cls(p, t, sort_t=False)
+        return p1_mesh(self.points[self.active_index], self.local_simplices.T)
 
     def n_components(self) -> int:
         """Count the connected bodies.

@@ -1,542 +1,36 @@
-"""The (P)FEM time loop: particles in, particles out.
+"""The time loop: many steps with output, checkpoints and adaptive time stepping.
 
-:func:`advance` performs one step: build a mesh from the particles (a fixed
-connectivity or a fresh Delaunay/alpha-shape triangulation), assemble the nodal
-integration on it, solve the cone program, and return *new* particles updated
-from the solution.  The mesh is then forgotten: nothing is mapped between meshes.
-
-:class:`Simulation` drives many steps: fixed or adaptive time step (halve and
-retry when the solver fails, grow back after successes), an end time or a
-stopping rule, callbacks, progress reporting, VTU output as steps finish, and
-checkpoints to resume from.
+:class:`Simulation` drives :func:`~skfem_npfem.step.advance`: fixed or adaptive
+time step (halve and retry when the solver fails, grow back after successes),
+an end time or a stopping rule (:class:`AtRest`), callbacks, progress
+reporting, VTU output as steps finish, and checkpoints to resume from (the
+files themselves are :mod:`skfem_npfem.io`'s).  Each step's arrays reach the
+callbacks and the writer in a :class:`~skfem_npfem.step.StepResult` and are
+dropped after them; the run keeps one scalar
+:class:`~skfem_npfem.step.StepRecord` per step.
 """
 
 from __future__ import annotations
 
-import json
 import math
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
-from skfem import MeshTet, MeshTri
 
-from .boundary import RigidWall
-from .conic import Contacts, SolverOptions, StepData, solve_step
-from .errors import NpfemError, ParameterError, SolverError
-from .materials import Material
+from .errors import ParameterError, SolverError
+from .io import read_checkpoint, write_checkpoint
+from .kinematics import energies
+from .model import Model
 from .particles import Particles
-from .smoothing import nodal_integration
+from .pfem import MeshSource
+from .step import StepRecord, StepResult, advance
 
-__all__ = [
-    "AtRest",
-    "FixedMesh",
-    "Model",
-    "Simulation",
-    "StepRecord",
-    "advance",
-    "energies",
-    "project_to_walls",
-    "rotate_stress",
-]
-
-
-@dataclass
-class Model:
-    """Physics and numerics shared by all steps of a run.
-
-    Parameters
-    ----------
-    dim : int
-        2 (plane strain) or 3.
-    materials : list of Material
-        Referenced by :attr:`Particles.material`.
-    gravity : float
-        Gravitational acceleration along ``-e_d``, m/s^2.
-    mode : {"dynamic", "static"}
-        Include inertia (theta1/theta2 scheme) or solve quasi-static steps.
-    theta1, theta2 : float
-        Time-integration parameters in [1/2, 1] (1, 1: backward Euler, the PFEM
-        default; 1/2, 1/2: trapezoidal, energy conserving, elastic waves only).
-    walls : list of RigidWall
-        Rigid planes the particles may touch.
-    objective_rotation : bool
-        Rotate stresses with the smoothed spin (Hughes-Winget, exactly orthogonal).
-    update_geometry : bool
-        Move the particles by each increment (updated Lagrangian, large
-        deformation).  False keeps the initial geometry (small-strain analysis, as
-        in limit-load benchmarks); displacements still accumulate in ``u``.
-    stress_scale : float or None
-        Stress scale for non-dimensionalisation (None: automatic).
-    solver : SolverOptions
-        Clarabel settings.
-    """
-
-    dim: int
-    materials: list[Material]
-    gravity: float = 9.81
-    mode: str = "dynamic"
-    theta1: float = 1.0
-    theta2: float = 1.0
-    walls: list[RigidWall] = field(default_factory=list)
-    objective_rotation: bool = True
-    update_geometry: bool = True
-    stress_scale: float | None = None
-    solver: SolverOptions = field(default_factory=SolverOptions)
-
-    def __post_init__(self) -> None:
-        if self.dim not in (2, 3):
-            raise ParameterError("dim", self.dim, "2 or 3")
-        if not self.materials:
-            raise ParameterError("materials", self.materials, "at least one material")
-        for m in self.materials:
-            m.check_dim(self.dim)
-        if self.mode not in ("dynamic", "static"):
-            raise ParameterError("mode", self.mode, "'dynamic' or 'static'")
-        for name in ("theta1", "theta2"):
-            val = getattr(self, name)
-            if not (isinstance(val, int | float) and 0.5 <= val <= 1.0):
-                raise ParameterError(name, val, "a number in [0.5, 1]")
-        s = self.stress_scale
-        if s is not None and not (
-            isinstance(s, int | float) and math.isfinite(s) and s > 0
-        ):
-            raise ParameterError("stress_scale", s, "a stress > 0 (Pa) or None")
-        g = self.gravity
-        if not (isinstance(g, int | float) and math.isfinite(g) and g >= 0):
-            raise ParameterError("gravity", g, "a finite number >= 0 (m/s^2)")
-        for w in self.walls:
-            if w.normal.size != self.dim:
-                raise ParameterError("walls", w, f"walls must be {self.dim}D")
-
-    @property
-    def components(self) -> tuple[int, ...]:
-        """Full-Voigt components carried as cone variables."""
-        if self.dim == 3:
-            return (0, 1, 2, 3, 4, 5)
-        if any(m.needs_zz(2) for m in self.materials):
-            return (0, 1, 2, 3)
-        return (0, 1, 3)
-
-    @property
-    def gravity_vector(self) -> np.ndarray:
-        """Gravity as a vector (along ``-e_d``)."""
-        g = np.zeros(self.dim)
-        g[-1] = -self.gravity
-        return g
-
-
-class MeshSource(Protocol):
-    """Turns particle positions into a mesh for one step."""
-
-    def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Return ``(active_index (N_a,), local_t (d+1, ne))`` for positions x."""
-        ...
-
-
-@dataclass
-class FixedMesh:
-    """Keep the initial connectivity (small-deformation problems, no remeshing).
-
-    Parameters
-    ----------
-    t : ndarray (d+1, ne)
-        Connectivity over all particles (every particle in an element).
-    """
-
-    t: np.ndarray
-
-    def __post_init__(self) -> None:
-        self.t = np.asarray(self.t, dtype=np.int64)
-        self._active = np.unique(self.t)
-        self._signs: np.ndarray | None = None
-
-    def _check_orientation(self, x: np.ndarray) -> None:
-        """Refuse a folded mesh: an element whose orientation has flipped."""
-        d = x.shape[1]
-        if self.t.shape[0] != d + 1:
-            return
-        v = x[self.t[1:]] - x[self.t[0]][None]  # (d, ne, d)
-        signs = np.sign(np.linalg.det(np.moveaxis(v, 0, 1)))
-        if self._signs is None:
-            self._signs = signs
-            return
-        flipped = (signs * self._signs) < 0
-        if np.any(flipped):
-            e = int(np.flatnonzero(flipped)[0])
-            raise NpfemError(
-                f"{int(flipped.sum())} element(s) of the fixed mesh turned inside "
-                f"out (first: element {e}); the deformation is too large for a "
-                "fixed connectivity: reduce dt or use remeshing (AlphaShapeMesher)"
-            )
-
-    def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # noqa: D102
-        n = x.shape[0]
-        if self.t.size and (self.t.min() < 0 or self.t.max() >= n):
-            raise ParameterError(
-                "t",
-                f"indices {int(self.t.min())}..{int(self.t.max())}",
-                f"particle indices in 0..{n - 1}",
-            )
-        self._check_orientation(x)
-        if self._active.size != x.shape[0]:
-            local = np.searchsorted(self._active, self.t)
-            return self._active, local
-        return self._active, self.t
-
-
-@dataclass
-class StepRecord:
-    """Diagnostics of one step (also written to the JSON summary)."""
-
-    step: int
-    time: float
-    dt: float
-    status: str
-    iterations: int
-    timings: dict[str, float]
-    n_active: int
-    n_inactive: int
-    mesh_volume: float
-    n_contacts: int
-    retries: int = 0
-    #: Sum of the particle masses, kg (exactly conserved).
-    mass: float = float("nan")
-    #: ``1/2 sum m |v|^2`` at the end of the step, J.
-    kinetic_energy: float = float("nan")
-    #: ``sum m g x_d`` at the end of the step (zero at ``x_d = 0``), J.
-    potential_energy: float = float("nan")
-    #: ``mesh_volume / (mesh volume of the first step) - 1``.
-    volume_change: float = float("nan")
-    #: Scene diagnostics (numbers) added by callbacks, e.g. ``runout``.
-    extra: dict[str, Any] = field(default_factory=dict)
-    # Not serialised: the solution and mesh of the step (for scene metrics).
-    solution: Any = field(default=None, repr=False, compare=False)
-    active: Any = field(default=None, repr=False, compare=False)
-    local_t: Any = field(default=None, repr=False, compare=False)
-
-    def as_dict(self) -> dict[str, Any]:
-        """Plain dict of the scalar diagnostics (for JSON); ``extra`` is merged in."""
-        skip = ("solution", "active", "local_t", "extra")
-        out = {k: v for k, v in vars(self).items() if k not in skip}
-        out.update({k: v for k, v in self.extra.items() if k not in out})
-        return out
-
-    @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> StepRecord:
-        """Inverse of :meth:`as_dict` (unknown keys go to ``extra``)."""
-        names = {f.name for f in fields(cls)} - {"solution", "active", "local_t"}
-        known = {k: v for k, v in d.items() if k in names}
-        known["extra"] = {k: v for k, v in d.items() if k not in names}
-        return cls(**known)
-
-
-def rotate_stress(stress: np.ndarray, grad_du: np.ndarray) -> np.ndarray:
-    """Rotate stresses by the exactly orthogonal Hughes-Winget (Cayley) rotation.
-
-    ``R = (I - W/2)^-1 (I + W/2)`` with ``W = skew(grad du)``; ``s <- R s R^T``.
-    Orthogonality keeps every invariant, so a stress inside a yield cone stays
-    inside (a first-order Jaumann update does not).
-
-    Parameters
-    ----------
-    stress : ndarray (N, n_full)
-        Full Voigt stresses.
-    grad_du : ndarray (N, d, d)
-        Smoothed gradients of the displacement increment.
-
-    Returns
-    -------
-    ndarray (N, n_full)
-    """
-    n, d, _ = grad_du.shape
-    W = np.zeros((n, 3, 3))
-    W[:, :d, :d] = 0.5 * (grad_du - np.swapaxes(grad_du, 1, 2))
-    eye = np.eye(3)
-    R = np.linalg.solve(eye - 0.5 * W, eye + 0.5 * W)
-    S = voigt_to_tensor(stress)
-    return tensor_to_voigt(R @ S @ np.swapaxes(R, 1, 2), stress.shape[1])
-
-
-def voigt_to_tensor(s: np.ndarray) -> np.ndarray:
-    """Full Voigt (N, 4|6) stresses to (N, 3, 3) tensors."""
-    n = s.shape[0]
-    T = np.zeros((n, 3, 3))
-    T[:, 0, 0], T[:, 1, 1], T[:, 2, 2] = s[:, 0], s[:, 1], s[:, 2]
-    T[:, 0, 1] = T[:, 1, 0] = s[:, 3]
-    if s.shape[1] == 6:
-        T[:, 1, 2] = T[:, 2, 1] = s[:, 4]
-        T[:, 2, 0] = T[:, 0, 2] = s[:, 5]
-    return T
-
-
-def tensor_to_voigt(T: np.ndarray, size: int) -> np.ndarray:
-    """(N, 3, 3) tensors to full Voigt vectors of length ``size`` (4 or 6)."""
-    cols = [T[:, 0, 0], T[:, 1, 1], T[:, 2, 2], T[:, 0, 1]]
-    if size == 6:
-        cols += [T[:, 1, 2], T[:, 2, 0]]
-    return np.stack(cols, axis=1)
-
-
-def energies(p: Particles, model: Model) -> dict[str, float]:
-    """Total mass (kg), kinetic and gravitational potential energy (J) of particles.
-
-    The potential energy is ``sum m g x_d`` (zero at ``x_d = 0``; gravity acts
-    along ``-e_d``).
-
-    Examples
-    --------
-    >>> from skfem_npfem.materials import LinearElastic
-    >>> p = Particles.create([[0.0, 2.0]], [3.0], v=[[1.0, 0.0]])
-    >>> e = energies(p, Model(dim=2, materials=[LinearElastic(1e6, 0.3)], gravity=10))
-    >>> e["mass"], e["kinetic_energy"], e["potential_energy"]
-    (3.0, 1.5, 60.0)
-    """
-    m = p.mass
-    return {
-        "mass": float(m.sum()),
-        "kinetic_energy": float(0.5 * np.sum(m * np.sum(p.v * p.v, axis=1))),
-        "potential_energy": float(model.gravity * np.sum(m * p.x[:, -1])),
-    }
-
-
-def project_to_walls(
-    walls: list[RigidWall],
-    x: np.ndarray,
-    v: np.ndarray,
-    friction: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Put particles behind a wall back on it (:meth:`RigidWall.project`).
-
-    For the particles flagged in ``friction`` (the ballistic ones, which have no
-    contact rows) the wall also applies a Coulomb impulse: the tangential
-    velocity shrinks by ``mu`` times the normal velocity the wall removed (an
-    impact, or ``g dt`` per step while resting), never past zero.  Without it a
-    grain that left the body would slide on a rough floor for ever.
-    """
-    for wall in walls:
-        vn_old = v @ wall.normal
-        x, v_new = wall.project(x, v)
-        if friction is not None and wall.mu > 0 and v_new is not v:
-            dvn = (v_new @ wall.normal - vn_old) * friction
-            hit = np.flatnonzero(dvn > 0)
-            if hit.size:
-                vt = v_new[hit] - (v_new[hit] @ wall.normal)[:, None] * wall.normal
-                speed = np.linalg.norm(vt, axis=1)
-                keep = np.zeros_like(speed)
-                moving = speed > 0
-                keep[moving] = (
-                    np.maximum(speed[moving] - wall.mu * dvn[hit][moving], 0.0)
-                    / speed[moving]
-                )
-                v_new[hit] -= (1.0 - keep)[:, None] * vt
-        v = v_new
-    return x, v
-
-
-def equivalent_strain(deps: np.ndarray) -> np.ndarray:
-    """``sqrt(2/3 e:e)`` of full-Voigt strains (engineering shear)."""
-    normal = deps[:, :3]
-    dev = normal - normal.mean(axis=1, keepdims=True)
-    shear = deps[:, 3:]
-    return np.sqrt(
-        2.0 / 3.0 * (np.sum(dev**2, axis=1) + 0.5 * np.sum(shear**2, axis=1))
-    )
-
-
-def _contacts(
-    model: Model, p: Particles, active: np.ndarray, dt: float, h: float
-) -> tuple[Contacts, np.ndarray, np.ndarray]:
-    """Contact candidates of the active particles against every wall.
-
-    A particle is a candidate when its gap is below ``h + 2|v| dt + g dt^2`` so
-    that fast particles cannot tunnel through a wall within one step.  The gap
-    handed to the cone program includes the normal part of any prescribed
-    displacement increment of the particle (the program only sees the free dofs).
-    The friction bound is ``mu`` times the particle's lagged normal force
-    :attr:`Particles.wall_force` of the wall.
-    """
-    d = model.dim
-    if p.wall_force.shape[1] < len(model.walls):
-        raise ParameterError(
-            "wall_force",
-            p.wall_force.shape,
-            f"one column per wall ({len(model.walls)}): create the particles with "
-            "Particles.create(..., n_walls=len(model.walls))",
-        )
-    nodes, normals, gaps, bounds, wall_ids = [], [], [], [], []
-    x, v = p.x[active], p.v[active]
-    fixed = p.fixed[active]
-    du_pres = np.where(fixed, p.v_prescribed[active] * dt, 0.0)
-    reach = h + 2.0 * np.linalg.norm(v, axis=1) * dt + model.gravity * dt**2
-    for w_id, wall in enumerate(model.walls):
-        g = wall.gap(x)
-        cand = np.flatnonzero(g < reach)
-        # A particle whose dofs along the normal are all fixed needs no contact row.
-        cand = cand[~np.all(fixed[cand][:, np.abs(wall.normal) > 0], axis=1)]
-        nodes.append(cand)
-        normals.append(np.broadcast_to(wall.normal, (cand.size, d)))
-        gaps.append(np.maximum(g[cand], 0.0) + du_pres[cand] @ wall.normal)
-        # Lagged normal force; values at the solver's noise level (a node that
-        # was only a candidate, lambda_n ~ +-1e-8 of the load) give no friction
-        # rather than a near-degenerate |lambda_t| <= tiny constraint.
-        lam = p.wall_force[active[cand], w_id]
-        noise = 1e-8 * np.max(np.abs(p.wall_force[:, w_id]), initial=0.0)
-        bounds.append(np.where(lam > noise, wall.mu * lam, 0.0))
-        wall_ids.append(np.full(cand.size, w_id))
-    if not nodes:
-        return Contacts.empty(d), np.zeros(0, int), np.zeros(0, int)
-    c = Contacts(
-        node=np.concatenate(nodes),
-        normal=np.concatenate(normals),
-        gap=np.concatenate(gaps),
-        mu_lambda=np.concatenate(bounds),
-    )
-    return c, np.concatenate(wall_ids), c.node
-
-
-def advance(
-    p: Particles,
-    model: Model,
-    dt: float,
-    mesh_source: MeshSource,
-    step: int | None = None,
-) -> tuple[Particles, StepRecord]:
-    """Advance the particles by one step.
-
-    Parameters
-    ----------
-    p : Particles
-        State at the start of the step.
-    model : Model
-        Materials, loads, walls and solver settings.
-    dt : float
-        Time step, s (pseudo-time in static mode).
-    mesh_source : callable
-        ``x -> (active_index, local_t)`` (for example :class:`FixedMesh` or the
-        alpha-shape remesher).
-    step : int, optional
-        Step index (used in error messages).
-
-    Returns
-    -------
-    Particles, StepRecord
-        New particles and the step diagnostics.
-
-    Raises
-    ------
-    SolverError
-        If the cone program fails; ``p`` is untouched.
-    """
-    if not (math.isfinite(dt) and dt > 0):
-        raise ParameterError("dt", dt, "a finite time step > 0 (s)")
-    d = model.dim
-    if p.dim != d:
-        raise ParameterError(
-            "particles", f"{p.dim}D positions", f"{d}D positions for a {d}D model"
-        )
-    t0 = time.perf_counter()
-    active, local_t = mesh_source(p.x)
-    xa = p.x[active]
-    pts, conn = np.ascontiguousarray(xa.T), np.ascontiguousarray(local_t)
-    # sort_t=False: scikit-fem would otherwise reorder (and flip) triangles.
-    mesh = MeshTri(pts, conn, sort_t=False) if d == 2 else MeshTet(pts, conn)
-    ni = nodal_integration(mesh, model.components)
-    t_mesh = time.perf_counter() - t0
-    h = float(np.mean(ni.volumes)) ** (1.0 / d)
-    mass = p.mass[active]
-    g = model.gravity_vector
-    force = mass[:, None] * g[None, :]
-    contacts, wall_ids, c_nodes = _contacts(model, p, active, dt, h)
-    dynamic = model.mode == "dynamic"
-    fixed = p.fixed[active]
-    data = StepData(
-        ni=ni,
-        materials=model.materials,
-        material=p.material[active],
-        sigma_n=p.stress[active],
-        force=force,
-        fixed=fixed,
-        du_prescribed=p.v_prescribed[active] * dt,
-        contacts=contacts,
-        dt=dt,
-        mass=mass,
-        v_n=p.v[active],
-        theta1=model.theta1,
-        theta2=model.theta2,
-        dynamic=dynamic,
-        stress_scale=model.stress_scale,
-    )
-    sol = solve_step(data, model.solver, step=step)
-    t1 = time.perf_counter()
-
-    # ---- update the particles (active ones from the solution) ----
-    du = np.zeros_like(p.x)
-    du[active] = sol.du
-    stress = p.stress.copy()
-    sig = sol.sigma
-    if model.objective_rotation:
-        sig = rotate_stress(sig, ni.gradient(sol.du))
-    stress[active] = sig
-    eps_p = p.eps_p.copy()
-    eps_p[active] += equivalent_strain(sol.deps_p)
-    th1, th2 = model.theta1, model.theta2
-    inactive = np.ones(p.n, bool)
-    inactive[active] = False
-    if np.any(inactive):
-        # Ballistic motion under gravity (formulation.md §2).
-        du[inactive] = dt * p.v[inactive] + th2 * dt**2 * g
-    if dynamic:
-        v = p.v + (du - dt * p.v) / (th2 * dt)
-        a = ((v - p.v) / dt - (1 - th1) * p.a) / th1
-    else:
-        v = du / dt
-        a = np.zeros_like(p.a)
-    if np.any(inactive):
-        v[inactive] = p.v[inactive] + dt * g
-        a[inactive] = g
-    if model.update_geometry:
-        moved = p.x + du
-        x, v = project_to_walls(model.walls, moved, v, friction=inactive)
-        # Accumulate du itself (x - p.x would lose increments below ~1e-16 |x|);
-        # only the wall projection goes through the positions.
-        u = p.u + du + (x - moved)
-    else:
-        x, u = p.x, p.u + du
-    wall_force = np.zeros_like(p.wall_force)
-    if contacts.size:
-        wall_force[active[c_nodes], wall_ids] = sol.lambda_n
-    new = p.replace(
-        x=x,
-        v=v,
-        a=a,
-        u=u,
-        stress=stress,
-        eps_p=eps_p,
-        wall_force=wall_force,
-    )
-    timings = {"mesh": t_mesh, **sol.timings, "update": time.perf_counter() - t1}
-    rec = StepRecord(
-        step=-1 if step is None else step,
-        time=float("nan"),
-        dt=dt,
-        status=sol.status,
-        iterations=sol.iterations,
-        timings=timings,
-        n_active=int(active.size),
-        n_inactive=int(p.n - active.size),
-        mesh_volume=float(ni.volumes.sum()),
-        n_contacts=contacts.size,
-        **energies(new, model),
-        solution=sol,
-        active=active,
-        local_t=local_t,
-    )
-    return new, rec
+__all__ = ["AtRest", "Simulation", "peak_memory_mb"]
 
 
 class Simulation:
@@ -573,7 +67,10 @@ class Simulation:
     checkpoint_every : int
         Steps between checkpoints.
     callbacks : list of callables
-        ``f(sim, particles, record)`` after every step; return True to stop.
+        ``f(sim, particles, result)`` after every step, with the new particles
+        and the :class:`~skfem_npfem.step.StepResult` (``result.record`` is
+        the kept :class:`~skfem_npfem.step.StepRecord`: store scene values in
+        ``result.record.extra``); return True to stop.
     progress : bool or None
         Progress line on stderr (None: only when stderr is a terminal).
     meta : dict
@@ -633,7 +130,7 @@ class Simulation:
         self._successes = 0
         self.last_record: StepRecord | None = None
         #: Mass and energies of the initial state (see :func:`energies`).
-        self.initial = energies(particles, model)
+        self.initial = energies(particles, model.gravity)
 
     # -- output ---------------------------------------------------------------
     def point_data(self, p: Particles, active: np.ndarray | None) -> dict:
@@ -675,23 +172,16 @@ class Simulation:
         """Write ``checkpoint_<step>.npz`` (see :mod:`skfem_npfem.io`)."""
         if self.checkpoint_dir is None:
             return None
-        from .io import checkpoint_path, save_checkpoint
-
-        self.checkpoint_dir.mkdir(parents=True, exist_ok=True)
-        meta = {
+        state = {
             **self.meta,
             "step": self.step,
             "time": self.time,
             "dt": self.dt,
             "successes": self._successes,
             "initial": self.initial,
-            "records": [_jsonable(r.as_dict()) for r in self.records],
+            "records": [r.as_dict() for r in self.records],
         }
-        return save_checkpoint(
-            checkpoint_path(self.checkpoint_dir, self.step),
-            self.particles.arrays(),
-            meta,
-        )
+        return write_checkpoint(self.checkpoint_dir, self.step, self.particles, state)
 
     def restore(self, path: str | Path) -> dict:
         """Continue from a checkpoint written by :meth:`save_checkpoint`.
@@ -700,10 +190,7 @@ class Simulation:
         step records, so that the continued run repeats the uninterrupted one
         step for step.  Returns the checkpoint's metadata.
         """
-        from .io import load_checkpoint
-
-        arrays, meta = load_checkpoint(path)
-        self.particles = Particles.from_arrays(arrays)
+        self.particles, meta = read_checkpoint(path)
         self.step = int(meta["step"])
         self.time = float(meta["time"])
         self.dt = float(meta["dt"])
@@ -750,46 +237,58 @@ class Simulation:
             if t_end is not None and t_end - self.time < dt * (1 - 1e-9):
                 # Land on t_end, but never shorten a step by round-off only.
                 dt = t_end - self.time
-            new, rec = self._try_step(dt)
-            self.particles = new
-            self.step += 1
-            self.time += rec.dt
-            rec.step, rec.time = self.step, self.time
-            v0 = self.records[0].mesh_volume if self.records else rec.mesh_volume
-            rec.volume_change = rec.mesh_volume / v0 - 1.0 if v0 > 0 else 0.0
-            self.records.append(rec)
-            self.last_record = rec
-            last = (n_target is not None and self.step >= n_target) or (
-                t_end is not None and self.time >= t_end * (1 - 1e-12)
-            )
-            t_out = time.perf_counter()
-            if self.writer is not None and (self.step % self.output_every == 0 or last):
-                self.write_output(self._cells(rec), rec.active)
-            stop_now = any(bool(cb(self, new, rec)) for cb in self.callbacks)
-            if stop is not None and stop(self):
-                stop_now = True
-            if self.checkpoint_every and (
-                self.step % self.checkpoint_every == 0 or stop_now or last
-            ):
-                self.save_checkpoint()
-            rec.timings["output"] = time.perf_counter() - t_out
+            last = self._step_once(dt, n_target, t_end, stop)
             if self.progress:
-                self._print_progress(rec, start, n_target, t_end)
-            if stop_now:
+                self._print_progress(self.records[-1], start, n_target, t_end)
+            if last:
                 break
         if self.progress:
             print(file=sys.stderr)
         return self.records
 
-    def _cells(self, rec: StepRecord) -> np.ndarray:
-        """Global connectivity (ne, d+1) of the mesh the last step was solved on."""
-        return rec.active[rec.local_t].T
+    def _step_once(
+        self,
+        dt: float,
+        n_target: int | None,
+        t_end: float | None,
+        stop: Callable[[Simulation], bool] | None,
+    ) -> bool:
+        """One step with its output, callbacks and checkpoint; True: stop now.
 
-    def _try_step(self, dt: float) -> tuple[Particles, StepRecord]:
+        The step's :class:`~skfem_npfem.step.StepResult` lives only here: the
+        run keeps its record.
+        """
+        new, result = self._try_step(dt)
+        rec = result.record
+        self.particles = new
+        self.step += 1
+        self.time += rec.dt
+        rec.step, rec.time = self.step, self.time
+        v0 = self.records[0].mesh_volume if self.records else rec.mesh_volume
+        rec.volume_change = rec.mesh_volume / v0 - 1.0 if v0 > 0 else 0.0
+        self.records.append(rec)
+        self.last_record = rec
+        last = (n_target is not None and self.step >= n_target) or (
+            t_end is not None and self.time >= t_end * (1 - 1e-12)
+        )
+        t_out = time.perf_counter()
+        if self.writer is not None and (self.step % self.output_every == 0 or last):
+            self.write_output(result.cells, result.active)
+        stop_now = any(bool(cb(self, new, result)) for cb in self.callbacks)
+        if stop is not None and stop(self):
+            stop_now = True
+        if self.checkpoint_every and (
+            self.step % self.checkpoint_every == 0 or stop_now or last
+        ):
+            self.save_checkpoint()
+        rec.timings["output"] = time.perf_counter() - t_out
+        return stop_now
+
+    def _try_step(self, dt: float) -> tuple[Particles, StepResult]:
         retries = 0
         while True:
             try:
-                new, rec = self._advance(dt)
+                new, result = self._advance(dt)
             except SolverError as err:
                 if not self.adaptive or dt / 2 < self.dt_min:
                     saved = self.save_checkpoint()
@@ -811,6 +310,7 @@ class Simulation:
                 retries += 1
                 self._successes = 0
                 continue
+            rec = result.record
             rec.retries = retries
             if self.adaptive:
                 self._successes += 1
@@ -823,7 +323,7 @@ class Simulation:
                 self._displacement_control(new, rec, dt)
                 if retries:  # do not grow straight after a failure
                     self.dt = min(self.dt, dt)
-            return new, rec
+            return new, result
 
     def _displacement_control(self, new: Particles, rec: StepRecord, dt: float):
         """Set the next step from the largest displacement of this one."""
@@ -836,7 +336,7 @@ class Simulation:
         elif du > 0:
             self.dt = min(self.dt_max, 2 * dt, 0.9 * dt * limit / du)
 
-    def _advance(self, dt: float) -> tuple[Particles, StepRecord]:
+    def _advance(self, dt: float) -> tuple[Particles, StepResult]:
         return advance(
             self.particles, self.model, dt, self.mesh_source, step=self.step + 1
         )
@@ -886,13 +386,7 @@ class Simulation:
             "max_kinetic_energy": float(
                 max((r.kinetic_energy for r in recs), default=0.0)
             ),
-            "linear_solvers": sorted(
-                {
-                    r.solution.sizes.get("linear_solver", "")
-                    for r in recs
-                    if r.solution is not None
-                }
-            ),
+            "linear_solvers": sorted({r.linear_solver for r in recs} - {""}),
             "peak_memory_mb": peak_memory_mb(),
         }
 
@@ -951,11 +445,3 @@ class AtRest:
         else:
             ref = sim.initial["potential_energy"] - recs[-1].potential_energy
         return ref > 0 and recs[-1].kinetic_energy <= self.fraction * ref
-
-
-def _jsonable(obj: Any) -> Any:
-    """Convert numpy scalars in nested dicts/lists to plain Python (NaN -> None)."""
-    return json.loads(
-        json.dumps(obj, default=lambda o: o.item() if hasattr(o, "item") else str(o)),
-        parse_constant=lambda _: None,
-    )

@@ -9,7 +9,11 @@ it.  Strains are averaged over that cell, so the smoothed strain of node ``i`` i
 
 and the internal-force operator is ``G = [V_1 Bbar_1^T, ..., V_N Bbar_N^T]`` so that
 ``f_int = G @ sigma``.  Everything is assembled in one vectorised COO call from the
-P1 gradients that scikit-fem's affine mapping provides.
+gradients of a scikit-fem P1 basis (:func:`p1_gradients`).
+
+:class:`NodalIntegration` is the N-PFEM strain operator of the cone program (one
+stress point per node; the interface is described in
+:mod:`skfem_npfem.program`).
 
 Stress/strain vectors use the *full Voigt* order of this library
 
@@ -29,7 +33,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import Mesh
+from skfem import CellBasis, ElementTetP1, ElementTriP1, Mesh
+
+from .errors import ParameterError
 
 __all__ = [
     "FULL_VOIGT",
@@ -42,6 +48,12 @@ __all__ = [
 FULL_VOIGT: dict[int, tuple[str, ...]] = {
     2: ("xx", "yy", "zz", "xy"),
     3: ("xx", "yy", "zz", "xy", "yz", "zx"),
+}
+
+# P1 elements and their one-point rule (centroid, weight = reference volume).
+_P1 = {
+    2: (ElementTriP1(), (np.full((2, 1), 1.0 / 3.0), np.array([1.0 / 2.0]))),
+    3: (ElementTetP1(), (np.full((3, 1), 1.0 / 4.0), np.array([1.0 / 6.0]))),
 }
 
 # Strain-displacement pattern: (voigt row, displacement component k, gradient
@@ -65,8 +77,9 @@ _B_PATTERN: dict[int, tuple[tuple[int, int, int], ...]] = {
 def p1_gradients(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
     """Return P1 shape-function gradients and simplex volumes of a mesh.
 
-    The gradients come from scikit-fem's affine mapping (``mesh.mapping().invA``),
-    which is exact for P1 simplices and independent of the vertex orientation.
+    Both come from a scikit-fem :class:`~skfem.CellBasis` of ``ElementTriP1`` or
+    ``ElementTetP1`` with a one-point (centroid) quadrature, which is exact for
+    P1 simplices and independent of the vertex orientation.
 
     Parameters
     ----------
@@ -85,15 +98,14 @@ def p1_gradients(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
     --------
     >>> from skfem import MeshTri
     >>> g, v = p1_gradients(MeshTri())
-    >>> float(v.sum())
-    1.0
+    >>> float(v.sum()), g[0].sum(axis=0).tolist()
+    (1.0, [0.0, 0.0])
     """
-    mapping = mesh.mapping()
     dim = mesh.dim()
-    dref = np.vstack([-np.ones(dim), np.eye(dim)])  # reference gradients (d+1, d)
-    grads = np.einsum("ar,rje->eaj", dref, mapping.invA)
-    factorial = 2.0 if dim == 2 else 6.0
-    return grads, np.abs(mapping.detA) / factorial
+    element, quadrature = _P1[dim]
+    basis = CellBasis(mesh, element, quadrature=quadrature, disable_doflocs=True)
+    grads = np.stack([phi[0].grad[:, :, 0] for phi in basis.basis], axis=1)
+    return grads.transpose(2, 1, 0), basis.dx[:, 0]
 
 
 @dataclass(frozen=True)
@@ -134,9 +146,35 @@ class NodalIntegration:
         return self.volumes.shape[0]
 
     @property
+    def n_points(self) -> int:
+        """Number of stress points (one per node)."""
+        return self.volumes.shape[0]
+
+    @property
     def n_stress(self) -> int:
         """Stress components per node ``n_s``."""
         return len(self.components)
+
+    def check(self) -> None:
+        """Refuse a mesh with degenerate elements (infinite P1 gradients).
+
+        Raises
+        ------
+        ParameterError
+            Naming the first element of zero area/volume and its nodes.
+        """
+        degenerate = ~np.all(np.isfinite(self.grads), axis=(1, 2))
+        if np.any(degenerate):
+            e = int(np.flatnonzero(degenerate)[0])
+            raise ParameterError(
+                "mesh",
+                f"{int(degenerate.sum())} degenerate element(s) of zero "
+                f"{'area' if self.dim == 2 else 'volume'}, first {e} with nodes "
+                f"{self.t[:, e].tolist()}",
+                "elements of nonzero size; drop them (remesh.alpha_shape does) or "
+                "separate coincident/collinear nodes (near-degenerate elements "
+                "are fine)",
+            )
 
     def strain(self, u: np.ndarray) -> np.ndarray:
         """Smoothed nodal strains ``Bbar_i u`` (engineering shear).

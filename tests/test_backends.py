@@ -47,7 +47,7 @@ def test_mkl_agrees_with_qdldl():
 
 
 def test_mkl_requested_but_missing_is_a_clear_error(monkeypatch):
-    monkeypatch.setattr(npfem.conic, "mkl_available", lambda: False)
+    monkeypatch.setattr(npfem.solver, "mkl_available", lambda: False)
     with pytest.raises(npfem.ParameterError, match=r"linear_solver.*mkl"):
         npfem.SolverOptions(linear_solver="mkl").resolved_linear_solver(10, 2)
 
@@ -113,7 +113,7 @@ import numpy as np
 from skfem import MeshTet
 import skfem_npfem as npfem
 from skfem_npfem import backends
-from skfem_npfem.simulation import FixedMesh, Model, Simulation
+from skfem_npfem import FixedMesh, Model, Simulation
 from skfem_npfem.smoothing import nodal_integration
 
 W, D, H, rho, g = 2.0, 1.0, 1.0, 1800.0, 9.81

@@ -55,7 +55,7 @@ def step_data(mesh, mat, comps, *, fixed, du=None, force=None, sigma_n=None, **k
     d, n = mesh.dim(), mesh.p.shape[1]
     nfull = 4 if d == 2 else 6
     return StepData(
-        ni=nodal_integration(mesh, comps),
+        operator=nodal_integration(mesh, comps),
         materials=[mat],
         material=np.zeros(n, int),
         sigma_n=np.zeros((n, nfull)) if sigma_n is None else sigma_n,
@@ -113,7 +113,7 @@ def test_duals_equal_direct_displacement_solve(dim, comps, prescribe_top):
     data, mat = gravity_block(dim, comps, prescribe_top)
     sol = solve_step(data)
     assert_finite(sol)
-    K, D = direct_stiffness(data.ni, mat, comps)
+    K, D = direct_stiffness(data.operator, mat, comps)
     f = data.force.ravel()
     fix = data.fixed.ravel()
     F, P = np.flatnonzero(~fix), np.flatnonzero(fix)
@@ -124,7 +124,7 @@ def test_duals_equal_direct_displacement_solve(dim, comps, prescribe_top):
     # Δu from the equilibrium duals vs the direct solve (1e-8 relative).
     assert np.linalg.norm(sol.du.ravel() - u) < 1e-8 * np.linalg.norm(u)
     # Stresses sigma_i = D Bbar_i u (1e-8 relative).
-    sig = data.ni.strain(u) @ D.T
+    sig = data.operator.strain(u) @ D.T
     s_lib = sol.sigma[:, list(comps)]
     assert np.linalg.norm(s_lib - sig) < 1e-8 * np.linalg.norm(sig)
     # Reactions on prescribed dofs equal K u - f there (1e-8 relative).
@@ -132,7 +132,7 @@ def test_duals_equal_direct_displacement_solve(dim, comps, prescribe_top):
     assert np.linalg.norm(sol.reaction.ravel()[P] - R[P]) < 1e-8 * np.linalg.norm(R[P])
     assert np.all(sol.reaction.ravel()[F] == 0.0)
     # Global equilibrium: reactions carry the whole weight (1e-8 relative).
-    W = RHO * GRAV * data.ni.volumes.sum()
+    W = RHO * GRAV * data.operator.volumes.sum()
     assert abs(sol.reaction[:, -1].sum() - W) < 1e-8 * W
 
 
@@ -193,7 +193,7 @@ def test_elastic_program_has_only_equilibrium_rows_and_zero_iterations():
     n_free = int((~data.fixed).sum())
     # Only the zero cone of the free-dof equilibrium rows (no SOC, no cut-off).
     assert sol.sizes["rows"] == n_free
-    assert sol.sizes["variables"] == 3 * data.ni.n_nodes
+    assert sol.sizes["variables"] == 3 * data.operator.n_nodes
     # Elastic-only programs are one KKT solve: 0 IPM iterations (formulation §9).
     assert sol.iterations == 0
     assert sol.status == "Solved"

@@ -42,7 +42,7 @@ from skfem_npfem import (
     nodal_integration,
     solve_step,
 )
-from skfem_npfem.conic import _tangents
+from skfem_npfem.families import tangents
 
 G = 9.81
 RHO = 2000.0
@@ -106,9 +106,9 @@ def _incline(theta, phi_w, *, dim=2, E=1e7, dt=2.5e-3, t_end=0.4, h=0.025):
     sim = Simulation(p, model, FixedMesh(mesh.t), dt, progress=False)
     min_gap = [np.inf]
 
-    def watch(sim_, q, rec):
+    def watch(sim_, q, step):
         min_gap[0] = min(min_gap[0], float(wall.gap(q.x).min()))
-        assert rec.status in ("Solved", "AlmostSolved")
+        assert step.record.status in ("Solved", "AlmostSolved")
 
     sim.callbacks.append(watch)
     sim.run(t_end=t_end)
@@ -140,14 +140,14 @@ def test_tangents_orthonormal(dim):
     rng = np.random.default_rng(0)
     n = np.vstack([np.eye(dim), -np.eye(dim), rng.normal(size=(50, dim))])
     n /= np.linalg.norm(n, axis=1, keepdims=True)
-    t = _tangents(n)
+    t = tangents(n)
     assert t.shape == (n.shape[0], dim - 1, dim)
     frame = np.concatenate([t, n[:, None, :]], axis=1)  # (n, d, d) rows t.., n
     eye = np.broadcast_to(np.eye(dim), frame.shape)
     np.testing.assert_allclose(frame @ np.swapaxes(frame, 1, 2), eye, atol=1e-14)
     # Right-handed (t_1, ..., n): the 2D tangent is n rotated by +90 degrees.
     np.testing.assert_allclose(np.linalg.det(frame), (-1.0) ** (dim - 1), atol=1e-13)
-    assert _tangents(np.zeros((0, dim))).shape == (0, dim - 1, dim)
+    assert tangents(np.zeros((0, dim))).shape == (0, dim - 1, dim)
 
 
 def _floor_block(dim=2, *, y0=0.0, v0=(0.0, 0.0), friction_angle=0.0, E=1e7):
@@ -167,9 +167,9 @@ def _floor_block(dim=2, *, y0=0.0, v0=(0.0, 0.0), friction_angle=0.0, E=1e7):
 def test_contact_sign_resting_block():
     """Pressed onto the floor: lambda_n > 0 pushes up, no penetration."""
     mesh, p, model, base = _floor_block()
-    q, rec = advance(p, model, 0.01, FixedMesh(mesh.t))
-    sol = rec.solution
-    assert rec.n_contacts == sol.lambda_n.size >= base.size
+    q, step = advance(p, model, 0.01, FixedMesh(mesh.t))
+    sol = step.solution
+    assert step.record.n_contacts == sol.lambda_n.size >= base.size
     gap_after = model.walls[0].gap(p.x + sol.du)
     assert gap_after.min() >= -1e-9
     # Every base particle is pushed up; the floor carries (a share of) the weight.
@@ -203,7 +203,7 @@ def _sliding_step(dim, v0, mu=0.5):
     force = np.zeros((n_nodes, dim))
     force[:, -1] = -mass * G
     data = StepData(
-        ni=ni,
+        operator=ni,
         materials=[LinearElastic(1e7, 0.3, RHO)],
         material=np.zeros(n_nodes, int),
         sigma_n=np.zeros((n_nodes, 4 if dim == 2 else 6)),
@@ -227,7 +227,7 @@ def test_friction_force_opposes_slip(dim, v0):
     sol, c = _sliding_step(dim, np.array(v0))
     assert np.all(sol.lambda_n > 0)
     assert np.all(c.gap + np.sum(c.normal * sol.du[c.node], axis=1) >= -1e-10)
-    tang = _tangents(c.normal)  # (nc, d-1, d)
+    tang = tangents(c.normal)  # (nc, d-1, d)
     f_t = np.einsum("ck,ckd->cd", sol.lambda_t, tang)  # friction force vectors
     slip = (
         sol.du[c.node] - np.sum(sol.du[c.node] * c.normal, axis=1)[:, None] * c.normal
@@ -243,8 +243,8 @@ def test_contact_closes_gap_exactly():
     """A falling block whose free flight would cross the floor lands on it."""
     gap0, v0, dt = 1e-4, -0.1, 0.005  # free flight: v0 dt - g dt^2 = -7.5e-4 m
     mesh, p, model, base = _floor_block(y0=gap0, v0=(0.0, v0))
-    q, rec = advance(p, model, dt, FixedMesh(mesh.t))
-    du = rec.solution.du
+    q, step = advance(p, model, dt, FixedMesh(mesh.t))
+    du = step.solution.du
     np.testing.assert_allclose(du[base, 1], -gap0, atol=1e-10)
     assert q.wall_force[base, 0].min() > 0.0
     assert model.walls[0].gap(p.x + du).min() >= -1e-10
@@ -296,9 +296,9 @@ def test_prescribed_dofs_enter_the_gap():
     model = Model(
         dim=2, materials=[LinearElastic(1e7, 0.3, RHO)], gravity=0.0, walls=[wall]
     )
-    _, rec = advance(p, model, 0.1, FixedMesh(mesh.t))
-    assert wall.gap(p.x + rec.solution.du).min() >= -1e-9
-    assert rec.solution.lambda_n.max() > 0.0
+    _, step = advance(p, model, 0.1, FixedMesh(mesh.t))
+    assert wall.gap(p.x + step.solution.du).min() >= -1e-9
+    assert step.solution.lambda_n.max() > 0.0
 
 
 def test_missing_wall_force_columns():

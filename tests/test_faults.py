@@ -5,7 +5,7 @@ import pytest
 
 import skfem_npfem as npfem
 import skfem_npfem.io as npio
-import skfem_npfem.simulation as simulation
+import skfem_npfem.step as step_module
 from skfem_npfem.cli import main
 from skfem_npfem.errors import SolverError
 
@@ -27,7 +27,7 @@ def _build(out=None, **over):
 def test_solver_failure_is_retried_with_half_the_step(monkeypatch):
     # A NumericalError at step 3 with the full dt: the loop halves dt, retries,
     # and the run continues (adaptive stepping).
-    original = simulation.solve_step
+    original = step_module.solve_step
     calls = []
 
     def flaky(data, options=None, step=None):
@@ -36,7 +36,7 @@ def test_solver_failure_is_retried_with_half_the_step(monkeypatch):
             raise SolverError("NumericalError", step, 7, "injected")
         return original(data, options, step)
 
-    monkeypatch.setattr(simulation, "solve_step", flaky)
+    monkeypatch.setattr(step_module, "solve_step", flaky)
     srun = _build()
     sim = srun.simulation
     sim.run(steps=5)
@@ -51,14 +51,14 @@ def test_failure_past_the_floor_keeps_every_finished_step(tmp_path, monkeypatch)
     # From step 4 on every solve fails: the loop halves dt down to its floor,
     # then stops with a SolverError that says where the results are; steps 1-3
     # are on disk and a checkpoint lets the run continue.
-    original = simulation.solve_step
+    original = step_module.solve_step
 
     def broken(data, options=None, step=None):
         if step >= 4:
             raise SolverError("NumericalError", step, 3, "injected")
         return original(data, options, step)
 
-    monkeypatch.setattr(simulation, "solve_step", broken)
+    monkeypatch.setattr(step_module, "solve_step", broken)
     out = tmp_path / "run"
     srun = _build(out=out, output_every=1, checkpoint_every=100)
     with pytest.raises(SolverError) as info:
@@ -77,7 +77,7 @@ def test_failure_past_the_floor_keeps_every_finished_step(tmp_path, monkeypatch)
 
     # Continue from the checkpoint with a working solver: identical to a run
     # that never failed.
-    monkeypatch.setattr(simulation, "solve_step", original)
+    monkeypatch.setattr(step_module, "solve_step", original)
     resumed = _build()
     resumed.simulation.restore(ckpt)
     resumed.simulation.run(steps=3)
@@ -111,16 +111,16 @@ def test_killed_mid_write_then_resume_reproduces_the_run(tmp_path, monkeypatch):
     assert main(["run", "column-collapse", *sets, "--out", str(ref), "--quiet"]) == 0
 
     run = tmp_path / "run"
-    real_replace = npio.os.replace
+    real_replace = npio.files.os.replace
 
     def dying_replace(src, dst):
         if str(dst).endswith("result_000007.vtu"):
             raise KeyboardInterrupt  # the process is killed mid-write
         return real_replace(src, dst)
 
-    monkeypatch.setattr(npio.os, "replace", dying_replace)
+    monkeypatch.setattr(npio.files.os, "replace", dying_replace)
     assert main(["run", "column-collapse", *sets, "--out", str(run), "--quiet"]) == 130
-    monkeypatch.setattr(npio.os, "replace", real_replace)
+    monkeypatch.setattr(npio.files.os, "replace", real_replace)
     listed = npio.read_pvd(run / "result.pvd")
     assert len(listed) == 7  # steps 0..6
     for _, path in listed:

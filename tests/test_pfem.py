@@ -5,19 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skfem_npfem.boundary import floor
+from skfem_npfem.boundary import floor, project_to_walls
 from skfem_npfem.materials import LinearElastic
+from skfem_npfem.model import Model
 from skfem_npfem.particles import Particles
 from skfem_npfem.pfem import AlphaShapeMesher, main_body
 from skfem_npfem.scenes.column_collapse import initial_particles, lattice
-from skfem_npfem.simulation import (
-    AtRest,
-    Model,
-    Simulation,
-    StepRecord,
-    advance,
-    project_to_walls,
-)
+from skfem_npfem.simulation import AtRest, Simulation
+from skfem_npfem.step import StepRecord, advance
 
 H = 0.05  # lattice spacing of the small blocks, m
 
@@ -48,10 +43,10 @@ def rigid_motion(p: Particles, velocity, n_steps: int, dt: float = 0.1):
     meshes = []
     for k in range(n_steps):
         p = p.replace(v_prescribed=velocity(p.x))
-        p, rec = advance(p, model, dt, mesher, step=k + 1)
-        assert rec.status in ("Solved", "AlmostSolved")
-        meshes.append(rec.local_t.shape[1])
-    return p, rec, meshes
+        p, step = advance(p, model, dt, mesher, step=k + 1)
+        assert step.record.status in ("Solved", "AlmostSolved")
+        meshes.append(step.local_t.shape[1])
+    return p, step.record, meshes
 
 
 def test_translation_keeps_stresses_on_particles():

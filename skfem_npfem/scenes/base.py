@@ -9,7 +9,6 @@ function for the JSON summary.
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from collections.abc import Callable
@@ -18,8 +17,18 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import CheckpointError, ParameterError
+from ..io import (
+    check_writable_dir,
+    checkpoint_step,
+    load_checkpoint,
+    to_jsonable,
+    write_json,
+)
 
-__all__ = ["Param", "Scene", "SceneRun", "parse_value"]
+__all__ = ["DEFAULT_CHECKPOINT_EVERY", "Param", "Scene", "SceneRun", "parse_value"]
+
+#: Steps between checkpoints of scenes that do not choose (``checkpoint_every``).
+DEFAULT_CHECKPOINT_EVERY = 20
 
 
 @dataclass(frozen=True)
@@ -185,9 +194,9 @@ class Scene:
         values = self.resolve(overrides)
         start = time.perf_counter()
         if out is not None:
-            _check_writable_dir("out", Path(out))
+            check_writable_dir("out", out)
         if summary is not None:
-            _check_writable_dir("--summary", Path(summary).parent, Path(summary))
+            check_writable_dir("--summary", Path(summary).parent, summary)
         checkpoint = self._resume_point(out, values) if resume else None
         if out is not None:  # lets `skfem-npfem plot DIR` find the scene scales
             write_json(
@@ -219,9 +228,6 @@ class Scene:
 
     def _resume_point(self, out: str | Path | None, values: dict[str, Any]) -> Path:
         """The latest checkpoint of ``out``, checked against this scene and values."""
-        from ..io import load_checkpoint
-        from .common import checkpoint_step
-
         if out is None:
             raise ParameterError("resume", True, "needs out (a folder)")
         path, step = checkpoint_step(out)
@@ -232,7 +238,7 @@ class Scene:
             )
         saved = meta.get("parameters")
         if saved is not None:
-            now = _clean(values)
+            now = to_jsonable(values)
             changed = sorted(
                 k
                 for k in set(saved) | set(now)
@@ -259,56 +265,8 @@ def _attach_checkpoints(sim: Any, out: str | Path | None, values: dict) -> None:
     """Checkpoint into ``out`` unless the scene already chose a folder."""
     if out is None or sim.checkpoint_dir is not None:
         return
-    from .common import DEFAULT_CHECKPOINT_EVERY
-
     sim.checkpoint_dir = Path(out)
     if not sim.checkpoint_every:
         sim.checkpoint_every = int(
             values.get("checkpoint_every") or DEFAULT_CHECKPOINT_EVERY
         )
-
-
-def _check_writable_dir(name: str, folder: Path, target: Path | None = None) -> None:
-    """Create ``folder`` if needed; raise ParameterError naming ``name`` if unusable.
-
-    Checked before a run starts, so a long run never ends in an unwritable path.
-    """
-    shown = target if target is not None else folder
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        probe = folder / ".skfem-npfem-write-test"
-        probe.write_text("")
-        probe.unlink()
-    except OSError as err:
-        raise ParameterError(
-            name,
-            str(shown),
-            f"a writable {'file path' if target else 'directory'} "
-            f"({err.strerror or err})",
-        ) from None
-    if target is not None and target.is_dir():
-        raise ParameterError(name, str(target), "a file path, not a directory")
-
-
-def write_json(path: str | Path, obj: dict) -> None:
-    """Write JSON atomically (NaN becomes null)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".tmp_{path.name}")
-    tmp.write_text(json.dumps(_clean(obj), indent=1))
-    tmp.replace(path)
-
-
-def _clean(obj: Any) -> Any:
-    if isinstance(obj, dict):
-        return {str(k): _clean(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_clean(v) for v in obj]
-    if hasattr(obj, "item") and not isinstance(obj, str):
-        try:
-            obj = obj.item()
-        except (ValueError, AttributeError):
-            return _clean(list(obj))
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    return obj

@@ -50,10 +50,12 @@ import numpy as np
 from ..boundary import floor, wall_x
 from ..errors import ParameterError
 from ..materials import DruckerPrager, MohrCoulomb
+from ..model import Model
 from ..particles import Particles
 from ..pfem import AlphaShapeMesher, main_body
-from ..simulation import AtRest, Model, Simulation
+from ..simulation import AtRest, Simulation
 from ..smoothing import nodal_integration
+from ..step import StepResult
 from .base import Param, Scene, SceneRun
 from .common import elastic_params, make_writer, solver_from, solver_params
 
@@ -329,19 +331,15 @@ def collapse_time(times: np.ndarray, runout: np.ndarray, tol: float) -> float:
     return float(times[min(k, times.size - 1)])
 
 
-def build(
-    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
-) -> SceneRun:
-    """Build the column-collapse simulation."""
-    L0, a = values["length"], values["aspect"]
-    H0 = a * L0
+def _check(values: dict[str, Any]) -> float:
+    """Refuse inconsistent values; return the particle spacing h."""
+    L0, H0 = values["length"], values["aspect"] * values["length"]
     h = values["spacing"] if values["spacing"] is not None else L0 / 22.0
     if h > L0 / 2 or h > H0 / 2:
         raise ParameterError(
             "spacing", h, f"at most min(L0, H0)/2 = {min(L0, H0) / 2:g} m"
         )
-    rho, g, phi = values["rho"], values["gravity"], values["phi"]
-    psi, c, K0 = values["psi"], values["c"], values["K0"]
+    phi, psi, c, K0 = values["phi"], values["psi"], values["c"], values["K0"]
     if psi > phi:
         raise ParameterError("psi", psi, f"at most phi = {phi:g} degrees")
     if values["material"] == "mohr-coulomb" and c == 0:
@@ -356,31 +354,114 @@ def build(
             f"theta2={values['theta2']:g}: impacts on the floor have restitution "
             f"{1 / values['theta2'] - 1:.2f}; theta2 = 1/2 makes them elastic and the "
             "collapse unstable (formulation.md pitfall 3)",
-            stacklevel=2,
+            stacklevel=3,
         )
-    symmetric = values["symmetric"]
+    return h
+
+
+def _model(values: dict[str, Any]) -> Model:
+    """Walls (rough floor, smooth symmetry wall) and the Mohr-Coulomb/DP soil."""
+    phi = values["phi"]
     floor_phi = phi if values["floor_friction"] is None else values["floor_friction"]
     walls = [floor(2, floor_phi)]
-    if symmetric:
+    if values["symmetric"]:
         walls.append(wall_x(2, 0.0, facing=1, friction_angle=0.0))
     cls = MohrCoulomb if values["material"] == "mohr-coulomb" else DruckerPrager
     mat = cls(
-        values["E"], values["nu"], rho, c=c, phi=phi, psi=psi, tension_cutoff=True
+        values["E"],
+        values["nu"],
+        values["rho"],
+        c=values["c"],
+        phi=phi,
+        psi=values["psi"],
+        tension_cutoff=True,
     )
-    model = Model(
+    return Model(
         dim=2,
         materials=[mat],
-        gravity=g,
+        gravity=values["gravity"],
         mode="dynamic",
         theta1=values["theta1"],
         theta2=values["theta2"],
         walls=walls,
         solver=solver_from(values),
     )
-    mesher = AlphaShapeMesher(h, values["alpha"], walls=walls)
+
+
+def _front_recorder(h: float, symmetric: bool):
+    """Callback storing the run-out measures on each step record."""
+
+    def record_front(sim_: Simulation, p: Particles, step: StepResult) -> bool:
+        body = np.zeros(p.n, bool)
+        body[step.active[main_body(p.x[step.active], 3.0 * h)]] = True
+        edge, top = front(p.x, body, symmetric)
+        tip, _ = front(p.x, np.ones(p.n, bool), symmetric)
+        step.record.extra.update(
+            runout=mass_front(p.x, p.mass, symmetric),
+            runout_main_body=edge,
+            runout_tip=tip,
+            max_height=top,
+        )
+        return False
+
+    return record_front
+
+
+def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
+    """The summary metrics of a finished run (see METRICS)."""
+    L0, a = values["length"], values["aspect"]
+    H0 = a * L0
+    t_scale = math.sqrt(H0 / values["gravity"])
+
+    def metrics(sim_: Simulation) -> dict[str, Any]:
+        recs = sim_.records
+        last = recs[-1].extra if recs else {}
+        times = np.array([r.time for r in recs])
+        runouts = np.array([r.extra.get("runout", np.nan) for r in recs])
+        runout = float(runouts[-1]) if recs else L0
+        top = float(last.get("max_height", H0))
+        t_c = collapse_time(times, runouts, h)
+        summ = sim_.summary()
+        return {
+            "runout": runout,
+            "normalised_runout": (runout - L0) / L0,
+            "runout_main_body": float(last.get("runout_main_body", L0)),
+            "runout_tip": float(last.get("runout_tip", L0)),
+            "reference_runout_lube": lube_runout(a),
+            "final_height": top / L0,
+            "height_ratio": top / H0,
+            "collapse_time": t_c,
+            "collapse_time_normalised": t_c / t_scale,
+            "at_rest": bool(stop is not None and stop(sim_)),
+            "volume_change": summ["volume_change"],
+            "mass_change": summ["mass_change"],
+            "max_kinetic_energy": summ["max_kinetic_energy"],
+            "final_kinetic_energy": float(recs[-1].kinetic_energy) if recs else 0.0,
+            "n_inactive_final": int(recs[-1].n_inactive) if recs else 0,
+            "n_particles": int(sim_.particles.n),
+        }
+
+    return metrics
+
+
+def build(
+    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
+) -> SceneRun:
+    """Build the column-collapse simulation."""
+    h = _check(values)
+    L0, H0 = values["length"], values["aspect"] * values["length"]
+    symmetric = values["symmetric"]
+    model = _model(values)
+    mesher = AlphaShapeMesher(h, values["alpha"], walls=model.walls)
     x = lattice(0.0 if symmetric else -L0, L0, H0, h)
     particles = initial_particles(
-        x, mesher, rho=rho, gravity=g, height=H0, K0=K0, n_walls=len(walls)
+        x,
+        mesher,
+        rho=values["rho"],
+        gravity=values["gravity"],
+        height=H0,
+        K0=values["K0"],
+        n_walls=len(model.walls),
     )
     sim = Simulation(
         particles,
@@ -396,60 +477,15 @@ def build(
         progress=progress,
         meta={"scene": "column-collapse", "parameters": values},
     )
-    t_scale = math.sqrt(H0 / g)
-
-    def record_front(sim_: Simulation, p: Particles, rec) -> bool:
-        body = np.zeros(p.n, bool)
-        body[rec.active[main_body(p.x[rec.active], 3.0 * h)]] = True
-        edge, top = front(p.x, body, symmetric)
-        tip, _ = front(p.x, np.ones(p.n, bool), symmetric)
-        rec.extra.update(
-            runout=mass_front(p.x, p.mass, symmetric),
-            runout_main_body=edge,
-            runout_tip=tip,
-            max_height=top,
-        )
-        return False
-
-    sim.callbacks.append(record_front)
+    sim.callbacks.append(_front_recorder(h, symmetric))
     run_kwargs: dict[str, Any] = {"t_end": values["t_end"]}
+    stop = None
     if values["rest_fraction"] > 0:
         min_time = values["min_time"]
-        run_kwargs["stop"] = AtRest(
-            values["rest_fraction"], 2 * t_scale if min_time is None else min_time
-        )
-
-    def metrics(sim_: Simulation) -> dict[str, Any]:
-        recs = sim_.records
-        times = np.array([r.time for r in recs])
-        runouts = np.array([r.extra.get("runout", np.nan) for r in recs])
-        runout = float(runouts[-1]) if recs else L0
-        top = float(recs[-1].extra.get("max_height", H0)) if recs else H0
-        t_c = collapse_time(times, runouts, h)
-        stop = run_kwargs.get("stop")
-        summ = sim_.summary()
-        return {
-            "runout": runout,
-            "normalised_runout": (runout - L0) / L0,
-            "runout_main_body": (
-                float(recs[-1].extra.get("runout_main_body", L0)) if recs else L0
-            ),
-            "runout_tip": float(recs[-1].extra.get("runout_tip", L0)) if recs else L0,
-            "reference_runout_lube": lube_runout(a),
-            "final_height": top / L0,
-            "height_ratio": top / H0,
-            "collapse_time": t_c,
-            "collapse_time_normalised": t_c / t_scale,
-            "at_rest": bool(stop is not None and stop(sim_)),
-            "volume_change": summ["volume_change"],
-            "mass_change": summ["mass_change"],
-            "max_kinetic_energy": summ["max_kinetic_energy"],
-            "final_kinetic_energy": float(recs[-1].kinetic_energy) if recs else 0.0,
-            "n_inactive_final": int(recs[-1].n_inactive) if recs else 0,
-            "n_particles": int(sim_.particles.n),
-        }
-
-    return SceneRun(sim, run_kwargs, metrics)
+        if min_time is None:
+            min_time = 2 * math.sqrt(H0 / values["gravity"])
+        stop = run_kwargs["stop"] = AtRest(values["rest_fraction"], min_time)
+    return SceneRun(sim, run_kwargs, _metrics(values, h, stop))
 
 
 SCENE = Scene(

@@ -5,19 +5,16 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ..conic import ACCURACY_PRESETS, LINEAR_SOLVERS, SolverOptions
+from ..io import ResultWriter, checkpoint_step
+from ..solver import ACCURACY_PRESETS, LINEAR_SOLVERS, SolverOptions
 from .base import Param
 
 __all__ = [
-    "checkpoint_step",
     "elastic_params",
     "make_writer",
     "solver_from",
     "solver_params",
 ]
-
-#: Steps between checkpoints of scenes that do not choose (``checkpoint_every``).
-DEFAULT_CHECKPOINT_EVERY = 20
 
 
 def elastic_params(E: float) -> list[Param]:
@@ -94,25 +91,6 @@ def solver_from(values: dict[str, Any]) -> SolverOptions:
     )
 
 
-def checkpoint_step(out: str | Path) -> tuple[Path, int]:
-    """Latest checkpoint in ``out`` and its step (from the file name).
-
-    Raises
-    ------
-    CheckpointError
-        If ``out`` holds no checkpoint.
-    """
-    from ..errors import CheckpointError
-    from ..io import latest_checkpoint
-
-    path = latest_checkpoint(out) if Path(out).is_dir() else None
-    if path is None:
-        raise CheckpointError(
-            f"{out}: no checkpoint_*.npz to resume from (run without --resume)"
-        )
-    return path, int(path.stem.rsplit("_", 1)[-1])
-
-
 def make_writer(
     out: str | Path | None, resume: bool = False, resume_after_step: int | None = None
 ):
@@ -123,8 +101,6 @@ def make_writer(
     """
     if out is None:
         return None
-    from ..io import ResultWriter
-
     if resume and resume_after_step is None:
         resume_after_step = checkpoint_step(out)[1]
     return ResultWriter(out, resume_after_step=resume_after_step)

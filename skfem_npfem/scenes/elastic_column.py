@@ -16,8 +16,11 @@ import numpy as np
 from skfem import MeshTet, MeshTri
 
 from ..materials import LinearElastic
+from ..model import Model
 from ..particles import Particles
-from ..simulation import FixedMesh, Model, Simulation
+from ..pfem import FixedMesh
+from ..simulation import Simulation
+from ..smoothing import nodal_integration
 from .base import Param, Scene, SceneRun
 from .common import elastic_params, make_writer, solver_from, solver_params
 
@@ -73,8 +76,6 @@ def build(
     dim, H, W = values["dim"], values["height"], values["width"]
     mesh = column_mesh(dim, W, H, values["spacing"])
     mat = LinearElastic(values["E"], values["nu"], values["rho"])
-    from ..smoothing import nodal_integration
-
     ni = nodal_integration(mesh)
     x = mesh.p.T.copy()
     fixed = np.zeros_like(x, dtype=bool)
@@ -102,9 +103,9 @@ def build(
     )
     top = np.isclose(x[:, -1], H)
 
-    def record_top(sim_, p, rec) -> bool:
+    def record_top(sim_, p, step) -> bool:
         # Stored on the step record so that it survives checkpoints (--resume).
-        rec.extra["settlement_top"] = float(-p.u[top, -1].mean())
+        step.record.extra["settlement_top"] = float(-p.u[top, -1].mean())
         return False
 
     sim.callbacks.append(record_top)

@@ -22,8 +22,10 @@ from skfem import MeshTri
 
 from ..errors import ParameterError
 from ..materials import DruckerPrager, MohrCoulomb, Tresca
+from ..model import Model
 from ..particles import Particles
-from ..simulation import FixedMesh, Model, Simulation
+from ..pfem import FixedMesh
+from ..simulation import Simulation
 from ..smoothing import nodal_integration
 from .base import Param, Scene, SceneRun
 from .common import elastic_params, make_writer, solver_from, solver_params
@@ -211,10 +213,10 @@ def build(
         meta={"scene": "strip-footing", "parameters": values},
     )
 
-    def record(sim_, p, rec) -> bool:
+    def record(sim_, p, res) -> bool:
         # Stored on the step record so that it survives checkpoints (--resume).
-        rec.extra["settlement"] = float(-p.u[foot, 1].mean())
-        rec.extra["pressure"] = -float(rec.solution.reaction[foot, 1].sum()) / b
+        res.record.extra["settlement"] = float(-p.u[foot, 1].mean())
+        res.record.extra["pressure"] = -float(res.solution.reaction[foot, 1].sum()) / b
         return False
 
     sim.callbacks.append(record)

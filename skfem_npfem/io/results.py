@@ -1,85 +1,36 @@
-"""Result output (VTU + PVD time series) and restart checkpoints.
+"""Result output: one VTU file per step plus ``.pvd`` and ``.vtu.series`` indexes.
 
-Results
--------
 :class:`ResultWriter` writes one ``<basename>_<step:06d>.vtu`` file per output
 step, because particle meshes change topology every step, plus a ParaView
 ``<basename>.pvd`` collection and a ``<basename>.vtu.series`` JSON file that
-list every step with its physical time. Every file is written to a hidden
-temporary file in the same folder and moved into place with :func:`os.replace`,
-so a crash never leaves a half-written file under a final name.
-
-Checkpoints
------------
-A checkpoint is one uncompressed NumPy ``.npz`` file, usually named
-``checkpoint_<step:06d>.npz`` (see :func:`checkpoint_path`). Format version
-``"skfem-npfem-checkpoint/1"`` contains the keys
-
-``__format__``
-    0-d string array holding the format version.
-``__meta__``
-    0-d string array holding a JSON object. The simulation loop stores
-    ``step`` (int), ``time`` (float), ``dt`` (float), ``scene`` (str) and
-    ``parameters`` (dict of JSON values).
-any other key
-    One particle array each, first dimension = number of particles, for example
-    ``x`` and ``v`` and ``a`` (N, d) positions, velocities and accelerations,
-    ``stress`` (N, ...) Cauchy stress, ``eps_p`` (N,) equivalent plastic strain,
-    ``mass`` (N,) and ``material`` (N,) integer material ids.
-
-Arrays must be numeric or bool (no object arrays) and finite.
+list every step with its physical time.  Every file goes through the atomic
+writer of :mod:`skfem_npfem.io.files`.  :func:`read_pvd` and :func:`read_step`
+read them back.
 """
 
 from __future__ import annotations
 
-import io
-import json
 import operator
 import os
 import re
-import tempfile
 import xml.etree.ElementTree as ET
-import zlib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
-from zipfile import BadZipFile
 
 import meshio
 import numpy as np
 
-from skfem_npfem.errors import CheckpointError, ParameterError
+from ..errors import CheckpointError, ParameterError
+from .files import atomic_path, check_writable_dir, write_bytes, write_json
 
-__all__ = [
-    "CHECKPOINT_FORMAT",
-    "ResultWriter",
-    "checkpoint_path",
-    "latest_checkpoint",
-    "load_checkpoint",
-    "read_pvd",
-    "read_step",
-    "save_checkpoint",
-]
+__all__ = ["ResultWriter", "read_pvd", "read_step", "step_number"]
 
-CHECKPOINT_FORMAT = "skfem-npfem-checkpoint/1"
-_KNOWN_FORMATS = (CHECKPOINT_FORMAT,)
 _BAD_NAME = re.compile(r"[<>&\"']")
-# zipfile raises NotImplementedError (unknown compression/version) and
-# RuntimeError (encrypted flag) on corrupted headers.
-_LOAD_ERRORS = (
-    OSError,
-    ValueError,
-    TypeError,
-    EOFError,
-    BadZipFile,
-    zlib.error,
-    NotImplementedError,
-    RuntimeError,
-)
 
 
-def _step(name: str, value: Any) -> int:
-    """Return ``value`` as an int >= 0 or raise ParameterError."""
+def step_number(name: str, value: Any) -> int:
+    """Return ``value`` as an int >= 0 or raise ParameterError naming ``name``."""
     try:
         step = operator.index(value)
     except TypeError:
@@ -87,23 +38,6 @@ def _step(name: str, value: Any) -> int:
     if step < 0:
         raise ParameterError(name, value, "an integer >= 0")
     return step
-
-
-def _write_synced(path: Path, data: bytes) -> None:
-    with open(path, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-
-
-def _atomic_write(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a synced temporary file."""
-    tmp = path.with_name(f".tmp_{path.name}")
-    try:
-        _write_synced(tmp, data)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 def _field_data_xml(field_data: Mapping[str, Any]) -> bytes:
@@ -158,14 +92,7 @@ class ResultWriter:
         if not basename or _BAD_NAME.search(basename) or "/" in basename:
             raise ParameterError("basename", basename, "a plain file-name prefix")
         self.basename = basename
-        try:
-            self.out_dir.mkdir(parents=True, exist_ok=True)
-            fd, probe = tempfile.mkstemp(dir=self.out_dir, prefix=".tmp_probe_")
-            os.close(fd)
-            os.unlink(probe)
-        except OSError as exc:
-            msg = f"a writable directory ({exc})"
-            raise ParameterError("out", str(out_dir), msg) from exc
+        check_writable_dir("out", self.out_dir)
         self.pvd_path = self.out_dir / f"{basename}.pvd"
         self.series_path = self.out_dir / f"{basename}.vtu.series"
         self._pattern = re.compile(rf"{re.escape(basename)}_(\d+)\.vtu")
@@ -177,7 +104,7 @@ class ResultWriter:
             if stray.fullmatch(f.name):
                 f.unlink(missing_ok=True)
         if resume_after_step is not None:
-            resume_after_step = _step("resume_after_step", resume_after_step)
+            resume_after_step = step_number("resume_after_step", resume_after_step)
             if self.pvd_path.exists():
                 for time, file in read_pvd(self.pvd_path):
                     m = self._pattern.fullmatch(file.name)
@@ -235,7 +162,7 @@ class ResultWriter:
         ParameterError
             If an argument is malformed or a point-data array is not finite.
         """
-        step, time = _step("step", step), float(time)
+        step, time = step_number("step", step), float(time)
         if not np.isfinite(time):
             raise ParameterError("time", time, "a finite number")
         p = np.asarray(points, dtype=float)
@@ -266,16 +193,12 @@ class ResultWriter:
         fxml = _field_data_xml({"TimeValue": time, **(field_data or {})})
 
         final = self.out_dir / f"{self.basename}_{step:06d}.vtu"
-        tmp = final.with_name(f".tmp_{final.name}")
-        try:
+        with atomic_path(final) as tmp:
             meshio.write(tmp, meshio.Mesh(p3, blocks, point_data=pdata), "vtu")
             text = tmp.read_bytes().replace(
                 b"<UnstructuredGrid>\n", b"<UnstructuredGrid>\n" + fxml, 1
             )
-            _write_synced(tmp, text)
-            os.replace(tmp, final)
-        finally:
-            tmp.unlink(missing_ok=True)
+            tmp.write_bytes(text)
         self._entries[step] = (time, final.name)
         self._write_index()
         return final
@@ -313,9 +236,9 @@ class ResultWriter:
             files.append({"name": name, "time": time})
         ET.indent(root)
         xml = ET.tostring(root, encoding="utf-8", xml_declaration=True)
-        _atomic_write(self.pvd_path, xml + b"\n")
+        write_bytes(self.pvd_path, xml + b"\n")
         series = {"file-series-version": "1.0", "files": files}
-        _atomic_write(self.series_path, json.dumps(series, indent=1).encode())
+        write_json(self.series_path, series)
 
 
 def read_pvd(path: str | os.PathLike) -> list[tuple[float, Path]]:
@@ -372,129 +295,3 @@ def read_step(path: str | os.PathLike) -> meshio.Mesh:
         return meshio.read(path, file_format="vtu")
     except (OSError, ValueError, ET.ParseError, meshio.ReadError) as exc:
         raise CheckpointError(f"{path}: unreadable VTU file ({exc})") from exc
-
-
-def checkpoint_path(folder: str | os.PathLike, step: int) -> Path:
-    """Return ``folder / f"checkpoint_{step:06d}.npz"``."""
-    return Path(folder) / f"checkpoint_{_step('step', step):06d}.npz"
-
-
-def latest_checkpoint(
-    folder: str | os.PathLike, pattern: str = "checkpoint_*.npz"
-) -> Path | None:
-    """Return the checkpoint in ``folder`` with the largest step number, or None.
-
-    The step number is the last group of digits in the file name.
-    """
-    best: tuple[int, Path] | None = None
-    for f in Path(folder).glob(pattern):
-        digits = re.findall(r"\d+", f.name.removesuffix(".npz"))
-        if f.is_file() and digits and (best is None or int(digits[-1]) > best[0]):
-            best = (int(digits[-1]), f)
-    return None if best is None else best[1]
-
-
-def _json_default(obj: object) -> object:
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    raise TypeError(f"{type(obj).__name__} is not JSON serializable")
-
-
-def save_checkpoint(
-    path: str | os.PathLike, arrays: Mapping[str, np.ndarray], meta: Mapping
-) -> Path:
-    """Write a checkpoint atomically (format described in the module docstring).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        Target ``.npz`` file; its folder must exist.
-    arrays : mapping of str to numpy.ndarray
-        Finite numeric or bool arrays; names must not start with ``__``.
-    meta : mapping
-        JSON-serializable metadata (numpy scalars and arrays are converted).
-
-    Returns
-    -------
-    pathlib.Path
-        The path written.
-    """
-    path = Path(path)
-    data: dict[str, np.ndarray] = {}
-    for name, arr in arrays.items():
-        a = np.asarray(arr)
-        if (
-            not isinstance(name, str)
-            or name.startswith("__")
-            or a.dtype.kind not in "biufc"
-        ):
-            raise ParameterError(f"arrays[{name!r}]", a.dtype, "numeric, not __name")
-        if a.dtype.kind in "fc" and not np.isfinite(a).all():
-            raise ParameterError(f"arrays[{name!r}]", "NaN/inf", "finite values only")
-        data[name] = a
-    try:
-        meta_json = json.dumps(dict(meta), default=_json_default, allow_nan=False)
-    except (TypeError, ValueError) as exc:
-        raise ParameterError("meta", meta, f"JSON-serializable ({exc})") from exc
-    data["__meta__"] = np.array(meta_json)
-    data["__format__"] = np.array(CHECKPOINT_FORMAT)
-    buf = io.BytesIO()
-    np.savez(buf, **data)
-    _atomic_write(path, buf.getvalue())
-    return path
-
-
-def load_checkpoint(path: str | os.PathLike) -> tuple[dict[str, np.ndarray], dict]:
-    """Load and validate a checkpoint written by :func:`save_checkpoint`.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The ``.npz`` checkpoint.
-
-    Returns
-    -------
-    arrays : dict of str to numpy.ndarray
-        The particle arrays (without the ``__format__``/``__meta__`` keys).
-    meta : dict
-        The decoded metadata.
-
-    Raises
-    ------
-    CheckpointError
-        If the file is missing, truncated, not an npz file, of an unknown
-        format version, has corrupt metadata or contains NaN/inf.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise CheckpointError(f"checkpoint {path}: file does not exist")
-    try:
-        z = np.load(path, allow_pickle=False)
-        if not isinstance(z, np.lib.npyio.NpzFile):
-            raise TypeError("a single .npy array")
-        with z:
-            data = {k: z[k] for k in z.files}
-    except _LOAD_ERRORS as exc:
-        raise CheckpointError(
-            f"checkpoint {path}: truncated or not an npz file ({exc})"
-        ) from exc
-    fmt = data.pop("__format__", None)
-    if fmt is None:
-        raise CheckpointError(f"checkpoint {path}: no __format__ key (not ours?)")
-    if str(fmt) not in _KNOWN_FORMATS:
-        raise CheckpointError(
-            f"checkpoint {path}: unknown format version {str(fmt)!r}, "
-            f"known: {', '.join(_KNOWN_FORMATS)}"
-        )
-    try:
-        meta = json.loads(str(data.pop("__meta__")))
-        if not isinstance(meta, dict):
-            raise TypeError("not a JSON object")
-    except (KeyError, ValueError, TypeError) as exc:
-        raise CheckpointError(f"checkpoint {path}: bad metadata ({exc})") from exc
-    for name, a in data.items():
-        if a.dtype.kind in "fc" and not np.isfinite(a).all():
-            raise CheckpointError(f"checkpoint {path}: array {name!r} has NaN/inf")
-    return data, meta

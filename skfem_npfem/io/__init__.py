@@ -1,0 +1,56 @@
+"""Every file the package writes, and reading them back.
+
+* :mod:`~skfem_npfem.io.files` -- the one atomic writer (:func:`atomic_path`:
+  temporary file, ``fsync``, rename, clean-up), the one JSON encoder
+  (:func:`to_jsonable`: NaN and inf are written as ``null``) and the check of
+  an output folder before a run;
+* :mod:`~skfem_npfem.io.results` -- the VTU + PVD result series
+  (:class:`ResultWriter`, :func:`read_pvd`, :func:`read_step`);
+* :mod:`~skfem_npfem.io.checkpoints` -- restart checkpoints (format
+  ``skfem-npfem-checkpoint/1``) and the simulation state they hold.
+
+Scene summaries and ``scene.json`` (:mod:`skfem_npfem.scenes`) and the
+pictures of :mod:`skfem_npfem.plot` are written through the same atomic writer.
+"""
+
+from __future__ import annotations
+
+from .checkpoints import (
+    CHECKPOINT_FORMAT,
+    checkpoint_path,
+    checkpoint_step,
+    latest_checkpoint,
+    load_checkpoint,
+    read_checkpoint,
+    save_checkpoint,
+    write_checkpoint,
+)
+from .files import (
+    atomic_path,
+    check_writable_dir,
+    dumps,
+    to_jsonable,
+    write_bytes,
+    write_json,
+)
+from .results import ResultWriter, read_pvd, read_step
+
+__all__ = [
+    "CHECKPOINT_FORMAT",
+    "ResultWriter",
+    "atomic_path",
+    "check_writable_dir",
+    "checkpoint_path",
+    "checkpoint_step",
+    "dumps",
+    "latest_checkpoint",
+    "load_checkpoint",
+    "read_checkpoint",
+    "read_pvd",
+    "read_step",
+    "save_checkpoint",
+    "to_jsonable",
+    "write_bytes",
+    "write_checkpoint",
+    "write_json",
+]

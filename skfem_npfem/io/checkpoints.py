@@ -1,0 +1,219 @@
+"""Restart checkpoints: the particle state and the run's metadata in one file.
+
+A checkpoint is one uncompressed NumPy ``.npz`` file, usually named
+``checkpoint_<step:06d>.npz`` (see :func:`checkpoint_path`). Format version
+``"skfem-npfem-checkpoint/1"`` contains the keys
+
+``__format__``
+    0-d string array holding the format version.
+``__meta__``
+    0-d string array holding a JSON object. The simulation loop stores
+    ``step`` (int), ``time`` (float), ``dt`` (float), ``scene`` (str) and
+    ``parameters`` (dict of JSON values).
+any other key
+    One particle array each, first dimension = number of particles, for example
+    ``x`` and ``v`` and ``a`` (N, d) positions, velocities and accelerations,
+    ``stress`` (N, ...) Cauchy stress, ``eps_p`` (N,) equivalent plastic strain,
+    ``mass`` (N,) and ``material`` (N,) integer material ids.
+
+Arrays must be numeric or bool (no object arrays) and finite.
+
+:func:`write_checkpoint` and :func:`read_checkpoint` store and restore a
+simulation's particles with its metadata (the loop's state and its step
+records, written by :meth:`~skfem_npfem.simulation.Simulation.save_checkpoint`);
+:func:`checkpoint_step` finds the checkpoint a run resumes from.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import re
+import zlib
+from collections.abc import Mapping
+from pathlib import Path
+from zipfile import BadZipFile
+
+import numpy as np
+
+from ..errors import CheckpointError, ParameterError
+from ..particles import Particles
+from .files import dumps, write_bytes
+from .results import step_number
+
+__all__ = [
+    "CHECKPOINT_FORMAT",
+    "checkpoint_path",
+    "checkpoint_step",
+    "latest_checkpoint",
+    "load_checkpoint",
+    "read_checkpoint",
+    "save_checkpoint",
+    "write_checkpoint",
+]
+
+CHECKPOINT_FORMAT = "skfem-npfem-checkpoint/1"
+_KNOWN_FORMATS = (CHECKPOINT_FORMAT,)
+# zipfile raises NotImplementedError (unknown compression/version) and
+# RuntimeError (encrypted flag) on corrupted headers.
+_LOAD_ERRORS = (
+    OSError,
+    ValueError,
+    TypeError,
+    EOFError,
+    BadZipFile,
+    zlib.error,
+    NotImplementedError,
+    RuntimeError,
+)
+
+
+def checkpoint_path(folder: str | os.PathLike, step: int) -> Path:
+    """Return ``folder / f"checkpoint_{step:06d}.npz"``."""
+    return Path(folder) / f"checkpoint_{step_number('step', step):06d}.npz"
+
+
+def latest_checkpoint(
+    folder: str | os.PathLike, pattern: str = "checkpoint_*.npz"
+) -> Path | None:
+    """Return the checkpoint in ``folder`` with the largest step number, or None.
+
+    The step number is the last group of digits in the file name.
+    """
+    best: tuple[int, Path] | None = None
+    for f in Path(folder).glob(pattern):
+        digits = re.findall(r"\d+", f.name.removesuffix(".npz"))
+        if f.is_file() and digits and (best is None or int(digits[-1]) > best[0]):
+            best = (int(digits[-1]), f)
+    return None if best is None else best[1]
+
+
+def save_checkpoint(
+    path: str | os.PathLike, arrays: Mapping[str, np.ndarray], meta: Mapping
+) -> Path:
+    """Write a checkpoint atomically (format described in the module docstring).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Target ``.npz`` file; its folder must exist.
+    arrays : mapping of str to numpy.ndarray
+        Finite numeric or bool arrays; names must not start with ``__``.
+    meta : mapping
+        JSON-serializable metadata, encoded by the package's JSON policy
+        (:func:`~skfem_npfem.io.files.to_jsonable`: numpy values converted,
+        NaN and inf stored as null).
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+    """
+    path = Path(path)
+    data: dict[str, np.ndarray] = {}
+    for name, arr in arrays.items():
+        a = np.asarray(arr)
+        if (
+            not isinstance(name, str)
+            or name.startswith("__")
+            or a.dtype.kind not in "biufc"
+        ):
+            raise ParameterError(f"arrays[{name!r}]", a.dtype, "numeric, not __name")
+        if a.dtype.kind in "fc" and not np.isfinite(a).all():
+            raise ParameterError(f"arrays[{name!r}]", "NaN/inf", "finite values only")
+        data[name] = a
+    try:
+        meta_json = dumps(dict(meta))
+    except (TypeError, ValueError) as exc:
+        raise ParameterError("meta", meta, f"JSON-serializable ({exc})") from exc
+    data["__meta__"] = np.array(meta_json)
+    data["__format__"] = np.array(CHECKPOINT_FORMAT)
+    buf = io.BytesIO()
+    np.savez(buf, **data)
+    return write_bytes(path, buf.getvalue())
+
+
+def load_checkpoint(path: str | os.PathLike) -> tuple[dict[str, np.ndarray], dict]:
+    """Load and validate a checkpoint written by :func:`save_checkpoint`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.npz`` checkpoint.
+
+    Returns
+    -------
+    arrays : dict of str to numpy.ndarray
+        The particle arrays (without the ``__format__``/``__meta__`` keys).
+    meta : dict
+        The decoded metadata.
+
+    Raises
+    ------
+    CheckpointError
+        If the file is missing, truncated, not an npz file, of an unknown
+        format version, has corrupt metadata or contains NaN/inf.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise CheckpointError(f"checkpoint {path}: file does not exist")
+    try:
+        z = np.load(path, allow_pickle=False)
+        if not isinstance(z, np.lib.npyio.NpzFile):
+            raise TypeError("a single .npy array")
+        with z:
+            data = {k: z[k] for k in z.files}
+    except _LOAD_ERRORS as exc:
+        raise CheckpointError(
+            f"checkpoint {path}: truncated or not an npz file ({exc})"
+        ) from exc
+    fmt = data.pop("__format__", None)
+    if fmt is None:
+        raise CheckpointError(f"checkpoint {path}: no __format__ key (not ours?)")
+    if str(fmt) not in _KNOWN_FORMATS:
+        raise CheckpointError(
+            f"checkpoint {path}: unknown format version {str(fmt)!r}, "
+            f"known: {', '.join(_KNOWN_FORMATS)}"
+        )
+    try:
+        meta = json.loads(str(data.pop("__meta__")))
+        if not isinstance(meta, dict):
+            raise TypeError("not a JSON object")
+    except (KeyError, ValueError, TypeError) as exc:
+        raise CheckpointError(f"checkpoint {path}: bad metadata ({exc})") from exc
+    for name, a in data.items():
+        if a.dtype.kind in "fc" and not np.isfinite(a).all():
+            raise CheckpointError(f"checkpoint {path}: array {name!r} has NaN/inf")
+    return data, meta
+
+
+def checkpoint_step(out: str | os.PathLike) -> tuple[Path, int]:
+    """Latest checkpoint in ``out`` and its step (from the file name).
+
+    Raises
+    ------
+    CheckpointError
+        If ``out`` holds no checkpoint.
+    """
+    path = latest_checkpoint(out) if Path(out).is_dir() else None
+    if path is None:
+        raise CheckpointError(
+            f"{out}: no checkpoint_*.npz to resume from (run without --resume)"
+        )
+    return path, int(path.stem.rsplit("_", 1)[-1])
+
+
+def write_checkpoint(
+    folder: str | os.PathLike, step: int, particles: Particles, meta: Mapping
+) -> Path:
+    """Write ``folder/checkpoint_<step>.npz`` with the particles and ``meta``."""
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    path = checkpoint_path(folder, step)
+    return save_checkpoint(path, particles.arrays(), meta)
+
+
+def read_checkpoint(path: str | os.PathLike) -> tuple[Particles, dict]:
+    """The particles and metadata of a checkpoint (see :func:`load_checkpoint`)."""
+    arrays, meta = load_checkpoint(path)
+    return Particles.from_arrays(arrays), meta

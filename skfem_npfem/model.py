@@ -1,0 +1,100 @@
+"""The physics and numerics shared by all steps of a run (:class:`Model`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .boundary import RigidWall
+from .errors import ParameterError
+from .materials import Material
+from .solver import SolverOptions
+
+__all__ = ["Model"]
+
+
+@dataclass
+class Model:
+    """Physics and numerics shared by all steps of a run.
+
+    Parameters
+    ----------
+    dim : int
+        2 (plane strain) or 3.
+    materials : list of Material
+        Referenced by :attr:`Particles.material`.
+    gravity : float
+        Gravitational acceleration along ``-e_d``, m/s^2.
+    mode : {"dynamic", "static"}
+        Include inertia (theta1/theta2 scheme) or solve quasi-static steps.
+    theta1, theta2 : float
+        Time-integration parameters in [1/2, 1] (1, 1: backward Euler, the PFEM
+        default; 1/2, 1/2: trapezoidal, energy conserving, elastic waves only).
+    walls : list of RigidWall
+        Rigid planes the particles may touch.
+    objective_rotation : bool
+        Rotate stresses with the smoothed spin (Hughes-Winget, exactly orthogonal).
+    update_geometry : bool
+        Move the particles by each increment (updated Lagrangian, large
+        deformation).  False keeps the initial geometry (small-strain analysis, as
+        in limit-load benchmarks); displacements still accumulate in ``u``.
+    stress_scale : float or None
+        Stress scale for non-dimensionalisation (None: automatic).
+    solver : SolverOptions
+        Clarabel settings.
+    """
+
+    dim: int
+    materials: list[Material]
+    gravity: float = 9.81
+    mode: str = "dynamic"
+    theta1: float = 1.0
+    theta2: float = 1.0
+    walls: list[RigidWall] = field(default_factory=list)
+    objective_rotation: bool = True
+    update_geometry: bool = True
+    stress_scale: float | None = None
+    solver: SolverOptions = field(default_factory=SolverOptions)
+
+    def __post_init__(self) -> None:
+        if self.dim not in (2, 3):
+            raise ParameterError("dim", self.dim, "2 or 3")
+        if not self.materials:
+            raise ParameterError("materials", self.materials, "at least one material")
+        for m in self.materials:
+            m.check_dim(self.dim)
+        if self.mode not in ("dynamic", "static"):
+            raise ParameterError("mode", self.mode, "'dynamic' or 'static'")
+        for name in ("theta1", "theta2"):
+            val = getattr(self, name)
+            if not (isinstance(val, int | float) and 0.5 <= val <= 1.0):
+                raise ParameterError(name, val, "a number in [0.5, 1]")
+        s = self.stress_scale
+        if s is not None and not (
+            isinstance(s, int | float) and math.isfinite(s) and s > 0
+        ):
+            raise ParameterError("stress_scale", s, "a stress > 0 (Pa) or None")
+        g = self.gravity
+        if not (isinstance(g, int | float) and math.isfinite(g) and g >= 0):
+            raise ParameterError("gravity", g, "a finite number >= 0 (m/s^2)")
+        for w in self.walls:
+            if w.normal.size != self.dim:
+                raise ParameterError("walls", w, f"walls must be {self.dim}D")
+
+    @property
+    def components(self) -> tuple[int, ...]:
+        """Full-Voigt components carried as cone variables."""
+        if self.dim == 3:
+            return (0, 1, 2, 3, 4, 5)
+        if any(m.needs_zz(2) for m in self.materials):
+            return (0, 1, 2, 3)
+        return (0, 1, 3)
+
+    @property
+    def gravity_vector(self) -> np.ndarray:
+        """Gravity as a vector (along ``-e_d``)."""
+        g = np.zeros(self.dim)
+        g[-1] = -self.gravity
+        return g

@@ -1,0 +1,294 @@
+"""One step: particles in, particles out.
+
+:func:`advance` runs the data flow of one N-PFEM step in three stages:
+
+1. :func:`build_operators` -- the mesh of this step (from the mesh source), the
+   nodal integration on it (:mod:`skfem_npfem.smoothing`), the wall contacts
+   (:mod:`skfem_npfem.boundary`) and the :class:`~skfem_npfem.program.StepData`;
+2. :func:`~skfem_npfem.conic.solve_step` -- the cone program;
+3. :func:`update_particles` -- *new* particles from the solution (stress
+   rotation, plastic strain, velocities, ballistic particles, walls).
+
+The mesh is then forgotten: nothing is mapped between meshes.  The step's
+arrays (solution, mesh, operator) travel in a :class:`StepResult` that the
+caller uses and drops; only the scalar :class:`StepRecord` is kept for the run.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+import numpy as np
+
+from .boundary import Contacts, project_to_walls, wall_contacts
+from .conic import StepSolution, solve_step
+from .errors import ParameterError
+from .kinematics import energies, equivalent_strain, rotate_stress
+from .model import Model
+from .particles import Particles
+from .pfem import MeshSource
+from .program import StepData
+from .remesh import p1_mesh
+from .smoothing import NodalIntegration, nodal_integration
+
+__all__ = [
+    "StepOperators",
+    "StepRecord",
+    "StepResult",
+    "advance",
+    "build_operators",
+    "update_particles",
+]
+
+
+@dataclass
+class StepRecord:
+    """Diagnostics of one step: scalars only (also written to the JSON summary)."""
+
+    step: int
+    time: float
+    dt: float
+    status: str
+    iterations: int
+    timings: dict[str, float]
+    n_active: int
+    n_inactive: int
+    mesh_volume: float
+    n_contacts: int
+    retries: int = 0
+    #: Sum of the particle masses, kg (exactly conserved).
+    mass: float = float("nan")
+    #: ``1/2 sum m |v|^2`` at the end of the step, J.
+    kinetic_energy: float = float("nan")
+    #: ``sum m g x_d`` at the end of the step (zero at ``x_d = 0``), J.
+    potential_energy: float = float("nan")
+    #: ``mesh_volume / (mesh volume of the first step) - 1``.
+    volume_change: float = float("nan")
+    #: Clarabel's linear solver of the step (``""`` if unknown).
+    linear_solver: str = ""
+    #: Scene diagnostics (numbers) added by callbacks, e.g. ``runout``.
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain dict of the diagnostics (for JSON); ``extra`` is merged in."""
+        out = {k: v for k, v in vars(self).items() if k != "extra"}
+        out.update({k: v for k, v in self.extra.items() if k not in out})
+        return out
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> StepRecord:
+        """Inverse of :meth:`as_dict` (unknown keys go to ``extra``)."""
+        names = {f.name for f in fields(cls)} - {"extra"}
+        known = {k: v for k, v in d.items() if k in names}
+        known["extra"] = {k: v for k, v in d.items() if k not in names}
+        return cls(**known)
+
+
+@dataclass
+class StepOperators:
+    """What :func:`build_operators` makes of the particles for one step.
+
+    Attributes
+    ----------
+    active : ndarray (N_a,) int
+        Particles in the mesh (the mesh nodes).
+    local_t : ndarray (d+1, ne) int
+        Connectivity in node numbers ``0 .. N_a-1``.
+    operator : NodalIntegration
+        Smoothing cells of the mesh.
+    wall_ids : ndarray (nc,) int
+        Wall of each contact candidate of ``data.contacts``.
+    data : StepData
+        The cone step's input.
+    """
+
+    active: np.ndarray
+    local_t: np.ndarray
+    operator: NodalIntegration
+    wall_ids: np.ndarray
+    data: StepData
+
+    @property
+    def contacts(self) -> Contacts:
+        """Contact candidates (node indices local to :attr:`active`)."""
+        return self.data.contacts
+
+
+@dataclass
+class StepResult:
+    """One finished step, handed to callbacks and the writer, then dropped.
+
+    Attributes
+    ----------
+    record : StepRecord
+        The scalar diagnostics (kept by :class:`~skfem_npfem.simulation.Simulation`).
+    solution : StepSolution
+        The cone solution on the active particles (``du``, ``sigma``,
+        ``reaction``, contact forces, sizes).
+    active : ndarray (N_a,) int
+        Particles of the step's mesh.
+    local_t : ndarray (d+1, ne) int
+        Its connectivity in positions of ``active``.
+    operator : NodalIntegration
+        Its smoothing cells.
+    """
+
+    record: StepRecord
+    solution: StepSolution
+    active: np.ndarray
+    local_t: np.ndarray
+    operator: NodalIntegration
+
+    @property
+    def cells(self) -> np.ndarray:
+        """Global connectivity (ne, d+1) of the step's mesh."""
+        return self.active[self.local_t].T
+
+
+def build_operators(
+    p: Particles, model: Model, dt: float, mesh_source: MeshSource
+) -> StepOperators:
+    """Stage 1: the mesh, smoothing cells, contacts and cone-step data of a step."""
+    active, local_t = mesh_source(p.x)
+    mesh = p1_mesh(p.x[active], local_t)
+    op = nodal_integration(mesh, model.components)
+    h = float(np.mean(op.volumes)) ** (1.0 / model.dim)
+    mass = p.mass[active]
+    contacts, wall_ids = wall_contacts(model.walls, p, active, dt, h, model.gravity)
+    data = StepData(
+        operator=op,
+        materials=model.materials,
+        material=p.material[active],
+        sigma_n=p.stress[active],
+        force=mass[:, None] * model.gravity_vector[None, :],
+        fixed=p.fixed[active],
+        du_prescribed=p.v_prescribed[active] * dt,
+        contacts=contacts,
+        dt=dt,
+        mass=mass,
+        v_n=p.v[active],
+        theta1=model.theta1,
+        theta2=model.theta2,
+        dynamic=model.mode == "dynamic",
+        stress_scale=model.stress_scale,
+    )
+    return StepOperators(active, local_t, op, wall_ids, data)
+
+
+def update_particles(
+    p: Particles, model: Model, dt: float, ops: StepOperators, sol: StepSolution
+) -> Particles:
+    """Stage 3: new particles from the solution of the step.
+
+    Active particles take the increment, the (rotated) stress and the plastic
+    strain of the solution; the others move ballistically under gravity
+    (formulation.md §2); particles behind a wall are put back on it.
+    """
+    active, g = ops.active, model.gravity_vector
+    du = np.zeros_like(p.x)
+    du[active] = sol.du
+    stress = p.stress.copy()
+    sig = sol.sigma
+    if model.objective_rotation:
+        sig = rotate_stress(sig, ops.operator.gradient(sol.du))
+    stress[active] = sig
+    eps_p = p.eps_p.copy()
+    eps_p[active] += equivalent_strain(sol.deps_p)
+    th1, th2 = model.theta1, model.theta2
+    inactive = np.ones(p.n, bool)
+    inactive[active] = False
+    if np.any(inactive):
+        du[inactive] = dt * p.v[inactive] + th2 * dt**2 * g
+    if ops.data.dynamic:
+        v = p.v + (du - dt * p.v) / (th2 * dt)
+        a = ((v - p.v) / dt - (1 - th1) * p.a) / th1
+    else:
+        v = du / dt
+        a = np.zeros_like(p.a)
+    if np.any(inactive):
+        v[inactive] = p.v[inactive] + dt * g
+        a[inactive] = g
+    if model.update_geometry:
+        moved = p.x + du
+        x, v = project_to_walls(model.walls, moved, v, friction=inactive)
+        # Accumulate du itself (x - p.x would lose increments below ~1e-16 |x|);
+        # only the wall projection goes through the positions.
+        u = p.u + du + (x - moved)
+    else:
+        x, u = p.x, p.u + du
+    wall_force = np.zeros_like(p.wall_force)
+    if ops.contacts.size:
+        wall_force[active[ops.contacts.node], ops.wall_ids] = sol.lambda_n
+    return p.replace(
+        x=x, v=v, a=a, u=u, stress=stress, eps_p=eps_p, wall_force=wall_force
+    )
+
+
+def advance(
+    p: Particles,
+    model: Model,
+    dt: float,
+    mesh_source: MeshSource,
+    step: int | None = None,
+) -> tuple[Particles, StepResult]:
+    """Advance the particles by one step.
+
+    Parameters
+    ----------
+    p : Particles
+        State at the start of the step.
+    model : Model
+        Materials, loads, walls and solver settings.
+    dt : float
+        Time step, s (pseudo-time in static mode).
+    mesh_source : callable
+        ``x -> (active_index, local_t)`` (for example
+        :class:`~skfem_npfem.pfem.FixedMesh` or
+        :class:`~skfem_npfem.pfem.AlphaShapeMesher`).
+    step : int, optional
+        Step index (used in error messages).
+
+    Returns
+    -------
+    Particles, StepResult
+        New particles, and the step (its :class:`StepRecord` as ``.record``,
+        the solution and the mesh).
+
+    Raises
+    ------
+    SolverError
+        If the cone program fails; ``p`` is untouched.
+    """
+    if not (math.isfinite(dt) and dt > 0):
+        raise ParameterError("dt", dt, "a finite time step > 0 (s)")
+    if p.dim != model.dim:
+        raise ParameterError(
+            "particles",
+            f"{p.dim}D positions",
+            f"{model.dim}D positions for a {model.dim}D model",
+        )
+    t0 = time.perf_counter()
+    ops = build_operators(p, model, dt, mesh_source)
+    t1 = time.perf_counter()
+    sol = solve_step(ops.data, model.solver, step=step)
+    t2 = time.perf_counter()
+    new = update_particles(p, model, dt, ops, sol)
+    timings = {"mesh": t1 - t0, **sol.timings, "update": time.perf_counter() - t2}
+    rec = StepRecord(
+        step=-1 if step is None else step,
+        time=float("nan"),
+        dt=dt,
+        status=sol.status,
+        iterations=sol.iterations,
+        timings=timings,
+        n_active=int(ops.active.size),
+        n_inactive=int(p.n - ops.active.size),
+        mesh_volume=float(ops.operator.volumes.sum()),
+        n_contacts=ops.contacts.size,
+        linear_solver=str(sol.sizes.get("linear_solver", "")),
+        **energies(new, model.gravity),
+    )
+    return new, StepResult(rec, sol, ops.active, ops.local_t, ops.operator)
