@@ -26,7 +26,8 @@ from scipy.spatial import cKDTree
 
 from .boundary import RigidWall
 from .errors import NpfemError, ParameterError
-from .remesh import Triangulation, alpha_shape, free_surface
+from .remesh import Triangulation, alpha_shape
+from .surface import free_surface
 
 __all__ = ["AlphaShapeMesher", "FixedMesh", "MeshSource", "main_body"]
 

@@ -6,34 +6,34 @@ next to it), and renders with pyvista/VTK without a display.
 
 Needs the ``viz`` extra (``pip install 'skfem-npfem[viz]'``): pyvista, matplotlib
 (colour maps), imageio (GIF; frames are encoded through Pillow, which imageio
-depends on) and imageio-ffmpeg (MP4). On Linux without ``DISPLAY``, VTK is told
-to use EGL (``VTK_DEFAULT_OPENGL_WINDOW=vtkEGLRenderWindow``, unless already
-set), which works on a headless machine with Mesa's ``libegl1``/``libegl-mesa0``.
-Before the first picture a tiny test render runs in a child process, because
-VTK crashes the whole interpreter (segmentation fault) instead of raising when
-it cannot get an OpenGL context; a failed test render raises
-:class:`~skfem_npfem.errors.NpfemError` that says what is missing.
+depends on) and imageio-ffmpeg (MP4).  The drawing itself is done by
+:mod:`skfem_npfem.render`: on Linux without ``DISPLAY`` VTK is told to use EGL,
+which works on a headless machine with Mesa's ``libegl1``/``libegl-mesa0``, and
+a failed test render raises :class:`~skfem_npfem.errors.NpfemError` that says
+what is missing.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import math
 import os
-import re
-import subprocess
-import sys
 import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from .errors import CheckpointError, NpfemError, ParameterError
-from .io import read_pvd, read_step
+from .errors import CheckpointError, ParameterError
+from .io import check_writable_dir, read_pvd, read_step
+from .render import (
+    Renderer,
+    Step,
+    Style,
+    check_rendering,
+    import_pyvista,
+    write_animation,
+)
 
 __all__ = ["FIELDS", "plot_results"]
 
@@ -67,126 +67,6 @@ _GRAVITY = 9.81
 _SAMPLE, _TAIL = 4000, 0.01
 #: Smallest top of the colour range of the plastic strain (round-off below it).
 _EPS_P_FLOOR = 1e-6
-#: Longest side of GIF frames in pixels (snapshots and MP4 keep the full size).
-_GIF_MAX_SIDE = 720
-#: Pixels kept free for the text lines (top) and the colour bar (bottom) in 2D.
-_TOP, _BOTTOM = 72, 136
-_ANSI = re.compile(r"\x1b\[[0-9;]*m")
-_VTK_LOG = re.compile(r"^.*?\b(?:WARN|ERR)\|\s*")
-
-_PROBE_CODE = """
-import vtkmodules.vtkRenderingOpenGL2
-from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.vtkFiltersSources import vtkSphereSource
-from vtkmodules.vtkRenderingCore import (
-    vtkActor, vtkPolyDataMapper, vtkRenderer, vtkRenderWindow, vtkWindowToImageFilter
-)
-win = vtkRenderWindow()
-win.SetOffScreenRendering(1)
-win.SetSize(32, 32)
-ren = vtkRenderer()
-win.AddRenderer(ren)
-src = vtkSphereSource()
-mapper = vtkPolyDataMapper()
-mapper.SetInputConnection(src.GetOutputPort())
-actor = vtkActor()
-actor.SetMapper(mapper)
-ren.AddActor(actor)
-win.Render()
-grab = vtkWindowToImageFilter()
-grab.SetInput(win)
-grab.Update()
-img = vtk_to_numpy(grab.GetOutput().GetPointData().GetScalars())
-assert img.size and img.std() > 0, "blank test image"
-"""
-_probe_ok = False
-
-
-@dataclass
-class _Step:
-    """One stored step reduced to what the pictures need."""
-
-    time: float
-    points: np.ndarray  # (N, 3)
-    cells: np.ndarray  # (ne, 3) triangles or (ne, 4) tetrahedra
-    free: np.ndarray  # indices of particles drawn as points
-    values: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
-
-
-@dataclass
-class _Style:
-    """Colour range, colour map and unit of one field."""
-
-    clim: tuple[float, float]
-    cmap: str
-    scale: float
-    unit: str
-
-
-def _set_headless_backend() -> None:
-    """Point VTK at EGL on a Linux machine without a display (unless set)."""
-    if sys.platform.startswith("linux") and not (
-        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
-    ):
-        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
-
-
-def _import_pyvista() -> Any:
-    """Import pyvista for off-screen use or raise NpfemError."""
-    _set_headless_backend()
-    try:
-        import pyvista as pv
-    except ImportError as err:
-        raise NpfemError(
-            "plotting needs pyvista (pip install 'skfem-npfem[viz]'): " + str(err)
-        ) from None
-    return pv
-
-
-def _check_rendering() -> None:
-    """Run a tiny off-screen render in a child process once per process.
-
-    Raises
-    ------
-    NpfemError
-        If the test render fails or crashes (no OpenGL context available).
-    """
-    global _probe_ok
-    if _probe_ok:
-        return
-    try:
-        proc = subprocess.run(
-            [sys.executable, "-c", _PROBE_CODE],
-            capture_output=True,
-            text=True,
-            timeout=180,
-            env=os.environ.copy(),
-            check=False,
-        )
-    except (OSError, subprocess.TimeoutExpired) as err:
-        raise NpfemError(f"off-screen rendering test could not run: {err}") from None
-    if proc.returncode != 0:
-        lines = [
-            _VTK_LOG.sub("", _ANSI.sub("", ln)).strip()
-            for ln in proc.stderr.splitlines()
-            if ln.strip() and ("WARN" in ln or "ERR" in ln or "Error" in ln)
-        ]
-        said = "; ".join(dict.fromkeys(lines[-4:])) or "no message"
-        how = (
-            f"crashed with signal {-proc.returncode}"
-            if proc.returncode < 0
-            else f"failed with exit code {proc.returncode}"
-        )
-        backend = os.environ.get("VTK_DEFAULT_OPENGL_WINDOW", "VTK's default")
-        raise NpfemError(
-            f"off-screen rendering is not possible here: a VTK test render "
-            f"({backend}) {how}. VTK needs an OpenGL context without a display: "
-            "install EGL (Debian/Ubuntu: apt-get install libegl1 libegl-mesa0) "
-            "or OSMesa (libosmesa6) and set VTK_DEFAULT_OPENGL_WINDOW to "
-            "vtkEGLRenderWindow or vtkOSMesaRenderWindow, or run with a display. "
-            f"VTK said: {said}"
-        )
-    _probe_ok = True
 
 
 def _find_pvd(result_dir: Path) -> Path:
@@ -248,7 +128,7 @@ def _field_values(name: str, pdata: Mapping[str, np.ndarray]) -> np.ndarray:
     return a.copy()
 
 
-def _read(path: Path, time: float, fields: Sequence[str]) -> tuple[_Step, int]:
+def _read(path: Path, time: float, fields: Sequence[str]) -> tuple[Step, int]:
     """Read one VTU step; return it and its spatial dimension."""
     mesh = read_step(path)
     points = np.asarray(mesh.points, dtype=float)
@@ -267,7 +147,7 @@ def _read(path: Path, time: float, fields: Sequence[str]) -> tuple[_Step, int]:
     in_cell[cells.ravel()] = True
     if "active" in mesh.point_data:
         in_cell &= np.asarray(mesh.point_data["active"]).ravel() != 0
-    step = _Step(time, points, cells, np.flatnonzero(~in_cell))
+    step = Step(time, points, cells, np.flatnonzero(~in_cell))
     for name in fields:
         if dim == 2 and name in ("stress_yz", "stress_zx"):
             raise ParameterError("field", name, "a field of 2D results (3D only)")
@@ -283,7 +163,7 @@ def _robust_range(values: np.ndarray) -> tuple[float, float]:
     return float(lo), float(hi)
 
 
-def _style(name: str, lo: float, hi: float, fixed: bool = False) -> _Style:
+def _style(name: str, lo: float, hi: float, fixed: bool = False) -> Style:
     """Colour range, colour map and unit scale of a field.
 
     With ``fixed`` the range ``lo..hi`` (SI units) is used as given.
@@ -296,21 +176,21 @@ def _style(name: str, lo: float, hi: float, fixed: bool = False) -> _Style:
         )
         if fixed and hi > lo:
             cmap = "coolwarm" if lo < 0 < hi else "viridis"
-            return _Style((lo / scale, hi / scale), cmap, scale, unit)
+            return Style((lo / scale, hi / scale), cmap, scale, unit)
         if big == 0:
-            return _Style((-1.0, 1.0), "coolwarm", scale, unit)
+            return Style((-1.0, 1.0), "coolwarm", scale, unit)
         if hi <= 0.05 * big:  # (nearly) compression only: min..0
-            return _Style((lo / scale, 0.0), "viridis", scale, unit)
+            return Style((lo / scale, 0.0), "viridis", scale, unit)
         if lo >= -0.05 * big:  # (nearly) tension only: 0..max
-            return _Style((0.0, hi / scale), "viridis", scale, unit)
-        return _Style((-big / scale, big / scale), "coolwarm", scale, unit)
+            return Style((0.0, hi / scale), "viridis", scale, unit)
+        return Style((-big / scale, big / scale), "coolwarm", scale, unit)
     cmap = "plasma" if name == "plastic_strain_eq" else "viridis"
     if fixed and hi > lo:
-        return _Style((lo, hi), cmap, 1.0, _UNITS[name])
+        return Style((lo, hi), cmap, 1.0, _UNITS[name])
     top = max(hi, _EPS_P_FLOOR) if name == "plastic_strain_eq" else hi
     if not top > 0:
         top = 1.0
-    return _Style((0.0, top), cmap, 1.0, _UNITS[name])
+    return Style((0.0, top), cmap, 1.0, _UNITS[name])
 
 
 def _time_label(value: float) -> str:
@@ -342,283 +222,6 @@ def _frame_indices(n: int, max_frames: int) -> np.ndarray:
     if n <= max_frames:
         return np.arange(n)
     return np.unique(np.round(np.linspace(0, n - 1, max_frames)).astype(int))
-
-
-def _round16(x: float) -> int:
-    return int(16 * math.ceil(x / 16))
-
-
-def _window_size(width: float, height: float) -> tuple[int, int]:
-    """Window size (multiples of 16) that fits a width x height picture."""
-    width, height = max(width, 1e-3 * height, 1e-12), max(height, 1e-3 * width, 1e-12)
-    w = 1024
-    h = _TOP + _BOTTOM + 0.9 * w * height / width
-    if h > 1024:
-        h = 1024
-        w = max(640, min(1024, (1024 - _TOP - _BOTTOM) * width / height / 0.9))
-    return _round16(w), _round16(max(h, 480))
-
-
-def _grid(pv: Any, step: _Step, dim: int, values: np.ndarray) -> Any:
-    """A pyvista UnstructuredGrid of the step's cells with point data 'value'."""
-    ctype = pv.CellType.TETRA if dim == 3 else pv.CellType.TRIANGLE
-    if len(step.cells):
-        grid = pv.UnstructuredGrid({ctype: step.cells}, step.points)
-    else:
-        grid = pv.UnstructuredGrid()
-        grid.points = step.points
-    grid.point_data["value"] = values
-    grid.set_active_scalars("value")
-    return grid
-
-
-class _Renderer:
-    """One off-screen plotter showing one field; draws any step on demand.
-
-    ``fast`` switches off multisample anti-aliasing (for animation frames).
-    """
-
-    def __init__(
-        self,
-        pv: Any,
-        steps: dict[int, _Step],
-        dim: int,
-        name: str,
-        style: _Style,
-        title: str,
-        tau: float | None,
-        window_size: tuple[int, int] | None,
-        fast: bool = False,
-    ) -> None:
-        self.pv, self.steps, self.dim, self.name = pv, steps, dim, name
-        self.style, self.title, self.tau = style, title, tau
-        pts = np.vstack([s.points for s in steps.values()])
-        lo, hi = pts.min(axis=0), pts.max(axis=0)
-        size = hi - lo
-        # screen axes: 2D looks down -z; 3D is an isometric view with z up
-        if dim == 2:
-            view_dir, up = np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0])
-        else:
-            view_dir = np.ones(3) / math.sqrt(3.0)
-            up = np.array([0.0, 0.0, 1.0]) - view_dir / math.sqrt(3.0)
-            up /= np.linalg.norm(up)
-        right = np.cross(up, view_dir)
-        corners = np.array(
-            [
-                [x, y, z]
-                for x in (lo[0], hi[0])
-                for y in (lo[1], hi[1])
-                for z in (lo[2], hi[2])
-            ]
-        )
-        extent = np.ptp(corners @ right), np.ptp(corners @ up)
-        if window_size is None:
-            window_size = _window_size(*extent)
-        self.size = (int(window_size[0]), int(window_size[1]))
-        w, h = self.size
-        band = h - _TOP - _BOTTOM
-        scale = min(0.9 * w / max(extent[0], 1e-12), band / max(extent[1], 1e-12))
-        first = steps[min(steps)]
-        spacing = self._spacing(steps)
-        n_cells = max(len(s.cells) for s in steps.values())
-        show_edges = bool(n_cells <= 20000 and spacing * scale >= 14)
-        self.point_size = float(np.clip(0.6 * spacing * scale, 3, 20))
-
-        pl = pv.Plotter(off_screen=True, window_size=self.size)
-        if fast:  # no multisample anti-aliasing: 3x faster in software GL
-            pl.ren_win.SetMultiSamples(0)
-        self.pl = pl
-        pl.set_background("white")
-        fs = max(12, min(18, w // 48))
-        bar_args = {
-            "title": f"{name} [{style.unit}]",
-            "vertical": False,
-            "n_labels": 5,
-            "fmt": "%.3g",
-            "color": "black",
-            "label_font_size": fs + 4,
-            "unconstrained_font_size": True,
-            "position_x": 0.2,
-            "position_y": 10 / h,
-            "width": 0.6,
-            "height": 80 / h,
-        }
-        shading = (
-            {"lighting": True, "ambient": 0.35, "diffuse": 0.65, "specular": 0.0}
-            if dim == 3
-            else {"lighting": False}
-        )
-        self.actor = pl.add_mesh(
-            _grid(pv, first, dim, first.values[name] / style.scale),
-            scalars="value",
-            clim=style.clim,
-            cmap=style.cmap,
-            show_edges=show_edges,
-            edge_color="#404040",
-            line_width=0.5,
-            scalar_bar_args=bar_args,
-            render=False,
-            **shading,
-        )
-        # labels under the bar, its title as a centred text above it
-        bar = pl.scalar_bars[bar_args["title"]]
-        bar.SetTextPositionToPrecedeScalarBar()
-        bar.SetTitle("")
-        bar.SetBarRatio(0.45)
-        bar_title = pl.add_text(
-            bar_args["title"], position=(w // 2, 98), font_size=fs - 2, color="black"
-        )
-        bar_title.GetTextProperty().SetJustificationToCentered()
-        # header font: shrink so that the title (and the time line) fit
-        chars = max(len(title), 48)
-        header_fs = int(np.clip((w - 16) / (0.95 * chars), 8, fs - 2))
-        self.text = pl.add_text(
-            "", position=(8, h - 6), font_size=header_fs, color="black"
-        )
-        self.text.GetTextProperty().SetVerticalJustificationToTop()
-        if dim == 3:
-            pl.add_axes(
-                color="black", viewport=(0.0, _BOTTOM / h, 0.15, 0.15 + _BOTTOM / h)
-            )
-        self.free_actors: list[Any] = []
-        # 2D: sphere impostors shift depth by their radius, so the coloured
-        # free particles are lifted well above their dark rims
-        self.depth = 2 * spacing + 1e-3 * float(np.max(size)) if dim == 2 else 0.0
-
-        # camera: parallel projection, the domain (union of all steps) centred
-        # in the band between the colour bar and the two text lines
-        pl.enable_parallel_projection()
-        diag = float(np.linalg.norm(size)) + 1e-12
-        focal = (lo + hi) / 2 - (_BOTTOM + band / 2 - h / 2) / scale * up
-        dist = 2.0 * diag + 1.0
-        cam = pl.camera
-        cam.focal_point = tuple(focal)
-        cam.position = tuple(focal + dist * view_dir)
-        cam.up = tuple(up)
-        cam.parallel_scale = h / (2 * scale)
-        cam.clipping_range = (max(dist - 2 * diag, 1e-6), dist + 2 * diag)
-
-    @staticmethod
-    def _spacing(steps: dict[int, _Step]) -> float:
-        """Median nearest-neighbour distance of the particles (first step)."""
-        from scipy.spatial import cKDTree
-
-        p = steps[min(steps)].points
-        if len(p) < 2:
-            return 0.0
-        d, _ = cKDTree(p).query(p[:: max(1, len(p) // 5000)], k=2)
-        return float(np.median(d[:, 1]))
-
-    def draw(self, index: int) -> None:
-        """Show step ``index`` (mesh, free particles and time text)."""
-        pv, step, style = self.pv, self.steps[index], self.style
-        values = step.values[self.name] / style.scale
-        self.actor.mapper.dataset = _grid(pv, step, self.dim, values)
-        for actor in self.free_actors:
-            self.pl.remove_actor(actor, render=False)
-        self.free_actors = []
-        if len(step.free):
-            pts = step.points[step.free]
-            lift = [0.0, 0.0, self.depth if self.dim == 2 else 0.0]
-            self.free_actors.append(
-                self.pl.add_points(
-                    pts + lift,
-                    scalars=values[step.free],
-                    clim=style.clim,
-                    cmap=style.cmap,
-                    render_points_as_spheres=True,
-                    point_size=self.point_size,
-                    show_scalar_bar=False,
-                    lighting=False,
-                    render=False,
-                )
-            )
-            if self.dim == 2:  # dark rim, drawn behind (camera at +z)
-                self.free_actors.append(
-                    self.pl.add_points(
-                        pts,
-                        color="#303030",
-                        render_points_as_spheres=True,
-                        point_size=self.point_size + 3,
-                        lighting=False,
-                        render=False,
-                    )
-                )
-        t = step.time
-        when = f"t = {t:.4g} s"
-        if self.tau is not None:
-            when += f"     t/\u221a(H0/g) = {t / self.tau:.3f}"
-        self.text.SetInput(f"{self.title}\n{when}")
-
-    def image(self, path: Path | None = None) -> np.ndarray:
-        """Render and return the RGB image (and save it as PNG if path given)."""
-        self.pl.render()
-        img = self.pl.screenshot(filename=None, return_img=True)
-        if path is not None:
-            from PIL import Image
-
-            Image.fromarray(img).save(path)
-        return img
-
-    def close(self) -> None:
-        self.pl.close()
-
-
-def _write_animation(
-    renderer: _Renderer, indices: Sequence[int], path: Path, kind: str
-) -> None:
-    """Write the frames of ``indices`` as a GIF or MP4."""
-    fps = int(np.clip(round(len(indices) / 6), 4, 20))
-    if kind == "mp4":
-        try:
-            import imageio.v2 as imageio
-            import imageio_ffmpeg  # noqa: F401
-        except ImportError as err:
-            raise NpfemError(
-                f"MP4 output needs imageio and imageio-ffmpeg ({err}); "
-                "pip install 'skfem-npfem[viz]' or use animation='gif'"
-            ) from None
-        writer = imageio.get_writer(
-            path, format="FFMPEG", fps=fps, macro_block_size=16, quality=7
-        )
-        try:
-            for i in indices:
-                renderer.draw(i)
-                writer.append_data(renderer.image())
-        finally:
-            writer.close()
-        return
-    try:
-        from PIL import Image  # installed with imageio
-    except ImportError as err:
-        raise NpfemError(
-            f"GIF output needs Pillow ({err}); pip install 'skfem-npfem[viz]'"
-        ) from None
-    w, h = renderer.size
-    shrink = min(1.0, _GIF_MAX_SIDE / max(w, h))
-    frames = []
-    for i in indices:
-        renderer.draw(i)
-        im = Image.fromarray(renderer.image())
-        if shrink < 1:
-            im = im.resize(
-                (round(w * shrink), round(h * shrink)), Image.Resampling.BILINEAR
-            )
-        frames.append(im.quantize(256, method=Image.Quantize.FASTOCTREE))
-    tmp = path.with_name(f".tmp_{path.name}")
-    try:
-        frames[0].save(
-            tmp,
-            format="GIF",
-            save_all=True,
-            append_images=frames[1:],
-            duration=round(1000 / fps),
-            loop=0,
-            optimize=False,
-        )
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 def _check_args(
@@ -700,7 +303,7 @@ def _load(
     entries: list[tuple[float, Path]],
     field_arg: str | Sequence[str],
     needed: set[int],
-) -> tuple[int, list[str], dict[int, _Step], dict[str, tuple[float, float]]]:
+) -> tuple[int, list[str], dict[int, Step], dict[str, tuple[float, float]]]:
     """Read every step once.
 
     Returns
@@ -709,14 +312,14 @@ def _load(
         Spatial dimension.
     names : list of str
         Fields to draw.
-    kept : dict of int to _Step
+    kept : dict of int to Step
         The steps in ``needed``.
     ranges : dict of str to (float, float)
         Colour range per field (robust range over all steps).
     """
     _, dim = _read(entries[0][1], entries[0][0], [])
     names = _resolve_fields(field_arg, dim)
-    kept: dict[int, _Step] = {}
+    kept: dict[int, Step] = {}
     pooled: dict[str, list[np.ndarray]] = {name: [] for name in names}
     for i, (t, path) in enumerate(entries):
         step, _ = _read(path, t, names)
@@ -833,15 +436,11 @@ def plot_results(
         )
     snaps = _pick_snapshots(ts, req, tau if normalised else None)
     frames = [] if animation == "none" else list(_frame_indices(len(ts), max_frames))
-    pv = _import_pyvista()
-    _check_rendering()
+    pv = import_pyvista()
+    check_rendering()
     dim, names, kept, ranges = _load(entries, field, set(snaps) | set(frames))
     out = folder / "plots" if out_dir is None else Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        msg = f"a writable folder ({err})"
-        raise ParameterError("out_dir", str(out), msg) from None
+    check_writable_dir("out_dir", out)
 
     written: list[Path] = []
     for name in names:
@@ -850,7 +449,7 @@ def plot_results(
         style = _style(name, lo, hi, fixed=fixed)
         title = f"{scene + ': ' if scene else ''}{FIELDS[name]}"
         args = (pv, kept, dim, name, style, title, tau, window_size)
-        renderer = _Renderer(*args)
+        renderer = Renderer(*args)
         try:
             for i in sorted(snaps, key=lambda k: ts[k]):
                 path = out / f"{name}_t{_time_label(snaps[i])}.png"
@@ -860,10 +459,10 @@ def plot_results(
         finally:
             renderer.close()
         if animation != "none":
-            renderer = _Renderer(*args, fast=True)
+            renderer = Renderer(*args, fast=True)
             try:
                 path = out / f"{name}.{animation}"
-                _write_animation(renderer, frames, path, animation)
+                write_animation(renderer, frames, path, animation)
                 written.append(path)
             finally:
                 renderer.close()

@@ -1,6 +1,9 @@
 """The documentation must match the code."""
 
+import math
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 from skfem_npfem.cli import scenes_markdown
@@ -52,3 +55,28 @@ def test_summary_keys_match_the_documented_contract():
     history = set(s["history"][0])
     assert (_documented_keys("history") - {"runout", "max_height"}) <= history
     assert {"runout", "max_height"} <= history
+
+
+def test_readme_first_script_runs_as_written(tmp_path):
+    # The first Python block of README.md, run unchanged in a fresh interpreter.
+    # Its printed numbers are checked against their analytic references: the
+    # elastic column's sigma_yy = -rho g (H - y) (E1; an elastic program is one
+    # KKT solve, 0 interior-point iterations) and Prandtl's q/c = 2 + pi (P1).
+    readme = (ROOT / "README.md").read_text()
+    script = re.search(r"```python\n(.*?)```", readme, re.S).group(1)
+    (tmp_path / "first.py").write_text(script)
+    out = subprocess.run(
+        [sys.executable, "first.py"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=True,
+    ).stdout
+    status, iterations, err = re.search(
+        r"^(\w+) (\d+) sigma_yy L2 error ([\d.]+)%$", out, re.M
+    ).groups()
+    assert status == "Solved" and int(iterations) == 0
+    assert float(err) / 100 < 1e-2
+    q = float(re.search(r"^Prandtl q/c = ([\d.]+) vs 2\+pi$", out, re.M).group(1))
+    assert abs(q / (2 + math.pi) - 1) < 1e-2
