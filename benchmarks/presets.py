@@ -76,9 +76,8 @@ def _norms(sol, ref, sigma_n) -> dict:
 
 def step_accuracy(case: str, backends: list[str], presets: list[str]) -> dict:
     """Solve one step of ``case`` with every backend x preset and the reference."""
-    from skfem_npfem.conic import SolverOptions
+    from skfem_npfem import SolverOptions, advance
     from skfem_npfem.errors import SolverError
-    from skfem_npfem.simulation import advance
 
     dim3 = suite.CASES[case]["kind"] == "block3d"
     base_backend = "faer" if dim3 else "qdldl"

@@ -99,10 +99,9 @@ def build_case(name: str, linear_solver: str, threads: int, time_limit: float):
     import numpy as np
     from skfem import MeshTet, MeshTri
 
-    from skfem_npfem.conic import SolverOptions
+    from skfem_npfem import FixedMesh, Model, SolverOptions
     from skfem_npfem.materials import DruckerPrager
     from skfem_npfem.particles import Particles
-    from skfem_npfem.simulation import FixedMesh, Model
     from skfem_npfem.smoothing import nodal_integration
 
     c = CASES[name]
@@ -168,8 +167,8 @@ def run_child(args) -> dict:
     t_import = time.perf_counter()
     import numpy as np
 
+    from skfem_npfem import advance
     from skfem_npfem.errors import SolverError
-    from skfem_npfem.simulation import advance
 
     t_import = time.perf_counter() - t_import
     rss0 = harness.peak_rss_mb()

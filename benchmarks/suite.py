@@ -149,7 +149,7 @@ def case_size(name: str) -> int:
 # --------------------------------------------------------------------------------
 def solver_options(backend: str, preset: str, threads: int = 0):
     """SolverOptions of a backend and a variant of PRESET_SPECS."""
-    from skfem_npfem.conic import SolverOptions
+    from skfem_npfem import SolverOptions
 
     return SolverOptions(
         linear_solver=backend, max_threads=threads, **PRESET_SPECS[preset]
@@ -161,9 +161,9 @@ def build_block3d(n: tuple[int, int, int], backend: str, preset: str, threads: i
     import numpy as np
     from skfem import MeshTet
 
+    from skfem_npfem import FixedMesh, Model, Simulation
     from skfem_npfem.materials import DruckerPrager
     from skfem_npfem.particles import Particles
-    from skfem_npfem.simulation import FixedMesh, Model, Simulation
     from skfem_npfem.smoothing import nodal_integration
 
     nx, ny, nz = n
@@ -217,11 +217,11 @@ def build_cylinder3d(nr: int, backend: str, preset: str, threads: int):
     """Simulation of the quarter-cylinder collapse (see CASES)."""
     import numpy as np
 
+    from skfem_npfem import Model, Simulation
     from skfem_npfem.boundary import RigidWall, floor
     from skfem_npfem.materials import DruckerPrager
     from skfem_npfem.particles import Particles
     from skfem_npfem.pfem import AlphaShapeMesher
-    from skfem_npfem.simulation import Model, Simulation
     from skfem_npfem.smoothing import nodal_integration
 
     x, h = cylinder_lattice(nr)

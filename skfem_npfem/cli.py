@@ -18,12 +18,12 @@ shows the traceback instead.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from collections.abc import Sequence
 
 from . import __version__
 from .errors import NpfemError, ParameterError
+from .io import dumps
 
 __all__ = ["main"]
 
@@ -68,7 +68,7 @@ def cmd_scenes(args: argparse.Namespace) -> int:
             }
             for name, s in SCENES.items()
         }
-        print(json.dumps(cat, indent=1))
+        print(dumps(cat, indent=1))
         return 0
     for name, s in SCENES.items():
         print(f"{name}: {s.description}")

@@ -45,17 +45,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from .boundary import Contacts
 from .errors import ParameterError, SolverError
 from .families import OBJECTIVE_TERMS, ROW_FAMILIES
 from .program import Assembled, Program, StepData, assemble
 from .solver import ACCEPTED, SolverOptions, hint, solve_clarabel
 
 __all__ = [
-    "Contacts",
     "Scaled",
-    "SolverOptions",
-    "StepData",
     "StepSolution",
     "build_program",
     "check_step_data",
