@@ -147,10 +147,6 @@ class StepData:
     stress_scale: float | None = None
 
 
-#: Units of rows and variables; the scaling stage divides by the matching scale.
-UNITS = ("force", "stress")
-
-
 @dataclass
 class Block:
     """Rows ``A x + s = b`` with ``s`` in ``cones`` (one constraint family).
@@ -247,6 +243,9 @@ class Program:
         self.ubar = np.asarray(data.du_prescribed, float).reshape(-1)[self.pres]
         self.sig_n = np.asarray(data.sigma_n, float)[:, list(self.comp)]
         self.mt = np.zeros(0)
+        if data.dynamic:
+            m = np.repeat(np.asarray(data.mass, float), d)
+            self.mt = m / (data.theta1 * data.theta2)
         self.ftilde = self._generalised_force()
         c = data.contacts
         self.fric = np.flatnonzero(c.mu_lambda > 0.0)
@@ -271,8 +270,7 @@ class Program:
         data = self.data
         f = np.asarray(data.force, float).reshape(-1)
         if data.dynamic:
-            th1, th2 = data.theta1, data.theta2
-            self.mt = np.repeat(np.asarray(data.mass, float), self.dim) / (th1 * th2)
+            th1 = data.theta1
             f = f / th1 + self.mt * np.asarray(data.v_n, float).reshape(-1) / data.dt
             if th1 != 1.0:
                 G = data.operator.G
