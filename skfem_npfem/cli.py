@@ -12,7 +12,8 @@ Commands
     Render PNG snapshots (and an animation) of a result folder (``viz`` extra).
 
 Errors are printed as one line (``error: ...``) with exit code 2; ``--debug``
-shows the traceback instead.
+shows the traceback instead.  Warnings of a run (e.g. a limit load stopped by its
+cap before the plateau) are printed as one ``warning: ...`` line each.
 """
 
 from __future__ import annotations
@@ -125,14 +126,24 @@ def cmd_run(args: argparse.Namespace) -> int:
     progress = False if args.quiet else None
     if args.resume and not args.out:
         raise ParameterError("--resume", True, "needs --out DIR with a checkpoint")
-    result = run_scene(
-        args.scene,
-        overrides,
-        out=args.out,
-        summary=args.summary,
-        progress=progress,
-        resume=args.resume,
-    )
+    import warnings
+
+    # A scene's warnings (e.g. a limit load stopped by its cap before the
+    # plateau) are printed as one clean line each, not as Python's
+    # "file:line: UserWarning" block; the warning filters stay as they are.
+    with warnings.catch_warnings(record=True) as caught:
+        try:
+            result = run_scene(
+                args.scene,
+                overrides,
+                out=args.out,
+                summary=args.summary,
+                progress=progress,
+                resume=args.resume,
+            )
+        finally:
+            for msg in dict.fromkeys(str(w.message) for w in caught):
+                print(f"warning: {msg}", file=sys.stderr)
     if not args.quiet:
         metrics = {
             k: v for k, v in result["metrics"].items() if not isinstance(v, list)

@@ -1,11 +1,18 @@
-"""Scene ``strip-footing``: rigid strip footing under displacement control.
+"""Scene ``strip-footing``: rigid strip footing pushed to its collapse load.
 
 Half model (symmetry at ``x = 0``), plane strain, quasi-static steps.  The soil
 block is ``domain*b`` wide and deep with a mesh graded from ``spacing`` under the
 footing; base fixed, far side on rollers.  The footing (half-width ``b``) pushes
-the surface particles at ``x <= b`` down by ``settlement/steps`` per step; it is
-smooth (horizontal motion free) or rough (horizontal motion fixed).  The
-footing pressure is the sum of the vertical reactions over ``b``.
+the surface particles at ``x <= b`` down; it is smooth (horizontal motion free)
+or rough (horizontal motion fixed).  The footing pressure is the sum of the
+vertical reactions over ``b``.
+
+Settlement steps (:mod:`~skfem_npfem.scenes.plateau`): ``steps`` equal steps
+reach ``settlement``; the run then goes on with growing increments until the
+load curve is flat (the load changes by at most ``plateau_tol`` while the
+settlement doubles) or a cap (``max_settlement``, ``max_steps``) stops it with a
+warning.  ``plateau_tol = 0`` runs exactly ``steps`` steps to ``settlement``.
+Pseudo-time equals settlement: ``dt`` of a step is its increment (m).
 
 References (weightless soil): Prandtl ``q/c = 2 + pi``; Mohr-Coulomb
 ``N_c = (N_q - 1) cot(phi)``, ``N_q = exp(pi tan phi) tan^2(45 + phi/2)``.
@@ -14,6 +21,7 @@ References (weightless soil): Prandtl ``q/c = 2 + pi``; Mohr-Coulomb
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +29,7 @@ import numpy as np
 from skfem import MeshTri
 
 from ..errors import ParameterError
-from ..materials import DruckerPrager, MohrCoulomb, Tresca
+from ..materials import DruckerPrager, Material, MohrCoulomb, Tresca
 from ..model import Model
 from ..particles import Particles
 from ..pfem import FixedMesh
@@ -29,8 +37,16 @@ from ..simulation import Simulation
 from ..smoothing import nodal_integration
 from .base import Param, Scene, SceneRun
 from .common import elastic_params, make_writer, solver_from, solver_params
+from .plateau import PlateauRule
 
 MATERIALS = ("tresca", "mohr-coulomb", "drucker-prager")
+
+#: Default minimum settlement in units of ``(c + gamma b) b / E``.
+SETTLEMENT_SCALE = 100.0
+#: Default ``max_settlement`` in units of ``settlement``.
+MAX_SETTLEMENT_FACTOR = 100.0
+
+_POSITIVE = {"lo": 0, "lo_open": True}
 
 PARAMS = [
     Param("material", "tresca", "-", "yield criterion", str, MATERIALS),
@@ -65,20 +81,11 @@ PARAMS = [
         "-",
         "at-rest earth pressure coefficient (default 1-sin phi)",
         float,
-        lo=0,
-        lo_open=True,
+        **_POSITIVE,
     ),
     Param("footing", "smooth", "-", "footing-soil interface", str, ("smooth", "rough")),
-    Param("half_width", 1.0, "m", "footing half-width b", float, lo=0, lo_open=True),
-    Param(
-        "spacing",
-        0.125,
-        "m",
-        "element size under the footing",
-        float,
-        lo=0,
-        lo_open=True,
-    ),
+    Param("half_width", 1.0, "m", "footing half-width b", float, **_POSITIVE),
+    Param("spacing", 0.125, "m", "element size under the footing", float, **_POSITIVE),
     Param(
         "grading",
         1.15,
@@ -98,9 +105,46 @@ PARAMS = [
         hi=50.0,
     ),
     Param(
-        "settlement", 0.01, "m", "total footing settlement", float, lo=0, lo_open=True
+        "settlement",
+        None,
+        "m",
+        "minimum settlement, reached in `steps` equal steps (default "
+        f"{SETTLEMENT_SCALE:g} (c + gamma b) b / E: 0.01 m at the defaults)",
+        float,
+        **_POSITIVE,
     ),
-    Param("steps", 8, "-", "number of (equal) settlement steps", int, lo=1),
+    Param("steps", 8, "-", "number of equal steps up to `settlement`", int, lo=1),
+    Param(
+        "plateau_tol",
+        None,
+        "-",
+        "continue until the load changes by at most this fraction while the "
+        "settlement doubles; 0: stop after `steps` (default 1e-3; 0 with "
+        "large_deformation, whose load keeps rising)",
+        float,
+        lo=0,
+        hi=0.5,
+    ),
+    Param(
+        "growth",
+        1.5,
+        "-",
+        "increment factor per step after `settlement` while the curve is "
+        "straight (1: equal steps)",
+        float,
+        lo=1.0,
+        hi=4.0,
+    ),
+    Param(
+        "max_settlement",
+        None,
+        "m",
+        "cap on the settlement without a plateau (default "
+        f"{MAX_SETTLEMENT_FACTOR:g} x settlement)",
+        float,
+        **_POSITIVE,
+    ),
+    Param("max_steps", 100, "-", "cap on the number of steps", int, lo=1),
     Param(
         "large_deformation",
         False,
@@ -118,6 +162,17 @@ METRICS = {
     "bearing_factor_reference": "Prandtl-Reissner N_c for weightless soil (else null)",
     "relative_error": "bearing_factor / reference - 1 (weightless soil)",
     "load_curve": "list of [settlement (m), pressure (Pa)] per step",
+    "plateau_reached": "true if the run stopped on a detected plateau, false if a "
+    "cap stopped it first (then q_ult is a lower estimate); null when "
+    "plateau_tol = 0",
+    "plateau_change": "relative load change over the last doubling of the "
+    "settlement (null before the settlement has doubled)",
+    "plateau_tolerance": "plateau_tol used (0: detection off)",
+    "plateau_settlement": "settlement at which the plateau was detected, m (null: "
+    "not reached)",
+    "stopped_by": "plateau, max_settlement, max_steps or steps (plateau_tol = 0)",
+    "warnings": "list of one-line warnings (a cap stopped the run before the "
+    "plateau); the CLI prints each on stderr",
     "n_particles": "number of particles",
 }
 
@@ -144,17 +199,19 @@ def n_c(phi_deg: float) -> float:
     return (nq - 1.0) / math.tan(f)
 
 
-def build(
-    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
-) -> SceneRun:
-    """Build the strip-footing simulation."""
+def soil_mesh(values: dict[str, Any]) -> MeshTri:
+    """The graded ``domain*b`` square block, surface at ``y = domain*b``."""
     b, h = values["half_width"], values["spacing"]
     if h > b / 2:
         raise ParameterError("spacing", h, f"at most half_width/2 = {b / 2:g} m")
     L = values["domain"] * b
     xs = graded_coordinates(b, h, L, values["grading"])
     ys = L - graded_coordinates(b, h, L, values["grading"])[::-1]
-    mesh = MeshTri.init_tensor(xs, ys)
+    return MeshTri.init_tensor(xs, ys)
+
+
+def soil_material(values: dict[str, Any]) -> tuple[Material, float]:
+    """The soil material and its friction angle (0 for Tresca)."""
     name = values["material"]
     c, phi = values["c"], values["phi"]
     psi = phi if values["psi"] is None else values["psi"]
@@ -164,14 +221,26 @@ def build(
     if name == "tresca":
         if c <= 0:
             raise ParameterError("c", c, "tresca needs c > 0")
-        mat = Tresca(E, nu, rho, c=c)
-        phi = 0.0
+        mat, phi = Tresca(E, nu, rho, c=c), 0.0
     elif name == "mohr-coulomb":
         mat = MohrCoulomb(E, nu, rho, c=c, phi=phi, psi=psi)
     else:
         mat = DruckerPrager(E, nu, rho, c=c, phi=phi, psi=psi)
     if c == 0 and gamma == 0:
         raise ParameterError("gamma", gamma, "must be > 0 when c = 0 (no strength)")
+    return mat, phi
+
+
+def soil_particles(
+    values: dict[str, Any], mesh: MeshTri, phi: float
+) -> tuple[Particles, np.ndarray]:
+    """Particles at the mesh nodes with the geostatic stress; the footing mask.
+
+    The footing particles move down at unit pseudo-speed (1 m per unit of
+    pseudo-time), so a step's ``dt`` is its settlement increment.
+    """
+    b, gamma = values["half_width"], values["gamma"]
+    L, rho = values["domain"] * b, gamma / 9.81
     ni = nodal_integration(mesh)
     x = mesh.p.T.copy()
     fixed = np.zeros_like(x, dtype=bool)
@@ -186,14 +255,44 @@ def build(
     sv = -gamma * (L - x[:, 1])
     stress[:, 1] = sv
     stress[:, 0] = stress[:, 2] = K0 * sv
+    vp = np.zeros_like(x)
+    vp[foot, 1] = -1.0
     particles = Particles.create(
         x, np.maximum(rho, 1e-12) * ni.volumes, stress=stress, fixed=fixed
     )
-    n_steps = values["steps"]
-    dt = 1.0
-    vp = np.zeros_like(x)
-    vp[foot, 1] = -values["settlement"] / n_steps / dt
-    particles = particles.replace(v_prescribed=vp)
+    return particles.replace(v_prescribed=vp), foot
+
+
+def plateau_rule(values: dict[str, Any]) -> PlateauRule:
+    """The stepping and stop rule from the resolved parameters."""
+    b = values["half_width"]
+    settlement = values["settlement"]
+    if settlement is None:
+        strength = values["c"] + values["gamma"] * b
+        settlement = SETTLEMENT_SCALE * strength * b / values["E"]
+    tol = values["plateau_tol"]
+    if tol is None:
+        tol = 0.0 if values["large_deformation"] else 1e-3
+    cap = values["max_settlement"]
+    return PlateauRule(
+        settlement=settlement,
+        steps=values["steps"],
+        tol=tol,
+        growth=values["growth"],
+        max_settlement=MAX_SETTLEMENT_FACTOR * settlement if cap is None else cap,
+        max_steps=values["max_steps"],
+    )
+
+
+def build(
+    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
+) -> SceneRun:
+    """Build the strip-footing simulation."""
+    mesh = soil_mesh(values)
+    mat, phi = soil_material(values)
+    rule = plateau_rule(values)
+    particles, foot = soil_particles(values, mesh, phi)
+    b, c, gamma = values["half_width"], values["c"], values["gamma"]
     model = Model(
         dim=2,
         materials=[mat],
@@ -207,39 +306,55 @@ def build(
         particles,
         model,
         FixedMesh(mesh.t),
-        dt,
+        rule.first_increment,
         writer=make_writer(out, resume),
         progress=progress,
         meta={"scene": "strip-footing", "parameters": values},
     )
 
-    def record(sim_, p, res) -> bool:
+    def record(sim_: Simulation, p: Particles, res) -> bool:
         # Stored on the step record so that it survives checkpoints (--resume).
-        res.record.extra["settlement"] = float(-p.u[foot, 1].mean())
-        res.record.extra["pressure"] = -float(res.solution.reaction[foot, 1].sum()) / b
+        rec = res.record
+        rec.extra["settlement"] = float(-p.u[foot, 1].mean())
+        rec.extra["pressure"] = -float(res.solution.reaction[foot, 1].sum()) / b
+        sim_.dt = rule.next_increment(load_curve(sim_), rec.dt)
         return False
+
+    def finished(sim_: Simulation) -> bool:
+        # Also checked before the first step of a resumed run, so resuming a
+        # finished run takes no further step.
+        return rule.stop_reason(load_curve(sim_)) is not None
 
     sim.callbacks.append(record)
     ref = n_c(phi) if gamma == 0 and c > 0 else None
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
-        curve = [
-            [r.extra["settlement"], r.extra["pressure"]]
-            for r in sim_.records
-            if "pressure" in r.extra
-        ]
+        curve = load_curve(sim_)
         q = curve[-1][1] if curve else float("nan")
         factor = q / c if c > 0 else q / (gamma * b)
+        plateau = rule.outcome(curve, "strip-footing")
+        for msg in plateau["warnings"]:
+            warnings.warn(msg, stacklevel=2)
         return {
             "q_ult": q,
             "bearing_factor": factor,
             "bearing_factor_reference": ref,
             "relative_error": None if ref is None else factor / ref - 1.0,
             "load_curve": curve,
-            "n_particles": int(x.shape[0]),
+            **plateau,
+            "n_particles": int(particles.n),
         }
 
-    return SceneRun(sim, {"steps": n_steps}, metrics)
+    return SceneRun(sim, {"steps": rule.step_cap, "stop": finished}, metrics)
+
+
+def load_curve(sim: Simulation) -> list[list[float]]:
+    """``[settlement, pressure]`` of every recorded step."""
+    return [
+        [r.extra["settlement"], r.extra["pressure"]]
+        for r in sim.records
+        if "pressure" in r.extra
+    ]
 
 
 SCENE = Scene(
