@@ -258,7 +258,13 @@ def elastic_footing_pressure(sim, settlement: float, b: float = 1.0) -> float:
     "footing-c-1e12-elastic",
     "c",
     "strip-footing",
-    {"material": "tresca", "c": 1e12, "settlement": 0.003, "steps": 3, "plateau_tol": 0},
+    {
+        "material": "tresca",
+        "c": 1e12,
+        "settlement": 0.003,
+        "steps": 3,
+        "plateau_tol": 0,
+    },
     "T9 converse: a strength that is never reached gives the elastic answer: "
     "q proportional to the settlement (1e-9) and equal to a direct NS-FEM "
     "solve (1e-6)",
