@@ -29,6 +29,7 @@ from .remesh import Triangulation, alpha_shape
 from .scenes import SCENES, get_scene, run_scene
 from .simulation import AtRest, FixedMesh, Model, Simulation, StepRecord, advance
 from .smoothing import NodalIntegration, nodal_integration, p1_gradients
+from .sweeps import sweep
 
 __all__ = [
     "SCENES",
@@ -67,5 +68,6 @@ __all__ = [
     "p1_gradients",
     "run_scene",
     "solve_step",
+    "sweep",
     "wall_x",
 ]
