@@ -375,3 +375,47 @@ def test_sweep_through_a_separately_started_scheduler(scheduler, capsys):
     for spacing, row in zip((0.5, 0.25), table.to_dict("records"), strict=True):
         ref = run_scene(SCENE, {"spacing": spacing, "nu": 0.25, "mode": "static"})
         _assert_row_matches(row, ref)
+
+
+def test_a_run_whose_worker_is_killed_continues_from_its_checkpoint(scheduler):
+    # Two single-process workers; the one running the case is killed (SIGKILL)
+    # after the case wrote its second checkpoint.  The scheduler hands the task
+    # to the other worker, which resumes from the checkpoint in the run folder.
+    address, worker, tmp = scheduler
+    procs = {name: worker(name, "--no-nanny") for name in ("a", "b")}
+    _wait_for_workers(address, 2)
+    out = tmp / "killed"
+    fixed = {"spacing": 0.025, "checkpoint_every": 5, "output_every": 20}
+    cmd = [sys.executable, "-m", "skfem_npfem", "sweep", "column-collapse"]
+    cmd += ["--grid", "aspect=1", "--scheduler", address, "--out", str(out)]
+    cmd += [arg for k, v in fixed.items() for arg in ("--set", f"{k}={v}")]
+    folder = out / "runs" / "aspect=1"
+    with distributed.Client(address, timeout=30) as client:
+        sweep_proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True)
+        try:
+            deadline = time.monotonic() + 120
+            while not (folder / "checkpoint_000010.npz").exists():
+                assert time.monotonic() < deadline and sweep_proc.poll() is None
+                time.sleep(0.02)
+            busy = [a for a, keys in client.processing().items() if keys]
+            assert len(busy) == 1
+            assert not (folder / "summary.json").exists()  # killed mid-run
+            name = client.scheduler_info(n_workers=-1)["workers"][busy[0]]["name"]
+            os.killpg(procs[name].pid, signal.SIGKILL)
+            _, err = sweep_proc.communicate(timeout=180)
+        finally:
+            if sweep_proc.poll() is None:
+                sweep_proc.kill()
+                sweep_proc.wait()
+    assert sweep_proc.returncode == 0, err
+    assert "resumed from its checkpoint" in err
+    row = read_table(out).to_dict("records")[0]
+    assert row["status"] == "ok" and row["resumed"]
+    summary = json.loads((folder / "summary.json").read_text())
+    steps = [h["step"] for h in summary["history"]]
+    assert steps == list(range(1, len(steps) + 1)) and steps[-1] > 10
+    # The same case run without interruption (reproducible mode: bit-identical).
+    ref = run_scene("column-collapse", {**fixed, "aspect": 1.0})
+    assert row["solver.steps"] == ref["solver"]["steps"]
+    for key in ("normalised_runout", "final_height", "collapse_time"):
+        assert row[key] == pytest.approx(ref["metrics"][key], rel=1e-9), key
