@@ -124,9 +124,7 @@ def sweep(
         root,
         {
             "scene": scene,
-            "fixed": {k: v for k, v in runs[0].overrides.items() if k not in varied}
-            if grid is not None
-            else {},
+            "fixed": {k: v for k, v in runs[0].overrides.items() if k not in varied},
             "grid": {k: sorted({_key(r.varied[k]) for r in runs}) for k in varied},
         },
     )
@@ -220,8 +218,9 @@ def _run_all(
         tasks = {}
         for r in todo:
             over = dict(r.overrides)
-            over.setdefault("threads", n)
-            values = {**r.values, "threads": over["threads"]}
+            if "threads" in r.values:  # every scene has it; a custom one may not
+                over.setdefault("threads", n)
+            values = {**r.values, **over}
             folder = (root / "runs" / r.name).absolute()  # workers have other cwds
             tasks[r.name] = (scene, over, str(folder), values)
 
