@@ -305,7 +305,7 @@ class _Processes:
                 os.killpg(proc.pid, signal.SIGTERM)
         for proc in self.procs:
             try:
-                proc.wait(timeout=15)
+                proc.wait(timeout=5)
             except subprocess.TimeoutExpired:
                 os.killpg(proc.pid, signal.SIGKILL)
                 proc.wait()
@@ -400,7 +400,7 @@ def test_a_run_whose_worker_is_killed_continues_from_its_checkpoint(scheduler):
             busy = [a for a, keys in client.processing().items() if keys]
             assert len(busy) == 1
             assert not (folder / "summary.json").exists()  # killed mid-run
-            name = client.scheduler_info(n_workers=-1)["workers"][busy[0]]["name"]
+            name = client.scheduler_info()["workers"][busy[0]]["name"]
             os.killpg(procs[name].pid, signal.SIGKILL)
             _, err = sweep_proc.communicate(timeout=180)
         finally:

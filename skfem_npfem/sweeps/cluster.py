@@ -218,7 +218,11 @@ def solver_threads(client: Any) -> int:
     workers times their threads); the smallest over the machines, at least 1.
     Returns 1 while no worker is connected.
     """
-    workers = client.scheduler_info(n_workers=-1).get("workers", {})
+    try:
+        info = client.scheduler_info(n_workers=-1)  # all workers (dask >= 2025.4)
+    except TypeError:
+        info = client.scheduler_info()
+    workers = info.get("workers", {})
     if not workers:
         return 1
     cores = client.run(available_cores)

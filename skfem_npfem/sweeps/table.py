@@ -139,8 +139,19 @@ def read_table(out: str | Path) -> Any:
     if (out / TABLE_PARQUET).is_file() and _has_pyarrow():
         return pd.read_parquet(out / TABLE_PARQUET)
     if (out / TABLE_CSV).is_file():
-        return pd.read_csv(out / TABLE_CSV, keep_default_na=False, na_values=[""])
+        # The numbers as written, to the bit (pandas 3 does it by default).
+        exact = {"float_precision": "round_trip"} if _major(pd) < 3 else {}
+        return pd.read_csv(
+            out / TABLE_CSV, keep_default_na=False, na_values=[""], **exact
+        )
     raise ParameterError("DIR", str(out), f"a sweep folder (with {TABLE_CSV})")
+
+
+def _major(module: Any) -> int:
+    try:
+        return int(str(module.__version__).split(".")[0])
+    except ValueError:  # pragma: no cover - an unusual version string
+        return 0
 
 
 def read_spec(out: str | Path) -> dict[str, Any]:
