@@ -419,3 +419,21 @@ def test_a_run_whose_worker_is_killed_continues_from_its_checkpoint(scheduler):
     assert row["solver.steps"] == ref["solver"]["steps"]
     for key in ("normalised_runout", "final_height", "collapse_time"):
         assert row[key] == pytest.approx(ref["metrics"][key], rel=1e-9), key
+
+
+def _csv(out: Path):
+    exact = {"float_precision": "round_trip"} if pd.__version__ < "3" else {}
+    return pd.read_csv(out / "table.csv", **exact)
+
+
+def test_parquet_table_beside_the_csv_when_pyarrow_is_installed(grid_sweep):
+    pytest.importorskip("pyarrow", reason="Parquet output needs pyarrow (optional)")
+    out, table, _ = grid_sweep  # (a later test may have added runs to it)
+    parquet = pd.read_parquet(out / "table.parquet")
+    csv = _csv(out)
+    assert list(parquet.columns) == list(csv.columns) == list(table.columns)
+    assert list(parquet["run"]) == list(csv["run"])
+    np.testing.assert_array_equal(parquet["settlement"], csv["settlement"])
+    np.testing.assert_array_equal(parquet["solver.steps"], csv["solver.steps"])
+    ref = _by_hand({"spacing": 0.25, "nu": 0.3})["metrics"]["settlement"]
+    assert parquet.set_index("run").loc["spacing=0.25_nu=0.3", "settlement"] == ref
