@@ -437,3 +437,30 @@ def test_parquet_table_beside_the_csv_when_pyarrow_is_installed(grid_sweep):
     np.testing.assert_array_equal(parquet["solver.steps"], csv["solver.steps"])
     ref = _by_hand({"spacing": 0.25, "nu": 0.3})["metrics"]["settlement"]
     assert parquet.set_index("run").loc["spacing=0.25_nu=0.3", "settlement"] == ref
+
+
+def test_another_set_value_in_the_same_folder_is_refused(grid_sweep):
+    out, _, _ = grid_sweep
+    with pytest.raises(ParameterError, match=r"--out.*fixed"):
+        sweep(SCENE, GRID, fixed={**FIXED, "steps": 2}, out=out, progress=False)
+    with pytest.raises(ParameterError, match=r"--out.*scene"):
+        sweep("strip-footing", {"phi": [20]}, out=out, progress=False)
+
+
+def test_run_names_are_the_same_from_the_command_line_and_python():
+    from skfem_npfem.scenes import get_scene
+    from skfem_npfem.sweeps import plan_runs
+
+    scene = get_scene(SCENE)
+    cli = plan_runs(scene, {"E": ["1e7", "2.5e6"], "mode": ["static"]})
+    py = plan_runs(scene, {"E": [1e7, 2.5e6], "mode": ["static"]})
+    assert [r.name for r in cli] == [r.name for r in py]
+    assert [r.name for r in py] == ["E=1e+07_mode=static", "E=2500000_mode=static"]
+    assert py[1].values["E"] == 2.5e6 and py[1].values["nu"] == 0.3  # default kept
+    cases = plan_runs(scene, cases=[{"E": 1e7}, {"nu": 0.25}], fixed={"dt": 0.5})
+    assert [r.name for r in cases] == ["E=1e+07", "nu=0.25"]
+    assert cases[1].overrides == {"dt": 0.5, "nu": 0.25}
+    with pytest.raises(ParameterError, match="distinct"):
+        plan_runs(scene, {"E": ["1e7", 1e7]})
+    with pytest.raises(ParameterError, match="not both"):
+        plan_runs(scene, {"E": [1e7]}, cases=[{"nu": 0.2}])

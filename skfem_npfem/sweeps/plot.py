@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import NpfemError, ParameterError
+from .plan import value_label
 from .table import read_spec, read_table
 
 __all__ = ["plot_sweep"]
@@ -71,7 +72,9 @@ def plot_sweep(
     for key, sub in groups:
         sub = sub.sort_values(param)
         keys = key if isinstance(key, tuple) else (key,)
-        label = ", ".join(f"{k}={v}" for k, v in zip(others, keys, strict=True))
+        label = ", ".join(
+            f"{k}={value_label(v)}" for k, v in zip(others, keys, strict=True)
+        )
         ax.plot(sub[param], sub[metric], "o-", label=label or None)
     ax.set_xlabel(param)
     ax.set_ylabel(metric)
