@@ -90,14 +90,15 @@ def markdown(report: dict) -> str:
         "from /proc/stat minus this sweep's CPU time; 2.0 would mean both).",
         "",
         "| order | workers | solver threads/run | wall (s) | sum of run walls (s) "
-        "| CPU of the sweep (s) | other cores | load before |",
-        "|---|---|---|---|---|---|---|---|",
+        "| CPU of the sweep (s) | cores the sweep got | other cores | load before |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for i, r in enumerate(report["sweeps"], 1):
         lines.append(
             f"| {i} | {r['workers']} | {r['solver_threads_per_run']} "
             f"| {r['wall_s']:.1f} | {r['sum_run_wall_s']:.1f} "
             f"| {r.get('cpu_s_this_sweep', float('nan')):.1f} "
+            f"| {r.get('cpu_s_this_sweep', float('nan')) / r['wall_s']:.2f} "
             f"| {r.get('busy_cores_other_processes', float('nan')):.2f} "
             f"| {r['load_1min_before']:.2f} |"
         )
@@ -106,7 +107,9 @@ def markdown(report: dict) -> str:
         "",
         f"Mean wall time: {s['wall_1_worker_s']:.1f} s with 1 worker, "
         f"{s['wall_2_workers_s']:.1f} s with 2 workers (speed-up "
-        f"{s['speedup']:.2f}x).",
+        f"{s['speedup']:.2f}x).  A sweep can only go faster with a second worker "
+        "if it gets a second core: 'cores the sweep got' (its CPU time over its "
+        "wall time) says how much of the machine it had.",
         "",
     ]
     return "\n".join(lines)

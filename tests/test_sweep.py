@@ -166,9 +166,9 @@ def test_a_run_with_a_checkpoint_continues_from_it(tmp_path):
     run_scene(SCENE, {**fixed, "nu": 0.3, "steps": 2, "threads": 1}, out=folder)
     first = (folder / "result_000001.vtu").stat().st_mtime_ns
     assert (folder / "checkpoint_000002.npz").exists()
-    table = sweep(
+    table = sweep(  # cases= (a list of runs) instead of a grid
         SCENE,
-        {"nu": [0.3]},
+        cases=[{"nu": 0.3}],
         fixed={**fixed, "steps": 4},
         out=tmp_path,
         workers=1,

@@ -125,7 +125,10 @@ def sweep(
         {
             "scene": scene,
             "fixed": {k: v for k, v in runs[0].overrides.items() if k not in varied},
-            "grid": {k: sorted({_key(r.varied[k]) for r in runs}) for k in varied},
+            "grid": {
+                k: list(dict.fromkeys(_key(r.varied[k]) for r in runs if k in r.varied))
+                for k in varied
+            },
         },
     )
     emit = Progress(0, progress).emit
