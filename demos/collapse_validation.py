@@ -52,7 +52,6 @@ import os
 import subprocess
 import sys
 import time
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -271,6 +270,18 @@ def launch(
     if rc == 0 and log.stat().st_size == 0:
         log.unlink()  # keep logs only when they say something
     return rc, time.perf_counter() - t0
+
+
+def launch_case(case: tuple) -> int:
+    """One case on a Dask worker (skfem_npfem.sweeps.run_tasks): :func:`launch`."""
+    from skfem_npfem.errors import NpfemError
+
+    a, n, params, path, tag = case
+    log = path.with_suffix(".log")
+    rc, _ = launch(a, n, params, path, log, tag)
+    if rc:
+        raise NpfemError(f"case exited with code {rc}; see {log}")
+    return rc
 
 
 # ---------------------------------------------------------------------------
@@ -766,7 +777,14 @@ def main(argv=None) -> int:
     )
     ap.add_argument("--refinement-aspect", type=float, default=2.0)
     ap.add_argument("--out", type=Path, default=Path("docs/validation"))
-    ap.add_argument("--jobs", type=int, default=2, help="cases run in parallel")
+    ap.add_argument(
+        "--jobs", type=int, default=2, help="cases run in parallel (local Dask workers)"
+    )
+    ap.add_argument(
+        "--scheduler",
+        default=None,
+        help="run the cases on this Dask scheduler (tcp://HOST:PORT) instead",
+    )
     ap.add_argument(
         "--t-end-factor",
         type=float,
@@ -884,18 +902,17 @@ def main(argv=None) -> int:
     # Largest first (load balance).
     todo.sort(key=lambda c: -(c[1] + 1) * (round(c[0] * c[1]) + 1) * math.sqrt(c[0]))
 
-    def work(case):
-        a, n, params, path, tag = case
-        print(f"start {path.stem}", flush=True)
-        rc, wall = launch(a, n, params, path, path.with_suffix(".log"), tag)
-        print(f"done  {path.stem}: rc={rc}, {wall:.0f} s", flush=True)
-        return rc
-
     t0 = time.perf_counter()
-    if todo:
-        with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-            rcs = list(pool.map(work, todo))
-        if any(rcs):
+    if todo:  # on Dask (issue 14): a local cluster of --jobs workers or --scheduler
+        from skfem_npfem.sweeps import run_tasks
+
+        outcomes = run_tasks(
+            launch_case,
+            {c[3].stem: (c,) for c in todo},
+            workers=None if args.scheduler else max(1, args.jobs),
+            scheduler=args.scheduler,
+        )
+        if not all(o.ok for o in outcomes.values()):
             print("some cases failed; see the logs in", cases_dir)
     wall_all = time.perf_counter() - t0
 

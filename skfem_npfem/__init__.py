@@ -43,6 +43,7 @@ from .remesh import Triangulation, alpha_shape
 from .smoothing import NodalIntegration, nodal_integration, p1_gradients
 from .solver import SolverOptions
 from .step import StepRecord, StepResult, advance
+from .sweeps import sweep
 
 # isort: split
 from .errors import CheckpointError, NpfemError, ParameterError, SolverError
@@ -82,6 +83,7 @@ __all__ += [
     "StepSolution",
     "advance",
     "solve_step",
+    "sweep",
 ]
 #: Errors.
 __all__ += ["CheckpointError", "NpfemError", "ParameterError", "SolverError"]

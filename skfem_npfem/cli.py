@@ -10,6 +10,9 @@ Commands
     DIR.  ``--quiet`` hides the progress line.
 ``skfem-npfem plot DIR``
     Render PNG snapshots (and an animation) of a result folder (``viz`` extra).
+``skfem-npfem sweep SCENE --grid name=v1,v2 ... --out DIR``
+    Run a parameter grid on Dask (``sweep`` extra); ``sweep-plot DIR METRIC
+    PARAM`` draws one metric against one parameter (see docs/sweep.md).
 
 Errors are printed as one line (``error: ...``) with exit code 2; ``--debug``
 shows the traceback instead.  Warnings of a run (e.g. a limit load stopped by its
@@ -25,6 +28,7 @@ from collections.abc import Sequence
 from . import __version__
 from .errors import NpfemError, ParameterError
 from .io import dumps
+from .sweeps.cli import add_sweep_commands
 
 __all__ = ["main"]
 
@@ -253,6 +257,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="show tracebacks",
     )
     p_plot.set_defaults(func=cmd_plot)
+    add_sweep_commands(sub)
     return parser
 
 
