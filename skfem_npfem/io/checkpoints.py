@@ -46,6 +46,7 @@ __all__ = [
     "CHECKPOINT_FORMAT",
     "checkpoint_path",
     "checkpoint_step",
+    "clear_run_files",
     "latest_checkpoint",
     "load_checkpoint",
     "read_checkpoint",
@@ -217,3 +218,32 @@ def read_checkpoint(path: str | os.PathLike) -> tuple[Particles, dict]:
     """The particles and metadata of a checkpoint (see :func:`load_checkpoint`)."""
     arrays, meta = load_checkpoint(path)
     return Particles.from_arrays(arrays), meta
+
+
+#: Names of a run's files in its folder (and in ``plots/``), removed before a
+#: fresh run.
+RUN_FILES = re.compile(
+    r"\.?(?:\.tmp_)?(?:checkpoint_\d+\.npz|result_\d+\.vtu|result\.pvd"
+    r"|result\.vtu\.series|scene\.json)"
+)
+PLOT_FILES = re.compile(r"[\w.+-]+\.(?:png|gif|mp4)")
+
+
+def clear_run_files(folder: str | os.PathLike) -> list[Path]:
+    """Remove the files an earlier run left in ``folder``; return them.
+
+    Only the package's own names are touched (:data:`RUN_FILES`: checkpoints,
+    result steps and their indexes, ``scene.json``, and the pictures in
+    ``plots/``); other files stay.  A fresh run calls this first, so that a
+    later ``--resume`` can never pick up another run's checkpoint.
+    """
+    folder = Path(folder)
+    removed = []
+    for sub, pattern in ((folder, RUN_FILES), (folder / "plots", PLOT_FILES)):
+        if not sub.is_dir():
+            continue
+        for f in sorted(sub.iterdir()):
+            if pattern.fullmatch(f.name) and f.is_file():
+                f.unlink(missing_ok=True)
+                removed.append(f)
+    return removed
