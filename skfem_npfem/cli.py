@@ -52,7 +52,7 @@ def _parse_sets(items: Sequence[str]) -> dict[str, str]:
 
 
 def format_value(value: object) -> str:
-    """A metric for the terminal: floats to 4 significant digits, None as null.
+    """A metric for the terminal: floats to 4 significant digits, None/NaN as null.
 
     Examples
     --------
@@ -61,7 +61,7 @@ def format_value(value: object) -> str:
     >>> format_value(2.4675063972e-05), format_value(1035)
     ('2.468e-05', '1035')
     """
-    if value is None:
+    if value is None or (isinstance(value, float) and value != value):
         return "null"
     if isinstance(value, bool):
         return str(value).lower()
