@@ -69,6 +69,9 @@ MATERIALS = ("mohr-coulomb", "drucker-prager")
 #: Largest cohesion in units of rho g H0 (beyond it, displacements of a
 #: standing column grow with c: measured 3x at 1.4e4, 36x at 1.4e5).
 MAX_STRENGTH_RATIO = 1e4
+#: Largest Young's modulus in units of rho g H0 (measured over 0.3 s: 1.4e9
+#: and 1.9e9 run, 9.9e9 fails at step 38, 2.5e12 at step 5).
+MAX_STIFFNESS_RATIO = 2e9
 
 PARAMS = [
     Param("aspect", 2.0, "-", "aspect ratio a = H0/L0", float, lo=0, lo_open=True),
@@ -369,6 +372,15 @@ def _check(values: dict[str, Any]) -> float:
             f"at most {MAX_STRENGTH_RATIO:g} rho g H0 = "
             f"{MAX_STRENGTH_RATIO * weight:.3g} Pa: a column that strong stands "
             "still, and the solver tolerance no longer resolves its weight",
+        )
+    if values["E"] > MAX_STIFFNESS_RATIO * weight:
+        raise ParameterError(
+            "E",
+            values["E"],
+            f"at most {MAX_STIFFNESS_RATIO:g} rho g H0 = "
+            f"{MAX_STIFFNESS_RATIO * weight:.3g} Pa: the elastic strains fall "
+            "below the solver tolerance (the flow is rate-independent long "
+            "before: E = 10 GPa and 10 MPa give the same run-out)",
         )
     if psi > phi:
         raise ParameterError("psi", psi, f"at most phi = {phi:g} degrees")

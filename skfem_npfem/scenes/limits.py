@@ -80,7 +80,7 @@ MAGNITUDES: dict[str, tuple[float, float]] = {
     "height": (1e-4, 1e4),
     "width": (1e-4, 1e4),
     "half_width": (1e-4, 1e4),
-    "aspect": (1e-2, 1e3),
+    "aspect": (1e-2, 1e2),
     "settlement": (1e-9, 1e6),
     "max_settlement": (1e-9, 1e7),
     "max_displacement": (1e-3, 10.0),
