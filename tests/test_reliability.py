@@ -340,11 +340,29 @@ def test_8_repeated_set_and_empty_out_are_refused(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []  # nothing written to the current folder
 
 
-def test_8_static_failure_advice_has_no_time_step():
+def test_8_static_failure_advice_has_no_time_step(monkeypatch):
     for status in ("NumericalError", "InsufficientProgress", "MaxIterations"):
         assert "reduce dt" not in hint(status, dynamic=False)
         assert "smaller load steps" in hint(status, dynamic=False)
         assert "reduce dt" in hint(status, dynamic=True)
+    # The footing (static) whose solver fails at step 3: the whole message.
+    import skfem_npfem.conic as conic
+
+    real = conic.solve_clarabel
+    calls = []
+
+    def failing(P, q, A, b, cones, options, dim):
+        calls.append(1)
+        res = real(P, q, A, b, cones, options, dim)
+        if len(calls) == 3:
+            res.status = "NumericalError"
+        return res
+
+    monkeypatch.setattr(conic, "solve_clarabel", failing)
+    code, _, err = cli(["run", "strip-footing", *sets("spacing=0.25"), "--quiet"])
+    line = one_error_line(code, err, "NumericalError at step 3")
+    assert "reduce dt" not in line and "smaller load steps" in line
+    assert "(load step)" in line
 
 
 def test_8_collapse_time_is_null_before_rest(tmp_path):
