@@ -25,7 +25,12 @@ velocity, prescribed motion and fixity are those of the straight edge (mean of
 the two end particles; fixed only when both ends are); masses are
 HRZ-lumped from element densities ``rho_e`` = mean over the element's
 vertices of the particle density ``m_i / V_i`` (``V_i``: the P1 cell volume on
-the step's mesh), gravity is the consistent load ``int rho_e g phi_j``; a wall
+the step's mesh); gravity is the consistent load ``int rho_e g phi_j`` in
+static steps (exact for the geostatic column) and the lumped ``m_j g`` in
+dynamic ones (the consistent load puts no weight on triangle vertices, so with
+lumped inertia a falling body would stretch; the lumped load makes free fall
+exact and costs an O(h) stress error at rest, 0.5 % on the elastic column with
+20 elements over its height); a wall
 contact force on a mid-edge node is stored half on each end particle, and the
 lagged friction bound is split back as ``mu lambda_i / 3`` (vertex) and
 ``mu (lambda_a + lambda_b) / 3`` (mid-edge), which gives each edge the bound
@@ -217,7 +222,10 @@ class FemRemap:
             rho_i = state.mass[active] / cell_v
             rho_e = rho_i[t].mean(axis=0)
             mass = lumped_masses(gm, rho_e)
-            force = body_force(gm, rho_e, g)
+            if model.mode == "static":
+                force = body_force(gm, rho_e, g)
+            else:  # lumped, so that free fall is exact (see module docstring)
+                force = mass[:, None] * g[None, :]
             lagged = np.concatenate([lam[active] / 3.0, (lam[a] + lam[b]) / 3.0])
         return mass, force, fixed, v_pres, v, lagged
 

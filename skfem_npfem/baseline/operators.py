@@ -392,7 +392,7 @@ def lumped_masses(gm: GaussMesh, rho_e: np.ndarray) -> np.ndarray:
     ndarray (n_nodes,)
     """
     sb = gm.scalar_basis(4)  # degree-4 rule: exact for phi_j^2 with P2
-    vals = np.stack([np.asarray(sb.basis[j][0].value) for j in range(sb.Nbfun)])
+    vals = np.stack([np.asarray(sb.basis[j][0]) for j in range(sb.Nbfun)])
     dx = np.asarray(sb.dx)  # (ne, nq)
     diag = np.einsum("jeq,eq->je", vals**2, dx)  # (nb, ne)
     mass_e = rho_e * dx.sum(axis=1)

@@ -99,23 +99,26 @@ def project_invariants(p, r, K, G, A, B, p_t):
     tol = 1e-12 * (np.abs(A) + np.abs(B * p) + np.abs(r) + 1e-300)
     inside = (r <= A - B * p + tol) & (p <= p_t)
     lam = (r + B * p - A) / (G + K * B**2)
+    cut = np.isfinite(p_t)
+    pc = np.where(cut, p_t, np.nan)  # cut-off candidates only where there is one
+    apex = np.where(B > 0, A / np.where(B > 0, B, 1.0), np.minimum(p, p_t))
     cands = [
         (p - lam * K * B, r - lam * G),  # cone line
-        (p_t, r),  # cut-off line
-        (p_t, A - B * p_t),  # corner cone/cut-off
-        (np.where(B > 0, A / np.where(B > 0, B, 1.0), np.minimum(p, p_t)), 0 * r),
+        (pc, r),  # cut-off line
+        (pc, A - B * pc),  # corner cone/cut-off
+        (apex, 0 * r),  # apex (B > 0) or the axis of a cylinder (B = 0)
     ]
     best_p, best_r = p.copy(), r.copy()
     best = np.full(p.shape, np.inf)
-    for cp, cr in cands:  # four candidate families, each vectorised
-        cp, cr = np.broadcast_to(cp, p.shape), np.broadcast_to(cr, p.shape)
-        ok = (cr >= -tol) & (cr <= A - B * cp + tol) & (cp <= p_t + tol)
-        ok &= np.isfinite(cp) & np.isfinite(cr)
-        dist = np.where(ok, (cp - p) ** 2 / K + (cr - r) ** 2 / G, np.inf)
-        take = dist < best
-        best = np.where(take, dist, best)
-        best_p = np.where(take, cp, best_p)
-        best_r = np.where(take, np.maximum(cr, 0.0), best_r)
+    with np.errstate(invalid="ignore"):
+        for cp, cr in cands:  # four candidate families, each vectorised
+            ok = np.isfinite(cp) & np.isfinite(cr) & (cr >= -tol) & (cp <= p_t + tol)
+            ok &= cr <= A - B * np.where(ok, cp, 0.0) + tol
+            dist = np.where(ok, (cp - p) ** 2 / K + (cr - r) ** 2 / G, np.inf)
+            take = dist < best
+            best = np.where(take, dist, best)
+            best_p = np.where(take, cp, best_p)
+            best_r = np.where(take, np.maximum(cr, 0.0), best_r)
     return np.where(inside, p, best_p), np.where(inside, r, best_r)
 
 
