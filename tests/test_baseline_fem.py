@@ -129,7 +129,7 @@ def block(n: int = 6, h: float = 0.1, n_walls: int = 0, stress: bool = False):
     g = np.arange(n + 1) * h
     x = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
     mesher = AlphaShapeMesher(h=h, alpha=1.3)
-    active, t = mesher(x)
+    _active, t = mesher(x)
     from skfem import MeshTri
 
     ni = nodal_integration(MeshTri(x.T.copy(), t))
@@ -150,7 +150,7 @@ def test_free_fall_is_exact_with_remeshing(element):
     state = method.initial_state(p, mesher)
     dt = 0.01
     for k in range(5):
-        state, rec = method.advance(state, model, dt, mesher, step=k + 1)
+        state, _rec = method.advance(state, model, dt, mesher, step=k + 1)
     # Backward Euler (theta = 1): v = n g dt exactly; no stress (1e-9 rho g h).
     assert np.allclose(state.v[:, 1], -5 * G * dt, rtol=1e-9, atol=0)
     assert np.allclose(state.v[:, 0], 0.0, atol=1e-12)
@@ -185,7 +185,7 @@ def test_block_at_rest_on_a_rough_floor(element):
     state = method.initial_state(p, mesher)
     dt = 0.01
     for k in range(10):
-        state, rec = method.advance(state, model, dt, mesher, step=k + 1)
+        state, _rec = method.advance(state, model, dt, mesher, step=k + 1)
     tol_f, tol_v = REST_TOL[element]
     assert abs(state.wall_force.sum() / weight - 1) < tol_f
     assert np.max(np.abs(state.v)) < tol_v * G * dt

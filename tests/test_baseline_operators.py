@@ -13,8 +13,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from skfem import Basis, ElementTetP2, ElementTriP2, ElementVector, LinearForm, asm
-from skfem import MeshTet, MeshTri
+from skfem import (
+    Basis,
+    ElementTetP2,
+    ElementTriP2,
+    ElementVector,
+    LinearForm,
+    MeshTet,
+    MeshTri,
+    asm,
+)
 
 from skfem_npfem.baseline import (
     GaussStepData,
