@@ -22,20 +22,22 @@ scikit-fem (:mod:`skfem_npfem.baseline.operators`).  Each step:
 
 P2 specifics (the mid-edge nodes are displacement nodes, not particles): their
 velocity, prescribed motion and fixity are those of the straight edge (mean of
-the two end particles; fixed only when both ends are); masses are
-HRZ-lumped from element densities ``rho_e`` = mean over the element's
-vertices of the particle density ``m_i / V_i`` (``V_i``: the P1 cell volume on
-the step's mesh); gravity is the consistent load ``int rho_e g phi_j`` in
-static steps (exact for the geostatic column) and the lumped ``m_j g`` in
-dynamic ones (the consistent load puts no weight on triangle vertices, so with
-lumped inertia a falling body would stretch; the lumped load makes free fall
-exact and costs an O(h) stress error at rest, 0.5 % on the elastic column with
-20 elements over its height); a wall
-contact force on a mid-edge node is stored half on each end particle, and the
-lagged friction bound is split back as ``mu lambda_i / 3`` (vertex) and
-``mu (lambda_a + lambda_b) / 3`` (mid-edge), which gives each edge the bound
-``mu p L`` under a uniform pressure ``p``.  P1 uses the particle masses and
-``m g``, exactly as N-PFEM.
+the two end particles; fixed only when both ends are); masses are HRZ-lumped
+from the element density ``rho_e``, the density of the element's material (a
+particle-based density ``sum m_i / sum V_i`` over its vertices only for
+materials with ``rho = 0``: with alpha-shape meshes the cell volumes ``V_i``
+change with the diagonals, by up to +-30 % on a lattice, so particle masses
+over current cells are a noisy density); gravity is the consistent load ``int
+rho_e g phi_j`` in static steps (exact for the geostatic column) and the lumped
+``m_j g`` in dynamic ones (the consistent load puts no weight on triangle
+vertices, so with lumped inertia a falling body would stretch; the lumped load
+makes free fall exact and costs an O(h) stress error at rest, 0.5 % on the
+elastic column with 20 elements over its height); a wall contact force on a
+mid-edge node is stored half on each end particle, and the lagged friction
+bound is split back as ``mu lambda_i / 3`` (vertex) and ``mu (lambda_a +
+lambda_b) / 3`` (mid-edge), which gives each edge the bound ``mu p L`` under a
+uniform pressure ``p``. P1 uses the particle masses and ``m g``, exactly as
+N-PFEM.
 """
 
 from __future__ import annotations
@@ -215,12 +217,16 @@ class FemRemap:
             lagged = lam[active]
         else:
             t = gm.mesh.t
-            vol_e = gm.points.weights.reshape(gm.n_elements, gm.nq).sum(axis=1)
-            cell_v = np.bincount(
-                t.ravel(), np.tile(vol_e / (d + 1), d + 1), minlength=gm.n_vertices
-            )
-            rho_i = state.mass[active] / cell_v
-            rho_e = rho_i[t].mean(axis=0)
+            rho_mat = np.array([m.rho for m in model.materials])
+            rho_e = rho_mat[_element_material(state.material, active[t].T)]
+            light = rho_e <= 0.0
+            if np.any(light):  # weightless material: density of the particles
+                vol_e = gm.points.weights.reshape(gm.n_elements, gm.nq).sum(axis=1)
+                cell_v = np.bincount(
+                    t.ravel(), np.tile(vol_e / (d + 1), d + 1), minlength=gm.n_vertices
+                )
+                m_act = state.mass[active]
+                rho_e[light] = (m_act[t].sum(0) / cell_v[t].sum(0))[light]
             mass = lumped_masses(gm, rho_e)
             if model.mode == "static":
                 force = body_force(gm, rho_e, g)
