@@ -272,6 +272,14 @@ class FemRemap:
             )
         if state.dim != model.dim:
             raise ParameterError("state", f"{state.dim}D", f"{model.dim}D positions")
+        nq = quadrature(model.dim, self.element)[1].size
+        if state.gp_stress.shape[0] != nq * state.cells.shape[0]:
+            raise ParameterError(
+                "element",
+                self.element,
+                f"the element of the state ({state.nq} Gauss points per element, "
+                f"{self.element} has {nq}): use the FemRemap that made the state",
+            )
         t0 = time.perf_counter()
         active, local_t = mesh_source(state.x)
         cells = np.ascontiguousarray(active[local_t].T)
