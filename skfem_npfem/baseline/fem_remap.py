@@ -283,16 +283,50 @@ class FemRemap:
         t0 = time.perf_counter()
         active, local_t = mesh_source(state.x)
         cells = np.ascontiguousarray(active[local_t].T)
+        ta = time.perf_counter()
         sig_gp, eps_gp, info = self.remap(state, cells, model)
-        t_map = time.perf_counter() - t0
+        t_map = time.perf_counter() - ta
         gm = gauss_mesh(state.x[active], local_t, self.element, model.components)
+        data, wall_ids = self._step_data(state, model, dt, gm, active, cells, sig_gp)
+        t1 = time.perf_counter()
+        sol = solve_gauss_step(data, model.solver, step=step)
+        t2 = time.perf_counter()
+        new, sol_out = self._update(state, model, dt, gm, active, cells, sol, eps_gp)
+        new_wall = self._wall_forces(state, gm, active, data.contacts, wall_ids, sol)
+        new = new.replace(wall_force=new_wall)
+        timings = {
+            "mesh": t1 - t0 - t_map,
+            "transfer": t_map,
+            **sol.timings,
+            "update": time.perf_counter() - t2,
+        }
+        rec = StepRecord(
+            step=-1 if step is None else step,
+            time=float("nan"),
+            dt=dt,
+            status=sol.status,
+            iterations=sol.iterations,
+            timings=timings,
+            n_active=int(active.size),
+            n_inactive=int(state.n - active.size),
+            mesh_volume=float(gm.points.weights.sum()),
+            n_contacts=data.contacts.size,
+            extra=dict(info),
+            **energies(new, model),
+            solution=sol_out,
+            active=active,
+            local_t=local_t,
+        )
+        return new, rec
+
+    def _step_data(self, state, model, dt, gm, active, cells, sig_gp):
+        """The stress-point program's data for this step, and contact walls."""
         mass, force, fixed, v_pres, v, lagged = self._node_data(
             state, model, gm, active
         )
         mat_gp = np.repeat(_element_material(state.material, cells), gm.nq)
-        h = float(np.mean(gm.points.weights.reshape(-1, gm.nq).sum(1))) ** (
-            1 / model.dim
-        )
+        vol_e = gm.points.weights.reshape(-1, gm.nq).sum(axis=1)
+        h = float(np.mean(vol_e)) ** (1 / model.dim)
         contacts, wall_ids = node_contacts(
             model, gm.node_x, v, fixed, v_pres, lagged, dt, h
         )
@@ -313,36 +347,7 @@ class FemRemap:
             dynamic=model.mode == "dynamic",
             stress_scale=model.stress_scale,
         )
-        t1 = time.perf_counter()
-        sol = solve_gauss_step(data, model.solver, step=step)
-        t2 = time.perf_counter()
-        new, sol_out = self._update(state, model, dt, gm, active, cells, sol, eps_gp)
-        new_wall = self._wall_forces(state, gm, active, contacts, wall_ids, sol)
-        new = new.replace(wall_force=new_wall)
-        timings = {
-            "mesh": t1 - t0 - t_map,
-            "transfer": t_map,
-            **sol.timings,
-            "update": time.perf_counter() - t2,
-        }
-        rec = StepRecord(
-            step=-1 if step is None else step,
-            time=float("nan"),
-            dt=dt,
-            status=sol.status,
-            iterations=sol.iterations,
-            timings=timings,
-            n_active=int(active.size),
-            n_inactive=int(state.n - active.size),
-            mesh_volume=float(gm.points.weights.sum()),
-            n_contacts=contacts.size,
-            extra=dict(info),
-            **energies(new, model),
-            solution=sol_out,
-            active=active,
-            local_t=local_t,
-        )
-        return new, rec
+        return data, wall_ids
 
     def _update(self, state, model, dt, gm, active, cells, sol, eps_gp):
         """Rotate Gauss-point stresses, recover nodal output, move particles."""
