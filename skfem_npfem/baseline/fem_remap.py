@@ -34,10 +34,10 @@ vertices, so with lumped inertia a falling body would stretch; the lumped load
 makes free fall exact and costs an O(h) stress error at rest, 0.5 % on the
 elastic column with 20 elements over its height); a wall contact force on a
 mid-edge node is stored half on each end particle, and the lagged friction
-bound is split back as ``mu lambda_i / 3`` (vertex) and ``mu (lambda_a +
-lambda_b) / 3`` (mid-edge), which gives each edge the bound ``mu p L`` under a
-uniform pressure ``p``. P1 uses the particle masses and ``m g``, exactly as
-N-PFEM.
+bound is split back with the consistent P2 shares (``_split_wall_forces``): the
+total bound is ``mu`` times the total stored force, as for P1 and N-PFEM.
+
+P1 uses the particle masses and ``m g``, exactly as N-PFEM.
 """
 
 from __future__ import annotations
@@ -108,6 +108,26 @@ def _element_material(material: np.ndarray, cells: np.ndarray) -> np.ndarray:
     m = material[cells]  # (ne, d+1)
     counts = (m[:, :, None] == m[:, None, :]).sum(axis=2)
     return m[np.arange(m.shape[0]), np.argmax(counts, axis=1)]
+
+
+def _split_wall_forces(lam, active, a, b) -> np.ndarray:
+    """Lagged wall forces of P2 nodes from the per-particle stored forces.
+
+    An edge lies on a wall when both ends touched it.  With ``k_i`` such edges
+    at particle ``i``, the vertex gets ``lam_i / 3`` (``lam_i`` if ``k_i = 0``)
+    and an edge's mid-node ``2/3 (lam_a / k_a + lam_b / k_b)``: the consistent
+    P2 shares (1/6, 2/3, 1/6 of ``p L`` per edge) under a uniform pressure,
+    and in every case the total equals the total stored force.
+    """
+    noise = 1e-8 * np.max(np.abs(lam), axis=0, initial=0.0)
+    on = (lam[a] > noise) & (lam[b] > noise)  # (n_edges, n_walls)
+    k = np.zeros(lam.shape)
+    for ends in (a, b):  # the two ends of every edge
+        np.add.at(k, ends, on.astype(float))
+    per_edge = np.divide(lam, k, out=np.zeros(lam.shape), where=k > 0)
+    vertex = np.where(k[active] > 0, lam[active] / 3.0, lam[active])
+    mid = np.where(on, 2.0 / 3.0 * (per_edge[a] + per_edge[b]), 0.0)
+    return np.concatenate([vertex, mid])
 
 
 def _gauss_points(x: np.ndarray, cells: np.ndarray, element: str) -> np.ndarray:
@@ -232,7 +252,7 @@ class FemRemap:
                 force = body_force(gm, rho_e, g)
             else:  # lumped, so that free fall is exact (see module docstring)
                 force = mass[:, None] * g[None, :]
-            lagged = np.concatenate([lam[active] / 3.0, (lam[a] + lam[b]) / 3.0])
+            lagged = _split_wall_forces(lam, active, a, b)
         return mass, force, fixed, v_pres, v, lagged
 
     def advance(
