@@ -192,3 +192,40 @@ def test_block_at_rest_on_a_rough_floor(element):
     assert abs(state.wall_force.sum() / weight - 1) < tol_f
     assert np.max(np.abs(state.v)) < tol_v * G * dt
     assert np.max(state.gp_eps_p) < 1e-9
+
+
+def test_mapped_stresses_outside_the_cone_are_returned_and_counted():
+    # Tresca stresses on the yield surface (R = c) with a direction that turns
+    # across the body: recovery fits and interpolates them, and near the
+    # boundary the fitted planes overshoot the cone.  Every mapped stress with
+    # R > c must come back to R = c (1e-12) and be counted; the others must be
+    # the transferred values unchanged.
+    from skfem_npfem.baseline.transfer import transfer_values
+    from skfem_npfem.materials import Tresca
+
+    c = 1.0e4
+    p, _ = block(n=8, h=0.125)
+    model = Model(dim=2, materials=[Tresca(E, NU, RHO, c=c)])
+    method = FemRemap("p2", "recovery")
+    state = method.initial_state(p, AlphaShapeMesher(h=0.125, seed=0))
+    gp = gauss_points(state.x, state.cells, "p2")
+    angle = 3.0 * gp[:, 0] ** 2 + 2.0 * gp[:, 1]
+    sig = np.zeros((gp.shape[0], 4))
+    sig[:, 0] = -2 * c + c * np.cos(angle)
+    sig[:, 1] = -2 * c - c * np.cos(angle)
+    sig[:, 2] = -2 * c
+    sig[:, 3] = c * np.sin(angle)
+    state = state.replace(gp_stress=sig)
+    act, loc = AlphaShapeMesher(h=0.125, seed=7)(state.x)
+    cells = np.ascontiguousarray(act[loc].T)
+    moved, _, info = method.remap(state, cells, model)
+    raw, _ = transfer_values(
+        "recovery", state.x, state.cells, gp, sig, gauss_points(state.x, cells, "p2")
+    )
+    R_raw = np.hypot(0.5 * (raw[:, 0] - raw[:, 1]), raw[:, 3])
+    outside = R_raw > c * (1 + 1e-12)
+    assert info["remapped"] and info["yield_violations"] == int(outside.sum()) > 0
+    R = np.hypot(0.5 * (moved[:, 0] - moved[:, 1]), moved[:, 3])
+    assert np.all(R <= c * (1 + 1e-12))
+    assert np.allclose(R[outside], c, rtol=1e-12)
+    assert np.array_equal(moved[~outside], raw[~outside])

@@ -118,6 +118,13 @@ class SPFEM:
         ):
             raise ParameterError("damping", a, "a finite number >= 0 (1/s)")
 
+    def initial_state(self, p: Particles, mesh_source: MeshSource) -> Particles:
+        """The particles themselves (SPFEM keeps its state on them).
+
+        Present so that every method offers ``initial_state`` and ``advance``.
+        """
+        return p
+
     def _mesh(self, p: Particles, model: Model, mesh_source: MeshSource):
         active, local_t = mesh_source(p.x)
         ni = nodal_integration(make_mesh(p.x[active], local_t))
