@@ -30,7 +30,6 @@ Writes ``docs/validation/comparison/locking.json`` and ``locking.png``.
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 
@@ -51,8 +50,9 @@ from skfem import (
 )
 from skfem.helpers import ddot, div, sym_grad
 
-from skfem_npfem.baseline import GaussStepData, gauss_mesh, solve_gauss_step
-from skfem_npfem.conic import Contacts, StepData, solve_step
+from skfem_npfem import Contacts, StepData, solve_step
+from skfem_npfem.baseline import gauss_mesh
+from skfem_npfem.baseline.reporting import save_png, write_result
 from skfem_npfem.materials import LinearElastic
 from skfem_npfem.smoothing import nodal_integration
 
@@ -96,7 +96,7 @@ def npfem(n: int, nu: float) -> float:
     force = np.zeros((N, 2))
     force[:, 1] = edge_load(mesh, ElementTriP1())
     data = StepData(
-        ni=nodal_integration(mesh, COMPS),
+        operator=nodal_integration(mesh, COMPS),
         materials=[LinearElastic(E, nu)],
         material=np.zeros(N, int),
         sigma_n=np.zeros((N, 4)),
@@ -115,8 +115,8 @@ def fem(n: int, nu: float, element: str) -> float:
     N = gm.node_x.shape[0]
     force = np.zeros((N, 2))
     force[:, 1] = edge_load(mesh, ElementTriP1() if element == "p1" else ElementTriP2())
-    data = GaussStepData(
-        points=gm.points,
+    data = StepData(
+        operator=gm.points,
         materials=[LinearElastic(E, nu)],
         material=np.zeros(gm.points.n_points, int),
         sigma_n=np.zeros((gm.points.n_points, 4)),
@@ -125,7 +125,7 @@ def fem(n: int, nu: float, element: str) -> float:
         du_prescribed=np.zeros((N, 2)),
         contacts=Contacts.empty(2),
     )
-    du = solve_gauss_step(data).du
+    du = solve_step(data).du
     return float(du[np.argmin(np.linalg.norm(gm.node_x - CORNER, axis=1)), 1])
 
 
@@ -224,8 +224,7 @@ def plot(result: dict, path: Path) -> None:
     axes[0].set_ylabel("u_y(C) / reference")
     axes[0].legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_png(fig, path)
 
 
 def table(result: dict) -> str:
@@ -259,8 +258,7 @@ def main(argv: list[str] | None = None) -> dict:
     result["quick"] = args.quick
     result["wall_time"] = time.perf_counter() - start
     if not args.quick:
-        args.out.mkdir(parents=True, exist_ok=True)
-        (args.out / "locking.json").write_text(json.dumps(result, indent=1) + "\n")
+        write_result(args.out / "locking.json", result)
         if not args.no_plot:
             plot(result, args.out / "locking.png")
     print(table(result))

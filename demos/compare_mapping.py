@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import math
 import time
 from pathlib import Path
@@ -49,12 +48,15 @@ from pathlib import Path
 import numpy as np
 
 from skfem_npfem.baseline import FemRemap
-from skfem_npfem.baseline.operators import quadrature
+from skfem_npfem.baseline.fem_nodes import gauss_points
+from skfem_npfem.baseline.reporting import save_png, write_result
 from skfem_npfem.baseline.transfer import recover_nodal
+from skfem_npfem.kinematics import tensor_to_voigt, voigt_to_tensor
 from skfem_npfem.materials import LinearElastic
+from skfem_npfem.model import Model
 from skfem_npfem.pfem import AlphaShapeMesher
 from skfem_npfem.scenes import get_scene
-from skfem_npfem.simulation import Model, advance, tensor_to_voigt, voigt_to_tensor
+from skfem_npfem.step import advance
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "docs" / "validation" / "comparison"
@@ -76,8 +78,7 @@ def _column(spacing: float):
 
 def _nodal(state) -> np.ndarray:
     """Recovered particle stresses of a FEM state (the user's output)."""
-    bary, _ = quadrature(state.dim, "p1" if state.nq == 1 else "p2")
-    gp = np.einsum("qa,ead->eqd", bary, state.x[state.cells]).reshape(-1, state.dim)
+    gp = gauss_points(state.x, state.cells, "p1" if state.nq == 1 else "p2")
     return recover_nodal(state.x, state.cells, gp, state.gp_stress)
 
 
@@ -211,10 +212,9 @@ def _fem_rigid(e, t, X, h, model, d_ang, place, pull_back, n_steps) -> dict:
     method = FemRemap(e, t)
     p = Particles.create(X, np.ones(X.shape[0]), stress=prestress(X))
     st = method.initial_state(p, AlphaShapeMesher(h=h, alpha=1.3, seed=0))
-    bary, _ = quadrature(2, e)
 
     def gp_of(state):
-        return np.einsum("qa,ead->eqd", bary, state.x[state.cells]).reshape(-1, 2)
+        return gauss_points(state.x, state.cells, e)
 
     # Start from the exact field at the Gauss points (not its interpolant).
     st = st.replace(gp_stress=prestress(gp_of(st)))
@@ -264,8 +264,7 @@ def plot(result: dict, path: Path) -> None:
     axes[1].set_title("pre-stressed block moved rigidly")
     axes[1].legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_png(fig, path)
 
 
 def main(argv: list[str] | None = None) -> dict:
@@ -283,8 +282,7 @@ def main(argv: list[str] | None = None) -> dict:
     }
     result["wall_time"] = time.perf_counter() - start
     if not args.quick:
-        args.out.mkdir(parents=True, exist_ok=True)
-        (args.out / "mapping.json").write_text(json.dumps(result, indent=1) + "\n")
+        write_result(args.out / "mapping.json", result)
         if not args.no_plot:
             plot(result, args.out / "mapping.png")
     print(table(result))

@@ -75,6 +75,14 @@ class Simulation:
         Progress line on stderr (None: only when stderr is a terminal).
     meta : dict
         Stored in checkpoints (scene name, parameters).
+    extra_point_data : callable or None
+        ``f(particles) -> dict`` of more point data for the VTU files.
+    stepper : callable or None
+        The step, ``stepper(particles, model, dt, mesh_source, step=k) ->
+        (particles, StepResult)``; None: N-PFEM's
+        :func:`~skfem_npfem.step.advance`.  Another method (FEM with remapping,
+        explicit SPFEM: :mod:`skfem_npfem.baseline`) plugs in here and may keep
+        more state in a subclass of :class:`Particles`; checkpoints keep it.
     """
 
     def __init__(
@@ -96,6 +104,7 @@ class Simulation:
         progress: bool | None = None,
         meta: dict | None = None,
         extra_point_data: Callable[[Particles], dict[str, np.ndarray]] | None = None,
+        stepper: Callable[..., tuple[Particles, StepResult]] | None = None,
     ) -> None:
         if not (isinstance(dt, int | float) and math.isfinite(dt) and dt > 0):
             raise ParameterError("dt", dt, "a finite time step > 0 (s)")
@@ -124,6 +133,7 @@ class Simulation:
         self.progress = sys.stderr.isatty() if progress is None else progress
         self.meta = dict(meta or {})
         self.extra_point_data = extra_point_data
+        self.stepper = stepper
         self.time = 0.0
         self.step = 0
         self.records: list[StepRecord] = []
@@ -188,9 +198,11 @@ class Simulation:
 
         Restores the particles, step, time, the adaptive time-step state and the
         step records, so that the continued run repeats the uninterrupted one
-        step for step.  Returns the checkpoint's metadata.
+        step for step.  The particles are read back as the class of the current
+        ones (a method's state subclass keeps its extra arrays).  Returns the
+        checkpoint's metadata.
         """
-        self.particles, meta = read_checkpoint(path)
+        self.particles, meta = read_checkpoint(path, type(self.particles))
         self.step = int(meta["step"])
         self.time = float(meta["time"])
         self.dt = float(meta["dt"])
@@ -337,9 +349,8 @@ class Simulation:
             self.dt = min(self.dt_max, 2 * dt, 0.9 * dt * limit / du)
 
     def _advance(self, dt: float) -> tuple[Particles, StepResult]:
-        return advance(
-            self.particles, self.model, dt, self.mesh_source, step=self.step + 1
-        )
+        step = self.stepper if self.stepper is not None else advance
+        return step(self.particles, self.model, dt, self.mesh_source, step=self.step + 1)
 
     def _print_progress(self, rec, start, n_target, t_end) -> None:
         done = (

@@ -10,7 +10,7 @@ from skfem_npfem.errors import ParameterError
 from skfem_npfem.materials import LinearElastic
 from skfem_npfem.particles import Particles
 from skfem_npfem.pfem import AlphaShapeMesher
-from skfem_npfem.simulation import Model
+from skfem_npfem.model import Model
 
 
 @pytest.mark.parametrize(

@@ -4,9 +4,9 @@ References: the patch test (benchmarks.md E5: a linear displacement gives the
 exact constant strain at every Gauss point), scikit-fem's own assembly of
 ``int sigma : eps(v)`` (the operator must equal it), the element area, the
 HRZ lumping fractions of the P2 triangle/tet (1/19, 16/57; 1/36, 4/27, from
-the consistent mass matrix diagonals 1/30 : 8/45 and 1/70 : 8/105), and the
-library's N-PFEM step (the stress-point program must reproduce
-``conic.solve_step`` with the nodal operator).
+the consistent mass matrix diagonals 1/30 : 8/45 and 1/70 : 8/105).  The
+library's cone step with stress points other than the nodes is tested in
+``tests/test_stress_points.py``.
 """
 
 from __future__ import annotations
@@ -24,16 +24,8 @@ from skfem import (
     asm,
 )
 
-from skfem_npfem.baseline import (
-    GaussStepData,
-    from_nodal_integration,
-    gauss_mesh,
-    solve_gauss_step,
-)
+from skfem_npfem.baseline import gauss_mesh
 from skfem_npfem.baseline.operators import body_force, lumped_masses, quadrature
-from skfem_npfem.conic import Contacts, StepData, solve_step
-from skfem_npfem.materials import LinearElastic, MohrCoulomb
-from skfem_npfem.smoothing import nodal_integration
 
 FULL = {2: (0, 1, 2, 3), 3: (0, 1, 2, 3, 4, 5)}
 
@@ -77,7 +69,7 @@ def test_patch_test_and_weights(dim, element):
     assert np.max(np.abs(gm.points.strain(u) - voigt(A))) < 1e-12
     assert np.max(np.abs(gm.points.gradient(u) - A)) < 1e-12
     area = 2.0 if dim == 2 else 6.0  # [0,1] x [0,2] (x [0,3])
-    assert abs(gm.points.weights.sum() - area) < 1e-12
+    assert abs(gm.points.volumes.sum() - area) < 1e-12
 
 
 @pytest.mark.parametrize("dim", [2, 3])
@@ -125,7 +117,7 @@ def test_hrz_masses_and_consistent_load(dim, vertex, edge):
     x, t = one[0][np.unique(one[1])], one[1]
     gm = gauss_mesh(x, t, "p2", FULL[dim])
     mass = lumped_masses(gm, np.array([1.0]))
-    vol = gm.points.weights.sum()
+    vol = gm.points.volumes.sum()
     assert np.allclose(mass[: dim + 1] / vol, vertex, rtol=1e-12)
     assert np.allclose(mass[dim + 1 :] / vol, edge, rtol=1e-12)
     x, t = jittered(dim, seed=4)
@@ -133,59 +125,8 @@ def test_hrz_masses_and_consistent_load(dim, vertex, edge):
     rho = np.full(t.shape[1], 1800.0)
     mass = lumped_masses(gm, rho)
     assert mass.min() > 0
-    assert abs(mass.sum() / (1800.0 * gm.points.weights.sum()) - 1) < 1e-12
+    assert abs(mass.sum() / (1800.0 * gm.points.volumes.sum()) - 1) < 1e-12
     g = np.zeros(dim)
     g[-1] = -9.81
     f = body_force(gm, rho, g)
     assert abs(f[:, -1].sum() / (-9.81 * mass.sum()) - 1) < 1e-12
-
-
-def test_stress_point_program_reproduces_the_library_step():
-    # With the nodal operator (stress points = nodes), the duplicated cone
-    # program equals conic.solve_step to round-off: dynamic theta1 = 0.8,
-    # frozen-friction Mohr-Coulomb with cut-off, floor contacts with friction,
-    # prescribed dofs.
-    m = MeshTri.init_tensor(np.linspace(0, 1, 7), np.linspace(0, 2, 13))
-    x, n = m.p.T, m.p.shape[1]
-    rng = np.random.default_rng(5)
-    for mat in (
-        LinearElastic(1e7, 0.3, 2000),
-        MohrCoulomb(1e7, 0.3, 2000, c=5e3, phi=30, psi=5, tension_cutoff=True),
-    ):
-        ni = nodal_integration(m, (0, 1, 3))
-        fixed = np.zeros((n, 2), bool)
-        fixed[x[:, 0] < 1e-9, 0] = True
-        fixed[x[:, 1] > 2 - 1e-9, 1] = True
-        base = np.flatnonzero(x[:, 1] < 1e-9)
-        contacts = Contacts(
-            base,
-            np.tile([0.0, 1.0], (base.size, 1)),
-            np.zeros(base.size),
-            np.full(base.size, 50.0),
-        )
-        sig = np.zeros((n, 4))
-        sig[:, 1] = -2000 * 9.81 * (2 - x[:, 1])
-        sig[:, 0] = sig[:, 2] = 0.5 * sig[:, 1]
-        force = np.zeros((n, 2))
-        force[:, 1] = -1.5 * 2000 * 9.81 * ni.volumes
-        kw = dict(
-            materials=[mat],
-            material=np.zeros(n, int),
-            sigma_n=sig,
-            force=force,
-            fixed=fixed,
-            du_prescribed=np.where(fixed, -1e-4, 0.0),
-            contacts=contacts,
-            dt=0.01,
-            mass=2000 * ni.volumes,
-            v_n=0.01 * rng.normal(size=(n, 2)),
-            theta1=0.8,
-            theta2=1.0,
-            dynamic=True,
-        )
-        ref = solve_step(StepData(ni=ni, **kw))
-        ours = solve_gauss_step(GaussStepData(points=from_nodal_integration(ni), **kw))
-        assert ours.iterations == ref.iterations
-        for key in ("du", "sigma", "deps_p", "reaction", "lambda_n", "lambda_t"):
-            a, b = getattr(ours, key), getattr(ref, key)
-            assert np.max(np.abs(a - b)) <= 1e-12 * max(np.max(np.abs(b)), 1e-30), key

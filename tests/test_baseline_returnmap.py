@@ -18,7 +18,7 @@ import pytest
 from skfem import MeshTet, MeshTri
 
 from skfem_npfem.baseline.returnmap import elastic_trial, project_invariants, return_map
-from skfem_npfem.conic import Contacts, SolverOptions, StepData, solve_step
+from skfem_npfem import Contacts, SolverOptions, StepData, solve_step
 from skfem_npfem.materials import DruckerPrager, MohrCoulomb, Tresca, VonMises
 from skfem_npfem.smoothing import nodal_integration
 
@@ -51,7 +51,7 @@ def socp_step(mat, comps, grad, sig_n):
     fixed = np.zeros((n, d), bool)
     fixed[mesh.boundary_nodes()] = True
     data = StepData(
-        ni=nodal_integration(mesh, comps),
+        operator=nodal_integration(mesh, comps),
         materials=[mat],
         material=np.zeros(n, int),
         sigma_n=np.tile(sig_n, (n, 1)),

@@ -30,7 +30,10 @@ from skfem_npfem.materials import LinearElastic, Tresca, compliance_matrix
 from skfem_npfem.particles import Particles
 from skfem_npfem.remesh import alpha_shape
 from skfem_npfem.scenes import get_scene
-from skfem_npfem.simulation import FixedMesh, Model, advance
+from skfem_npfem.model import Model
+from skfem_npfem.pfem import FixedMesh
+from skfem_npfem.simulation import Simulation
+from skfem_npfem.step import advance
 from skfem_npfem.smoothing import nodal_integration
 
 E, NU, RHO, G = 1.0e7, 0.3, 2000.0, 9.81
@@ -89,17 +92,23 @@ def column(height=4.0, spacing=0.125):
     return sim.particles, sim.model, sim.mesh_source
 
 
+def run(method: SPFEM, p, model, mesh_source, dt: float, t_end: float):
+    """Steps of ``dt`` to ``t_end`` through the time loop; (particles, substeps)."""
+    sim = Simulation(p, model, mesh_source, dt, stepper=method.advance)
+    sim.run(t_end=t_end)
+    return sim.particles, sum(r.extra["substeps"] for r in sim.records)
+
+
 def test_elastic_column_settles_to_the_static_solution():
     p, model, ms = column()
     H = 4.0
     M = model.materials[0].p_wave_modulus
     omega1 = 2 * math.pi / (4 * H / math.sqrt(M / RHO))
     method = SPFEM(damping=2 * omega1)
-    dt = 0.9 * method.stable_dt(p, model, ms)
-    end, info = method.run(p, model, dt, ms, t_end=0.6)
-    # 0.6 s = 3 first-mode periods: 1072 steps of 0.56 ms (N-PFEM: 1 static
-    # step, or ~20 implicit steps of omega dt ~ 1).
-    assert info["steps"] > 1000
+    end, substeps = run(method, p, model, ms, 0.01, 0.6)
+    # 0.6 s = 3 first-mode periods: 60 steps of 10 ms in 1080 substeps of
+    # 0.56 ms (N-PFEM: 1 static step, or ~20 implicit steps of omega dt ~ 1).
+    assert 1000 < substeps < 1200
     sv = -RHO * G * (H - p.x[:, 1])
     rel = np.linalg.norm
     assert rel(end.stress[:, 1] - sv) / rel(sv) < 0.01  # measured 3.4e-3
@@ -130,8 +139,7 @@ def test_tresca_simple_shear_saturates_at_c():
     model = Model(dim=2, materials=[Tresca(E, NU, RHO, c=c)], gravity=0.0)
     ms = FixedMesh(m.t)
     method = SPFEM(damping=200.0)
-    dt = 0.9 * method.stable_dt(p, model, ms)
-    end, _ = method.run(p, model, dt, ms, t_end=0.5)
+    end, _ = run(method, p, model, ms, 0.01, 0.5)
     s = end.stress
     R = np.hypot(0.5 * (s[:, 0] - s[:, 1]), s[:, 3])
     assert np.allclose(R, c, rtol=1e-9)  # on the yield surface
@@ -143,16 +151,17 @@ def test_tresca_simple_shear_saturates_at_c():
 
 def test_time_step_above_the_stable_one_is_refused_before_any_step():
     p, model, ms = column(spacing=0.25)
-    method = SPFEM()
-    stable = method.stable_dt(p, model, ms)
-    calls = []
+    stable = SPFEM().stable_dt(p, model, ms)
+    assert SPFEM(explicit_dt=stable).check(p, model, ms) == stable
     with pytest.raises(ParameterError, match="stable explicit step"):
-        method.run(
-            p, model, 1.01 * stable, ms, steps=3, callback=lambda *a: calls.append(a)
-        )
-    assert not calls
+        SPFEM(explicit_dt=1.01 * stable).check(p, model, ms)
+    # Mid-run (cells shrink) a step stops once it exceeds the margin.
+    with pytest.raises(ParameterError, match="stable explicit step"):
+        SPFEM(explicit_dt=1.3 * stable).advance(p, model, 0.01, ms, step=7)
     static = Model(dim=2, materials=model.materials, mode="static")
-    with pytest.raises(ParameterError, match="explicit and dynamic"):
-        method.run(p, static, 0.5 * stable, ms, steps=1)
+    with pytest.raises(ParameterError, match="SPFEM is explicit"):
+        SPFEM().check(p, static, ms)
     with pytest.raises(ParameterError, match="damping"):
         SPFEM(damping=-1.0)
+    with pytest.raises(ParameterError, match="explicit_dt"):
+        SPFEM(explicit_dt=0.0)

@@ -3,7 +3,7 @@
 :func:`make_method` is the one place where a method name and its options are
 checked, so that a scene or the command line can refuse a bad combination
 (an unknown method, an ``element`` or ``transfer`` given to a method that has
-none, a ``damping`` given to an implicit method) with one
+none, a ``damping`` or ``explicit_dt`` given to an implicit method) with one
 :class:`~skfem_npfem.errors.ParameterError` before any work.
 """
 
@@ -24,7 +24,7 @@ METHODS = ("npfem", "fem-remap", "spfem")
 METHOD_OPTIONS: dict[str, tuple[str, ...]] = {
     "npfem": (),
     "fem-remap": ("element", "transfer"),
-    "spfem": ("damping",),
+    "spfem": ("damping", "explicit_dt"),
 }
 
 
@@ -35,8 +35,8 @@ def make_method(name: str, **options: Any) -> FemRemap | SPFEM | None:
     ----------
     name : {"npfem", "fem-remap", "spfem"}
     **options
-        ``element``, ``transfer`` (fem-remap) or ``damping`` (spfem); options
-        given as None are ignored.
+        ``element``, ``transfer`` (fem-remap) or ``damping``, ``explicit_dt``
+        (spfem); options given as None are ignored.
 
     Raises
     ------

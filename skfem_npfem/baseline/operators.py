@@ -5,7 +5,9 @@ The cone step of N-PFEM needs, for a set of *stress points* ``g``, the weights
 that ``f_int = G @ sigma``.  With nodal integration the stress points are the
 mesh nodes (``w_i = V_i``, :mod:`skfem_npfem.smoothing`); for the classical FEM
 baseline they are the Gauss points of the elements (``w_g = W_q |det J_e|``).
-:class:`StressPoints` holds either, so one cone program serves both.
+:class:`StressPoints` is that Gauss-point operator; it implements the
+:class:`~skfem_npfem.program.StrainOperator` protocol, so the library's one
+cone program (:func:`skfem_npfem.conic.solve_step`) serves both.
 
 The Gauss-point operator is built from a scikit-fem ``Basis`` of
 ``ElementVector(ElementTriP1|ElementTriP2|ElementTetP1|ElementTetP2)`` with an
@@ -44,18 +46,15 @@ from skfem import (
     ElementTriP2,
     ElementVector,
     Mesh,
-    MeshTet,
-    MeshTri,
 )
 
 from ..errors import ParameterError
-from ..smoothing import NodalIntegration
+from ..remesh import p1_mesh
 
 __all__ = [
     "ELEMENTS",
     "GaussMesh",
     "StressPoints",
-    "from_nodal_integration",
     "gauss_mesh",
     "quadrature",
 ]
@@ -115,11 +114,12 @@ def quadrature(dim: int, element: str) -> tuple[np.ndarray, np.ndarray]:
 
 @dataclass(frozen=True)
 class StressPoints:
-    """Stress points of one mesh: weights, internal-force operator, gradients.
+    """Gauss points of one mesh as a strain operator of the cone program.
 
-    This is the operator the cone program needs (see
-    :func:`skfem_npfem.baseline.program.solve_gauss_step`): its own number of
-    stress points and weights, separate from the displacement nodes.
+    Implements :class:`~skfem_npfem.program.StrainOperator` with its own number
+    of stress points (``n_points = nq * n_elements``), separate from the
+    displacement nodes, so :func:`skfem_npfem.conic.solve_step` solves the
+    FEM step unchanged.
 
     Attributes
     ----------
@@ -127,64 +127,58 @@ class StressPoints:
         Spatial dimension.
     components : tuple of int
         Full-Voigt components carried as stress variables.
-    weights : ndarray (n_points,)
-        Integration weight of each point (``w_q |det J|`` or the cell volume).
+    volumes : ndarray (n_points,)
+        Integration weight ``w_q |det J_e|`` of each point.
     G : scipy.sparse.csc_matrix (d * n_nodes, n_points * n_s)
         ``f_int = G @ sigma`` (node-major dofs, point-major stresses).
-    n_nodes : int
+    nodes : int
         Number of displacement nodes.
-    grad : scipy.sparse.csr_matrix (n_points * d * d, d * n_nodes) or None
+    grad : scipy.sparse.csr_matrix (n_points * d * d, d * n_nodes)
         Displacement gradient at the points: ``(grad @ u).reshape(-1, d, d)``.
     """
 
     dim: int
     components: tuple[int, ...]
-    weights: np.ndarray
+    volumes: np.ndarray
     G: sp.csc_matrix
-    n_nodes: int
-    grad: sp.csr_matrix | None = None
+    nodes: int
+    grad: sp.csr_matrix
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of displacement nodes."""
+        return int(self.nodes)
 
     @property
     def n_points(self) -> int:
         """Number of stress points."""
-        return int(self.weights.shape[0])
+        return int(self.volumes.shape[0])
 
     @property
     def n_stress(self) -> int:
         """Stress variables per point."""
         return len(self.components)
 
-    @property
-    def volumes(self) -> np.ndarray:
-        """Alias of :attr:`weights` (the name nodal integration uses)."""
-        return self.weights
+    def check(self) -> None:
+        """Refuse a mesh with degenerate elements (zero or non-finite weights)."""
+        bad = ~(np.isfinite(self.volumes) & (self.volumes > 0))
+        if np.any(bad):
+            raise ParameterError(
+                "mesh",
+                f"{int(bad.sum())} Gauss point(s) of zero or non-finite weight "
+                f"(first {int(np.flatnonzero(bad)[0])})",
+                "elements of nonzero size",
+            )
 
     def strain(self, u: np.ndarray) -> np.ndarray:
         """Strains (engineering shear) at the points, shape (n_points, n_s)."""
         u = np.asarray(u, dtype=float).reshape(-1)
-        return (self.G.T @ u).reshape(self.n_points, -1) / self.weights[:, None]
+        return (self.G.T @ u).reshape(self.n_points, -1) / self.volumes[:, None]
 
     def gradient(self, u: np.ndarray) -> np.ndarray:
         """Displacement gradients ``du_k/dx_l`` at the points, (n_points, d, d)."""
-        if self.grad is None:
-            raise ValueError("these stress points carry no gradient operator")
         u = np.asarray(u, dtype=float).reshape(-1)
         return (self.grad @ u).reshape(-1, self.dim, self.dim)
-
-
-def from_nodal_integration(ni: NodalIntegration) -> StressPoints:
-    """Nodal integration as stress points (points = nodes, weights = ``V_i``).
-
-    Used to check the Gauss-point cone program against the library's N-PFEM
-    step on the same data.
-    """
-    return StressPoints(
-        dim=ni.dim,
-        components=tuple(ni.components),
-        weights=ni.volumes,
-        G=ni.G,
-        n_nodes=ni.n_nodes,
-    )
 
 
 @dataclass(frozen=True)
@@ -247,14 +241,6 @@ def _scalar_element(dim: int, element: str):
     return table[(dim, element)]()
 
 
-def make_mesh(x: np.ndarray, t: np.ndarray) -> Mesh:
-    """scikit-fem P1 mesh on points ``x`` (N, d) with cells ``t`` (d+1, ne)."""
-    pts, conn = np.ascontiguousarray(x.T), np.ascontiguousarray(t)
-    if x.shape[1] == 2:
-        return MeshTri(pts, conn, sort_t=False)
-    return MeshTet(pts, conn)
-
-
 def _mid_edges(basis: Basis, dim: int, n_vert: int) -> np.ndarray:
     """Vertex pairs of the P2 mid-edge nodes in scikit-fem's dof order."""
     mesh = basis.mesh
@@ -296,13 +282,13 @@ def gauss_mesh(
     >>> gm = gauss_mesh(m.p.T, m.t, "p2", (0, 1, 3))
     >>> gm.points.n_points, gm.node_x.shape[0]
     (24, 25)
-    >>> round(float(gm.points.weights.sum()), 12)
+    >>> round(float(gm.points.volumes.sum()), 12)
     1.0
     """
     if element not in ELEMENTS:
         raise ParameterError("element", element, f"one of {ELEMENTS}")
     dim = x.shape[1]
-    mesh = make_mesh(x, t)
+    mesh = p1_mesh(x, t)
     bary, wref = quadrature(dim, element)
     X = np.ascontiguousarray(bary[:, 1:].T)  # reference coordinates (d, nq)
     basis = Basis(
