@@ -350,7 +350,9 @@ class Simulation:
 
     def _advance(self, dt: float) -> tuple[Particles, StepResult]:
         step = self.stepper if self.stepper is not None else advance
-        return step(self.particles, self.model, dt, self.mesh_source, step=self.step + 1)
+        return step(
+            self.particles, self.model, dt, self.mesh_source, step=self.step + 1
+        )
 
     def _print_progress(self, rec, start, n_target, t_end) -> None:
         done = (

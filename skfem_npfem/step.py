@@ -73,6 +73,41 @@ class StepRecord:
     #: Scene diagnostics (numbers) added by callbacks, e.g. ``runout``.
     extra: dict[str, Any] = field(default_factory=dict)
 
+    @classmethod
+    def of_step(
+        cls,
+        step: int | None,
+        dt: float,
+        new: Particles,
+        gravity: float,
+        active: np.ndarray,
+        operator: StrainOperator,
+        sol: StepSolution,
+        timings: dict[str, float],
+        **extra: Any,
+    ) -> StepRecord:
+        """The record of a finished step of any method.
+
+        Solver status, mesh size and volume, contacts (``sol.lambda_n``) and
+        the energies of the new particles; ``extra`` goes to :attr:`extra`,
+        ``time`` is set by the time loop.
+        """
+        return cls(
+            step=-1 if step is None else step,
+            time=float("nan"),
+            dt=dt,
+            status=sol.status,
+            iterations=sol.iterations,
+            timings=timings,
+            n_active=int(active.size),
+            n_inactive=int(new.n - active.size),
+            mesh_volume=float(operator.volumes.sum()),
+            n_contacts=int(sol.lambda_n.size),
+            linear_solver=str(sol.sizes.get("linear_solver", "")),
+            extra=dict(extra),
+            **energies(new, gravity),
+        )
+
     def as_dict(self) -> dict[str, Any]:
         """Plain dict of the diagnostics (for JSON); ``extra`` is merged in."""
         out = {k: v for k, v in vars(self).items() if k != "extra"}
@@ -302,18 +337,8 @@ def advance(
     t2 = time.perf_counter()
     new = update_particles(p, model, dt, ops, sol)
     timings = {"mesh": t1 - t0, **sol.timings, "update": time.perf_counter() - t2}
-    rec = StepRecord(
-        step=-1 if step is None else step,
-        time=float("nan"),
-        dt=dt,
-        status=sol.status,
-        iterations=sol.iterations,
-        timings=timings,
-        n_active=int(ops.active.size),
-        n_inactive=int(p.n - ops.active.size),
-        mesh_volume=float(ops.operator.volumes.sum()),
-        n_contacts=ops.contacts.size,
-        linear_solver=str(sol.sizes.get("linear_solver", "")),
-        **energies(new, model.gravity),
+    rec = StepRecord.of_step(
+        step, dt, new, model.gravity, ops.active, ops.operator, sol, timings
     )
+    rec.n_contacts = ops.contacts.size
     return new, StepResult(rec, sol, ops.active, ops.local_t, ops.operator)

@@ -8,9 +8,9 @@ import pytest
 from skfem_npfem.baseline import SPFEM, FemRemap, make_method, transfer_values
 from skfem_npfem.errors import ParameterError
 from skfem_npfem.materials import LinearElastic
+from skfem_npfem.model import Model
 from skfem_npfem.particles import Particles
 from skfem_npfem.pfem import AlphaShapeMesher
-from skfem_npfem.model import Model
 
 
 @pytest.mark.parametrize(

@@ -26,10 +26,10 @@ import pytest
 from skfem_npfem.baseline import FemRemap
 from skfem_npfem.boundary import floor
 from skfem_npfem.materials import LinearElastic, MohrCoulomb
+from skfem_npfem.model import Model
 from skfem_npfem.particles import Particles
 from skfem_npfem.pfem import AlphaShapeMesher
 from skfem_npfem.scenes import get_scene
-from skfem_npfem.model import Model
 from skfem_npfem.smoothing import nodal_integration
 
 H, RHO, G, E, NU = 10.0, 2000.0, 9.81, 1.0e7, 0.3
@@ -197,8 +197,9 @@ def test_mapped_stresses_outside_the_cone_are_returned_and_counted():
     # Tresca stresses on the yield surface (R = c) with a direction that turns
     # across the body: recovery fits and interpolates them, and near the
     # boundary the fitted planes overshoot the cone.  Every mapped stress with
-    # R > c must come back to R = c (1e-12) and be counted; the others must be
-    # the transferred values unchanged.
+    # R > c must come back to R = c (1e-12); those returned by more than 1e-6
+    # of the largest stress are counted (every one outside by 1e-4 c, none
+    # inside); the others must be the transferred values unchanged.
     from skfem_npfem.baseline.transfer import transfer_values
     from skfem_npfem.materials import Tresca
 
@@ -223,7 +224,9 @@ def test_mapped_stresses_outside_the_cone_are_returned_and_counted():
     )
     R_raw = np.hypot(0.5 * (raw[:, 0] - raw[:, 1]), raw[:, 3])
     outside = R_raw > c * (1 + 1e-12)
-    assert info["remapped"] and info["yield_violations"] == int(outside.sum()) > 0
+    clearly = R_raw > c * (1 + 1e-4)
+    assert info["remapped"] and clearly.sum() > 0
+    assert clearly.sum() <= info["yield_violations"] <= outside.sum()
     R = np.hypot(0.5 * (moved[:, 0] - moved[:, 1]), moved[:, 3])
     assert np.all(R <= c * (1 + 1e-12))
     assert np.allclose(R[outside], c, rtol=1e-12)

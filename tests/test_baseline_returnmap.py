@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 from skfem import MeshTet, MeshTri
 
-from skfem_npfem.baseline.returnmap import elastic_trial, project_invariants, return_map
 from skfem_npfem import Contacts, SolverOptions, StepData, solve_step
+from skfem_npfem.baseline.returnmap import elastic_trial, project_invariants, return_map
 from skfem_npfem.materials import DruckerPrager, MohrCoulomb, Tresca, VonMises
 from skfem_npfem.smoothing import nodal_integration
 

@@ -44,6 +44,7 @@ def markdown_table(headers: Sequence[str], rows: Sequence[Sequence[Any]]) -> str
     | 1 | 0.1235 |
     | x | – |
     """
+
     def cell(v: Any) -> str:
         if v is None:
             return "–"

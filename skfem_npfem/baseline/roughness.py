@@ -28,9 +28,7 @@ __all__ = ["MIN_INTERIOR", "roughness_index", "stress_roughness"]
 MIN_INTERIOR = 10
 
 
-def roughness_index(
-    cells: np.ndarray, values: np.ndarray
-) -> tuple[float, int]:
+def roughness_index(cells: np.ndarray, values: np.ndarray) -> tuple[float, int]:
     """Roughness ``R`` of nodal ``values`` on a simplex mesh; and the interior count.
 
     Parameters

@@ -55,7 +55,7 @@ import numpy as np
 from ..boundary import project_to_walls
 from ..conic import StepSolution
 from ..errors import ParameterError
-from ..kinematics import energies, equivalent_strain, rotate_stress
+from ..kinematics import equivalent_strain, rotate_stress
 from ..model import Model
 from ..particles import Particles
 from ..pfem import MeshSource
@@ -99,7 +99,9 @@ def _positive(name: str, value, allow_none: bool = False):
     if value is None and allow_none:
         return None
     ok = not isinstance(value, bool) and isinstance(value, int | float)
-    ok = ok and math.isfinite(value) and (value >= 0 if name == "damping" else value > 0)
+    ok = (
+        ok and math.isfinite(value) and (value >= 0 if name == "damping" else value > 0)
+    )
     if not ok:
         unit = "1/s" if name == "damping" else "s"
         limit = ">= 0" if name == "damping" else "> 0"
@@ -154,7 +156,8 @@ class SPFEM:
             raise ParameterError(
                 "mode",
                 model.mode,
-                "dynamic: SPFEM is explicit (quasi-static problems: npfem or fem-remap)",
+                "dynamic: SPFEM is explicit (quasi-static problems: npfem or "
+                "fem-remap)",
             )
         stable = self.stable_dt(p, model, mesh_source)
         if self.explicit_dt is not None and self.explicit_dt > stable:
@@ -205,25 +208,22 @@ class SPFEM:
         wall_force = impulse / dt
         q = q.replace(wall_force=wall_force)
         sol = self._solution(p, q, model, active, ni)
-        rec = StepRecord(
-            step=-1 if step is None else step,
-            time=float("nan"),
-            dt=dt,
-            status="Explicit",
-            iterations=0,
-            timings={"mesh": t1 - t0, "update": time.perf_counter() - t1},
-            n_active=int(active.size),
-            n_inactive=int(p.n - active.size),
-            mesh_volume=float(ni.volumes.sum()),
-            n_contacts=int(np.count_nonzero(np.any(wall_force > 0, axis=1))),
-            extra={
-                "substeps": n_sub,
-                "stable_dt": stable,
-                "explicit_dt": h,
-                "cfl": h / stable,
-            },
-            **energies(q, model.gravity),
+        timings = {"mesh": t1 - t0, "update": time.perf_counter() - t1}
+        rec = StepRecord.of_step(
+            step,
+            dt,
+            q,
+            model.gravity,
+            active,
+            ni,
+            sol,
+            timings,
+            substeps=n_sub,
+            stable_dt=stable,
+            explicit_dt=h,
+            cfl=h / stable,
         )
+        rec.n_contacts = int(np.count_nonzero(np.any(wall_force > 0, axis=1)))
         return q, StepResult(rec, sol, active, local_t, ni)
 
     def _substeps(self, dt: float, stable: float, step: int | None) -> int:

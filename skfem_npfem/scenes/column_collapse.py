@@ -58,6 +58,7 @@ from ..smoothing import nodal_integration
 from ..step import StepResult
 from .base import Param, Scene, SceneRun
 from .common import elastic_params, make_writer, solver_from, solver_params
+from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
 
 MATERIALS = ("mohr-coulomb", "drucker-prager")
 
@@ -208,6 +209,7 @@ PARAMS = [
         int,
         lo=1,
     ),
+    *METHOD_PARAMS,
     *solver_params(),
 ]
 
@@ -232,6 +234,7 @@ METRICS = {
     "final_kinetic_energy": "kinetic energy at the end, J",
     "n_inactive_final": "particles outside every element at the end (ballistic)",
     "n_particles": "number of particles",
+    **METHOD_METRICS,
 }
 
 
@@ -485,7 +488,7 @@ def build(
         if min_time is None:
             min_time = 2 * math.sqrt(H0 / values["gravity"])
         stop = run_kwargs["stop"] = AtRest(values["rest_fraction"], min_time)
-    return SceneRun(sim, run_kwargs, _metrics(values, h, stop))
+    return with_method(values, SceneRun(sim, run_kwargs, _metrics(values, h, stop)))
 
 
 SCENE = Scene(

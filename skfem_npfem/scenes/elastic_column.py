@@ -23,6 +23,7 @@ from ..simulation import Simulation
 from ..smoothing import nodal_integration
 from .base import Param, Scene, SceneRun
 from .common import elastic_params, make_writer, solver_from, solver_params
+from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
 
 PARAMS = [
     Param("dim", 2, "-", "spatial dimension (2: plane strain, 3: 3D)", int, (2, 3)),
@@ -43,6 +44,7 @@ PARAMS = [
     Param(
         "theta2", 1.0, "-", "time-integration parameter theta2", float, lo=0.5, hi=1.0
     ),
+    *METHOD_PARAMS,
     *solver_params(),
 ]
 
@@ -55,6 +57,7 @@ METRICS = {
     "period": "oscillation period of the top (dynamic, >= 1 period run), s",
     "period_exact": "first oedometric period 4 H / c_p, s",
     "n_particles": "number of particles",
+    **METHOD_METRICS,
 }
 
 
@@ -139,7 +142,7 @@ def build(
             "n_particles": int(p.n),
         }
 
-    return SceneRun(sim, {"steps": values["steps"]}, metrics)
+    return with_method(values, SceneRun(sim, {"steps": values["steps"]}, metrics))
 
 
 def _rel(a: np.ndarray, b: np.ndarray, scale: np.ndarray | None = None) -> float:

@@ -37,6 +37,7 @@ from ..simulation import Simulation
 from ..smoothing import nodal_integration
 from .base import Param, Scene, SceneRun
 from .common import elastic_params, make_writer, solver_from, solver_params
+from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
 from .plateau import PlateauRule
 
 MATERIALS = ("tresca", "mohr-coulomb", "drucker-prager")
@@ -153,6 +154,7 @@ PARAMS = [
         "small-strain limit analysis",
         bool,
     ),
+    *METHOD_PARAMS,
     *solver_params(),
 ]
 
@@ -174,6 +176,7 @@ METRICS = {
     "warnings": "list of one-line warnings (a cap stopped the run before the "
     "plateau); the CLI prints each on stderr",
     "n_particles": "number of particles",
+    **METHOD_METRICS,
 }
 
 
@@ -345,7 +348,9 @@ def build(
             "n_particles": int(particles.n),
         }
 
-    return SceneRun(sim, {"steps": rule.step_cap, "stop": finished}, metrics)
+    return with_method(
+        values, SceneRun(sim, {"steps": rule.step_cap, "stop": finished}, metrics)
+    )
 
 
 def load_curve(sim: Simulation) -> list[list[float]]:
