@@ -27,6 +27,7 @@ each edge, each vertex) that is feasible, chosen point by point without loops.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -54,10 +55,28 @@ class ReturnResult:
     plastic: np.ndarray
 
 
+@lru_cache(maxsize=64)
+def _compliance(E: float, nu: float, dim: int, comps: tuple[int, ...]) -> np.ndarray:
+    """:func:`~skfem_npfem.materials.compliance_matrix`, kept per material.
+
+    An explicit method calls the return mapping every substep; the matrices
+    depend on the material only.
+    """
+    C = compliance_matrix(E, nu, dim, comps)
+    C.flags.writeable = False
+    return C
+
+
+@lru_cache(maxsize=64)
+def _stiffness(E: float, nu: float, dim: int) -> np.ndarray:
+    D = np.linalg.inv(_compliance(E, nu, dim, tuple(range(full_voigt_size(dim)))))
+    D.flags.writeable = False
+    return D
+
+
 def stiffness(mat: Material, dim: int) -> np.ndarray:
     """Elastic stiffness on the full Voigt components (plane strain in 2D)."""
-    comps = tuple(range(full_voigt_size(dim)))
-    return np.linalg.inv(compliance_matrix(mat.E, mat.nu, dim, comps))
+    return _stiffness(float(mat.E), float(mat.nu), dim)
 
 
 def elastic_trial(
@@ -190,28 +209,42 @@ def return_map(
         if idx.size == 0 or not mat.plastic:
             continue
         inplane, A, B, p_t = _cone_invariants(mat, dim, sigma_n[idx])
+        p, dev, r = _split(sigma_trial[idx], inplane)
+        A, B, p_t = (np.broadcast_to(v, p.shape) for v in (A, B, p_t))
+        # Points inside their cone keep the trial stress (the test of
+        # project_invariants); only the others are projected.
+        tol = 1e-12 * (np.abs(A) + np.abs(B * p) + np.abs(r) + 1e-300)
+        out = ~((r <= A - B * p + tol) & (p <= p_t))
+        if not np.any(out):
+            continue
+        idx, p, dev, r = idx[out], p[out], dev[out], r[out]
+        new, moved = _returned(
+            mat, dim, inplane, p, dev, r, A[out], B[out], p_t[out], sigma_n[idx]
+        )
         tr = sigma_trial[idx]
-        p, dev, r = _split(tr, inplane)
-        G = mat.E / (2.0 * (1.0 + mat.nu))
-        lam = mat.E * mat.nu / ((1.0 + mat.nu) * (1.0 - 2.0 * mat.nu))
-        K = lam + G if inplane else lam + 2.0 * G / 3.0
-        p2, r2 = project_invariants(p, r, K, G, A, B, p_t)
-        scale = np.divide(r2, r, out=np.zeros_like(r), where=r > 0)
-        new = dev * scale[:, None]
-        if inplane:
-            new[:, 0] += p2
-            new[:, 1] += p2
-            sn = sigma_n[idx]
-            new[:, 2] = sn[:, 2] + mat.nu * (
-                new[:, 0] + new[:, 1] - sn[:, 0] - sn[:, 1]
-            )
-        else:
-            new[:, :3] += p2[:, None]
-        moved = (p2 != p) | (r2 != r)
         comps = (0, 1, 3) if inplane else tuple(range(sigma.shape[1]))
-        C = compliance_matrix(mat.E, mat.nu, dim, comps)
+        C = _compliance(float(mat.E), float(mat.nu), dim, tuple(comps))
         d = (tr - new)[:, list(comps)] @ C.T
         deps_p[np.ix_(idx, list(comps))] = np.where(moved[:, None], d, 0.0)
         sigma[idx] = np.where(moved[:, None], new, tr)
         plastic[idx] = moved
     return ReturnResult(sigma, deps_p, plastic)
+
+
+def _returned(mat, dim, inplane, p, dev, r, A, B, p_t, sigma_n):
+    """Projected full-Voigt stresses of trial points and whether they moved."""
+    G = mat.E / (2.0 * (1.0 + mat.nu))
+    lam = mat.E * mat.nu / ((1.0 + mat.nu) * (1.0 - 2.0 * mat.nu))
+    K = lam + G if inplane else lam + 2.0 * G / 3.0
+    p2, r2 = project_invariants(p, r, K, G, A, B, p_t)
+    scale = np.divide(r2, r, out=np.zeros_like(r), where=r > 0)
+    new = dev * scale[:, None]
+    if inplane:
+        new[:, 0] += p2
+        new[:, 1] += p2
+        new[:, 2] = sigma_n[:, 2] + mat.nu * (
+            new[:, 0] + new[:, 1] - sigma_n[:, 0] - sigma_n[:, 1]
+        )
+    else:
+        new[:, :3] += p2[:, None]
+    return new, (p2 != p) | (r2 != r)

@@ -202,8 +202,9 @@ class SPFEM:
         h = dt / n_sub
         t1 = time.perf_counter()
         q, impulse = p, np.zeros_like(p.wall_force)
+        GT = ni.G.T.tocsr()  # strains of every substep (G is fixed in the step)
         for _ in range(n_sub):  # explicit substeps: the method's own time loop
-            q, dv = self._substep(q, model, h, active, ni)
+            q, dv = self._substep(q, model, h, active, ni, GT)
             impulse += dv
         wall_force = impulse / dt
         q = q.replace(wall_force=wall_force)
@@ -242,7 +243,7 @@ class SPFEM:
             )
         return max(1, math.ceil(dt / h * (1 - 1e-12)))
 
-    def _substep(self, p: Particles, model: Model, h: float, active, ni):
+    def _substep(self, p: Particles, model: Model, h: float, active, ni, GT):
         """Central difference, kinematic contact, return mapping, rotation."""
         d, g = model.dim, model.gravity_vector
         m = p.mass[active]
@@ -266,7 +267,9 @@ class SPFEM:
         else:
             v_new, du, x = v, h * v, p.x
         mat = p.material[active]
-        trial = elastic_trial(model.materials, mat, d, sig_n, ni.strain(du[active]))
+        deps = (GT @ du[active].reshape(-1)).reshape(-1, sig_n.shape[1])
+        deps /= ni.volumes[:, None]
+        trial = elastic_trial(model.materials, mat, d, sig_n, deps)
         back = return_map(model.materials, mat, d, trial, sig_n)
         sig = back.sigma
         if model.objective_rotation:

@@ -12,7 +12,9 @@ old Gauss points to the new ones.  Two operators:
     Superconvergent patch recovery (Zienkiewicz-Zhu): at every old vertex a
     linear polynomial is fitted by least squares to the Gauss-point values of
     the elements around it (the patch is widened to the second ring where the
-    first ring has too few points, e.g. at corners), evaluated at the vertex,
+    first ring cannot fit a plane well, e.g. at corners or where a thin
+    element makes the points nearly collinear: :data:`WELL_POSED`), evaluated
+    at the vertex,
     and the recovered nodal field is interpolated linearly at the new points
     inside the old element that contains them.  Exact for linear fields; new
     points outside the old mesh take the nearest old Gauss-point value.
@@ -50,6 +52,15 @@ TRANSFERS = ("nearest", "recovery")
 
 #: A point is inside an element when every barycentric coordinate is >= -BARY_TOL.
 BARY_TOL = 1e-10
+#: A patch fit is used when the smallest eigenvalue of its normal matrix (in
+#: coordinates scaled by the patch size) is at least this fraction of the
+#: largest; otherwise the patch grows to the second ring of elements.  With
+#: 1e-8 a boundary vertex whose patch held a sliver extrapolated its nearly
+#: collinear Gauss points, the transfer amplified that value step after step
+#: and FEM-remap P1 blew up in the a = 2 column collapse (stresses 1e6 rho g H
+#: at t = 0.6 s, ``tests/test_baseline_fem.py``); a well-posed fit of a linear
+#: field is still exact.
+WELL_POSED = 1e-3
 
 
 def _inverse_maps(x: np.ndarray, t: np.ndarray):
@@ -186,7 +197,7 @@ def _fit(x, gp_x, values, vv, gg, n_vert):
     Atb = np.zeros((n_vert, nb, m))
     np.add.at(Atb, vv, basis[:, :, None] * values[gg][:, None, :])
     eig = np.linalg.eigvalsh(AtA)
-    good = eig[:, 0] > 1e-8 * np.maximum(eig[:, -1], 1e-300)
+    good = eig[:, 0] > WELL_POSED * np.maximum(eig[:, -1], 1e-300)
     coef = np.zeros((n_vert, nb, m))
     coef[good] = np.linalg.solve(AtA[good], Atb[good])
     return coef[:, 0, :], good, AtA, Atb
