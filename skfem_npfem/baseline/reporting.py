@@ -13,7 +13,14 @@ from typing import Any
 
 from ..io import atomic_path, write_json
 
-__all__ = ["markdown_table", "save_png", "write_result"]
+__all__ = [
+    "best_within",
+    "cheapest_within",
+    "markdown_table",
+    "pareto_front",
+    "save_png",
+    "write_result",
+]
 
 
 def write_result(path: str | Path, result: dict) -> Path:
@@ -55,3 +62,48 @@ def markdown_table(headers: Sequence[str], rows: Sequence[Sequence[Any]]) -> str
     lines = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
     lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in rows]
     return "\n".join(lines)
+
+
+def pareto_front(points: Sequence[tuple[float, float]]) -> list[int]:
+    """Indices of the points not beaten in both cost and error, cheapest first.
+
+    A point ``(cost, error)`` is on the front when no other point is at most
+    as costly *and* at most as wrong (one of the two strictly).
+
+    Examples
+    --------
+    >>> pareto_front([(1.0, 0.5), (2.0, 0.6), (3.0, 0.1), (0.5, 0.9)])
+    [3, 0, 2]
+    """
+    order = sorted(range(len(points)), key=lambda i: (points[i][0], points[i][1]))
+    front: list[int] = []
+    best = float("inf")
+    for i in order:
+        if points[i][1] < best:
+            front.append(i)
+            best = points[i][1]
+    return front
+
+
+def cheapest_within(points: Sequence[tuple[float, float]], target: float) -> int | None:
+    """Index of the cheapest point with error at most ``target`` (None: none).
+
+    Examples
+    --------
+    >>> cheapest_within([(1.0, 0.5), (2.0, 0.05), (3.0, 0.01)], 0.1)
+    1
+    """
+    ok = [i for i, (_, e) in enumerate(points) if e <= target]
+    return min(ok, key=lambda i: points[i][0]) if ok else None
+
+
+def best_within(points: Sequence[tuple[float, float]], budget: float) -> int | None:
+    """Index of the most accurate point costing at most ``budget`` (None: none).
+
+    Examples
+    --------
+    >>> best_within([(1.0, 0.5), (2.0, 0.05), (3.0, 0.01)], 2.5)
+    1
+    """
+    ok = [i for i, (c, _) in enumerate(points) if c <= budget]
+    return min(ok, key=lambda i: points[i][1]) if ok else None
