@@ -70,7 +70,9 @@ def key(*labels: str) -> str:
 def cases(quick: bool, n: int) -> dict:
     out = {}
     soils = {"Tresca": SOILS["Tresca"]} if quick else SOILS
-    footing = {"spacing": 0.25 if quick else 0.125, "threads": 1}
+    footing = {"spacing": 0.125, "threads": 1}
+    if quick:  # four equal steps to 0.01 b, no plateau search
+        footing.update(spacing=0.25, steps=4, plateau_tol=0.0)
     for soil, sp in soils.items():
         for label, method in IMPLICIT.items():
             out[key("footing", soil, label)] = (
@@ -149,7 +151,7 @@ def tables(result: dict) -> str:
     for soil, entry in result["footing"].items():
         for label, r in entry["methods"].items():
             if r is None:
-                rows.append([soil, label, "failed"] + [None] * 6)
+                rows.append([soil, label, "failed"] + [None] * 7)
                 continue
             rows.append(
                 [
@@ -158,6 +160,9 @@ def tables(result: dict) -> str:
                     r["bearing_factor"],
                     entry["reference"],
                     f"{100 * r['relative_error']:+.2f} %",
+                    {True: "yes", False: "no (capped)", None: "off"}[
+                        r["plateau_reached"]
+                    ],
                     r["steps"],
                     r["wall_time"],
                     r["peak_memory_mb"],
@@ -170,6 +175,7 @@ def tables(result: dict) -> str:
             "q/c",
             "reference",
             "error",
+            "plateau",
             "steps",
             "wall (s)",
             "peak memory (MB)",
