@@ -239,8 +239,16 @@ def plot_pictures(pictures: dict, rho_g_h: float, path: Path) -> None:
 
     labels = [k for k in METHODS if pictures.get(k)]
     ncol = max(len(pictures[k]) for k in labels)
+    snaps = [s for k in labels for s in pictures[k]]
+    x_max = max(float(s["x"][:, 0].max()) for s in snaps)
+    y_max = max(float(s["x"][:, 1].max()) for s in snaps)
+    width = 3.4
+    height = width * y_max / x_max + 0.35
     fig, axes = plt.subplots(
-        len(labels), ncol, figsize=(3.2 * ncol, 1.9 * len(labels)), squeeze=False
+        len(labels),
+        ncol,
+        figsize=(width * ncol + 1.2, height * len(labels)),
+        squeeze=False,
     )
     for i, label in enumerate(labels):
         for j in range(ncol):
@@ -258,6 +266,8 @@ def plot_pictures(pictures: dict, rho_g_h: float, path: Path) -> None:
                 vmax=0.0,
                 cmap="viridis",
             )
+            ax.set_xlim(0.0, x_max)
+            ax.set_ylim(0.0, y_max)
             ax.set_aspect("equal")
             last = j == len(pictures[label]) - 1
             when = "end" if last else f"t̄ = {snap['t_bar']:.2f}"
