@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from skfem_npfem.baseline.reporting import markdown_table, save_png, write_result
-from skfem_npfem.baseline.study import run_cases
+from skfem_npfem.baseline.study import run_cases, study_arguments, study_folders
 from skfem_npfem.io import read_pvd, read_step
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -282,21 +282,10 @@ def _nan(values) -> list[float]:
 
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[1])
-    ap.add_argument("--quick", action="store_true", help="reduced, in-process")
-    ap.add_argument(
-        "--out",
-        type=Path,
-        default=None,
-        help=f"default {OUT} (--quick: the work folder)",
-    )
-    ap.add_argument("--work", type=Path, default=WORK)
-    ap.add_argument("--workers", type=int, default=None, help="Dask workers")
-    ap.add_argument("--scheduler", default=None, help="Dask scheduler address")
+    study_arguments(ap, OUT, WORK)
     args = ap.parse_args(argv)
     start = time.perf_counter()
-    workers = 0 if args.quick and args.workers is None else args.workers
-    work = args.work / ("quick" if args.quick else "full")
-    out = args.out or (work if args.quick else OUT)
+    work, out, workers = study_folders(args, OUT, "quick" if args.quick else "full")
     summaries = run_cases(
         cases(args.quick), work, workers=workers, scheduler=args.scheduler
     )

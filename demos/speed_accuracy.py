@@ -51,7 +51,7 @@ import time
 from pathlib import Path
 
 from skfem_npfem.baseline.reporting import save_png, write_result
-from skfem_npfem.baseline.study import run_cases
+from skfem_npfem.baseline.study import run_cases, study_arguments, study_folders
 from skfem_npfem.io import write_bytes
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -414,6 +414,31 @@ def _runs_table(result: dict, problem: str) -> str:
     return markdown_table(head, rows)
 
 
+def _pick_row(kind: str, limit: float, best: dict, nbest: dict | None):
+    """Table row and sentence for one accuracy target or wall-time budget."""
+    if kind == "acc":
+        nb = _fmt(nbest["wall_time"]) if nbest else "not reached"
+        tail = (
+            f"N-PFEM needs {nb} s ({_setting(nbest)})"
+            if nbest
+            else "N-PFEM does not reach it in this study"
+        )
+        row = [f"{100 * limit:g} %", _setting(best), _fmt(best["wall_time"]), nb]
+        note = (
+            f"for an error of {100 * limit:g} %, {_setting(best)} takes "
+            f"{_fmt(best['wall_time'])} s; {tail}"
+        )
+        return row, note
+    nb = _fmt(nbest["error"]) if nbest else "none that fast"
+    tail = f"N-PFEM's best within it is {nb}" if nbest else "no N-PFEM run is that fast"
+    row = [f"{limit} s", _setting(best), _fmt(best["error"]), nb]
+    note = (
+        f"within {limit} s the most accurate run is {_setting(best)} "
+        f"(error {_fmt(best['error'])}); {tail}"
+    )
+    return row, note
+
+
 def _choices(result: dict, problem: str) -> tuple[str, list[str]]:
     """Accuracy and budget tables and the statements where N-PFEM loses."""
     from skfem_npfem.baseline.reporting import (
@@ -429,59 +454,27 @@ def _choices(result: dict, problem: str) -> tuple[str, list[str]]:
     npf = [i for i, (_, r) in enumerate(rows) if r["setting"].startswith("N-PFEM")]
     npts = [pts[i] for i in npf]
     notes: list[str] = []
-    acc = []
-    for target in (0.3, 0.1, 0.03, 0.01, 0.003, 0.001):
-        i = cheapest_within(pts, target)
-        if i is None:
-            continue
-        j = cheapest_within(npts, target)
-        best = rows[i][1]
-        nbest = rows[npf[j]][1] if j is not None else None
-        acc.append(
-            [
-                f"{100 * target:g} %",
-                _setting(best),
-                _fmt(best["wall_time"]),
-                _fmt(nbest["wall_time"]) if nbest else "not reached",
-            ]
-        )
-        if not best["setting"].startswith("N-PFEM"):
-            tail = (
-                f"N-PFEM needs {_fmt(nbest['wall_time'])} s ({_setting(nbest)})"
-                if nbest
-                else "N-PFEM does not reach it in this study"
-            )
-            notes.append(
-                f"for an error of {100 * target:g} %, {_setting(best)} "
-                f"takes {_fmt(best['wall_time'])} s; {tail}"
-            )
-    budgets = []
     lo, hi = min(p[0] for p in pts), max(p[0] for p in pts)
-    for budget in (1, 3, 10, 30, 100, 300, 1000, 3000):
-        if budget < lo or budget > 3 * hi:
-            continue
-        i = best_within(pts, budget)
-        j = best_within(npts, budget)
-        best = rows[i][1]
-        nbest = rows[npf[j]][1] if j is not None else None
-        budgets.append(
-            [
-                f"{budget} s",
-                _setting(best),
-                _fmt(best["error"]),
-                _fmt(nbest["error"]) if nbest else "none that fast",
-            ]
-        )
-        if not best["setting"].startswith("N-PFEM"):
-            tail = (
-                f"N-PFEM's best within it is {_fmt(nbest['error'])}"
-                if nbest
-                else "no N-PFEM run is that fast"
-            )
-            notes.append(
-                f"within {budget} s the most accurate run is "
-                f"{_setting(best)} (error {_fmt(best['error'])}); {tail}"
-            )
+    picks = {
+        "acc": (cheapest_within, (0.3, 0.1, 0.03, 0.01, 0.003, 0.001)),
+        "budget": (
+            best_within,
+            [b for b in (1, 3, 10, 30, 100, 300, 1000, 3000) if lo <= b <= 3 * hi],
+        ),
+    }
+    tables: dict[str, list] = {"acc": [], "budget": []}
+    for kind, (select, limits) in picks.items():
+        for limit in limits:
+            i, j = select(pts, limit), select(npts, limit)
+            if i is None:
+                continue
+            best = rows[i][1]
+            nbest = rows[npf[j]][1] if j is not None else None
+            row, note = _pick_row(kind, limit, best, nbest)
+            tables[kind].append(row)
+            if not best["setting"].startswith("N-PFEM"):
+                notes.append(note)
+    acc, budgets = tables["acc"], tables["budget"]
     text = (
         "Cheapest run reaching an error:\n\n"
         + markdown_table(
@@ -588,38 +581,24 @@ def write_page(result: dict, path: Path | None) -> str:
 
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[1])
-    mode = ap.add_mutually_exclusive_group()
-    mode.add_argument("--quick", action="store_true", help="tiny runs (tests)")
-    mode.add_argument("--subset", action="store_true", help="moderate subset")
-    ap.add_argument(
-        "--out",
-        type=Path,
-        default=None,
-        help=f"JSON and PNG folder (default {OUT}; --quick: the work folder)",
-    )
+    study_arguments(ap, OUT, WORK)
+    ap.add_argument("--subset", action="store_true", help="moderate subset")
     ap.add_argument(
         "--page",
         type=Path,
         default=None,
         help=f"generated docs page (default {PAGE}; --quick: none)",
     )
-    ap.add_argument("--work", type=Path, default=WORK)
-    ap.add_argument(
-        "--workers",
-        type=int,
-        default=None,
-        help="Dask workers (default: one per core; 0: in this process)",
-    )
-    ap.add_argument("--scheduler", default=None, help="Dask scheduler address")
     ap.add_argument(
         "--page-only",
         action="store_true",
         help="rebuild figure and page from the existing JSON",
     )
     args = ap.parse_args(argv)
+    if args.quick and args.subset:
+        ap.error("--quick and --subset exclude each other")
     name = "quick" if args.quick else "subset" if args.subset else "full"
-    work = args.work / name
-    out = args.out or (work if args.quick else OUT)
+    work, out, workers = study_folders(args, OUT, name)
     page = args.page or (None if args.quick else PAGE)
     if args.page_only:
         import json
@@ -631,7 +610,7 @@ def main(argv: list[str] | None = None) -> dict:
         summaries = run_cases(
             {k: (c[0], c[1]) for k, c in confs.items()},
             work,
-            workers=args.workers,
+            workers=workers,
             scheduler=args.scheduler,
         )
         result = collect(name, summaries)

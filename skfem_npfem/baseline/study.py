@@ -28,7 +28,14 @@ from typing import Any
 from ..errors import NpfemError
 from ..io import dumps, latest_checkpoint, to_jsonable
 
-__all__ = ["Case", "case_args", "run_case", "run_cases"]
+__all__ = [
+    "Case",
+    "case_args",
+    "run_case",
+    "run_cases",
+    "study_arguments",
+    "study_folders",
+]
 
 #: A configuration: (scene name, parameter values).
 Case = tuple[str, Mapping[str, Any]]
@@ -173,3 +180,34 @@ def _in_process(scene: str, params: dict, folder: str) -> dict:
         resume=resume,
     )
     return json.loads(dumps(summary))  # as read back from the file (NaN: None)
+
+
+def study_arguments(parser: Any, out: Path, work: Path) -> None:
+    """The command-line options every comparison demo shares.
+
+    ``--quick`` (reduced runs in this process), ``--out`` (JSON and figures;
+    default ``out``, with ``--quick`` the work folder), ``--work`` (run folders),
+    ``--workers`` and ``--scheduler`` (Dask).
+    """
+    parser.add_argument("--quick", action="store_true", help="reduced, in-process")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help=f"default {out} (--quick: the work folder)",
+    )
+    parser.add_argument("--work", type=Path, default=work, help="run folders")
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help="Dask workers (default: one per core; 0: in this process)",
+    )
+    parser.add_argument("--scheduler", default=None, help="Dask scheduler address")
+
+
+def study_folders(args: Any, out: Path, mode: str) -> tuple[Path, Path, int | None]:
+    """``(work folder, output folder, workers)`` of a demo's parsed options."""
+    work = args.work / mode
+    workers = 0 if args.quick and args.workers is None else args.workers
+    return work, args.out or (work if args.quick else out), workers
