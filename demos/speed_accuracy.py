@@ -439,8 +439,8 @@ def _pick_row(kind: str, limit: float, best: dict, nbest: dict | None):
     return row, note
 
 
-def _choices(result: dict, problem: str) -> tuple[str, list[str]]:
-    """Accuracy and budget tables and the statements where N-PFEM loses."""
+def _choices(result: dict, problem: str) -> tuple[str, list[str], list[str]]:
+    """Accuracy and budget tables, where N-PFEM loses, and the short advice."""
     from skfem_npfem.baseline.reporting import (
         best_within,
         cheapest_within,
@@ -449,7 +449,7 @@ def _choices(result: dict, problem: str) -> tuple[str, list[str]]:
 
     rows = usable(result, problem)
     if not rows:
-        return "(no finished runs)", []
+        return "(no finished runs)", [], []
     pts = [(r["wall_time"], r["error"]) for _, r in rows]
     npf = [i for i, (_, r) in enumerate(rows) if r["setting"].startswith("N-PFEM")]
     npts = [pts[i] for i in npf]
@@ -475,6 +475,17 @@ def _choices(result: dict, problem: str) -> tuple[str, list[str]]:
             if not best["setting"].startswith("N-PFEM"):
                 notes.append(note)
     acc, budgets = tables["acc"], tables["budget"]
+    short = []
+    if acc:
+        short.append(
+            f"for an error up to {acc[0][0]}: {acc[0][1]} ({acc[0][2]} s); for "
+            f"the smallest error reached, {acc[-1][0]}: {acc[-1][1]} ({acc[-1][2]} s)"
+        )
+    if budgets:
+        short.append(
+            f"with {budgets[0][0]}: {budgets[0][1]} (error {budgets[0][2]}); with "
+            f"{budgets[-1][0]}: {budgets[-1][1]} (error {budgets[-1][2]})"
+        )
     text = (
         "Cheapest run reaching an error:\n\n"
         + markdown_table(
@@ -485,7 +496,7 @@ def _choices(result: dict, problem: str) -> tuple[str, list[str]]:
             ["budget", "most accurate run", "error", "best N-PFEM error"], budgets
         )
     )
-    return text, notes
+    return text, notes, short
 
 
 def _median_by_setting(result: dict, problem: str, value) -> dict:
@@ -593,13 +604,14 @@ def write_page(result: dict, path: Path | None) -> str:
         )
         + "The machine is shared: timings are indicative.\n"
     )
-    notes = []
+    notes, advice = [], []
     for problem, title in (
         ("footing", "Prandtl footing"),
         ("collapse", "Column collapse, a = 2"),
     ):
-        text, loses = _choices(result, problem)
+        text, loses, short = _choices(result, problem)
         notes += [f"{title}: {s}" for s in loses]
+        advice += [f"{title}, {s}" for s in short]
         parts.append(f"## {title}\n")
         if problem == "collapse":
             cr = ref.get("collapse_run") or {}
@@ -626,6 +638,13 @@ def write_page(result: dict, path: Path | None) -> str:
             "reached and the most accurate within every budget."
         )
     parts.insert(2, "\n".join(summary) + "\n")
+    pick = ["## Which method to pick\n"]
+    pick += [f"* {s}." for s in advice]
+    pick.append(
+        "\nThe tables below give every accuracy target and budget; the runs "
+        "behind them are listed per problem."
+    )
+    parts.insert(2, "\n".join(pick) + "\n")
     parts.append(
         "## Figure\n\n![error against wall time per method, with each method's "
         "Pareto front; collapse run-out against the experimental band]"
