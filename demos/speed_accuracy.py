@@ -32,7 +32,8 @@ and figure from an existing JSON).
 
 Runs live in ``--work`` (default ``out/comparison/speed_accuracy/<mode>``): a
 rerun skips finished configurations and continues interrupted ones from their
-checkpoints.
+checkpoints, as long as the library source is the same (after a change of the
+package every configuration runs afresh).
 
 Usage (from the repository root)::
 

@@ -2,7 +2,8 @@
 
 Reference: a configuration run in its own process gives the same summary as
 the same scene run here (same code, same numbers to round-off); a rerun starts
-nothing; a failing configuration is reported with its log.  The demos built on
+nothing unless the library source changed; a failing configuration is reported
+with its log.  The demos built on
 it are tested in ``tests/test_baseline_demos.py``.
 """
 
@@ -28,6 +29,13 @@ def test_each_case_in_its_own_process_on_dask(tmp_path):
     again = run_cases(cases, tmp_path, workers=1, progress=False)["p2"]
     assert again == first
     assert (tmp_path / "p2" / "summary.json").stat().st_mtime_ns == stamp
+    # A run made by another library source is not reused: it runs again.
+    source = tmp_path / "p2" / "source.txt"
+    sha = source.read_text()
+    source.write_text("0123456789ab")
+    fresh = run_cases(cases, tmp_path, workers=0, progress=False)["p2"]
+    assert fresh["metrics"] == first["metrics"] and source.read_text() == sha
+    assert (tmp_path / "p2" / "summary.json").stat().st_mtime_ns != stamp
     # A failing case is reported as None with its log.
     bad = run_cases(
         {"bad": ("elastic-column", {"method": "spfem"})},

@@ -9,10 +9,14 @@ run.  :func:`run_cases` hands the configurations to
 whose tasks each start one such process.
 
 Every configuration has its own folder (``ROOT/NAME``) with the run's
-checkpoints, result files, ``summary.json`` and ``log.txt``, so a study is
-resumable: a configuration whose folder holds a summary with the same
-parameters is not run again, one with a checkpoint but no summary continues
-from it (``--resume``), and a failed one is tried again on the next call.
+checkpoints, result files, ``summary.json``, ``log.txt`` and ``source.txt``
+(the :func:`~skfem_npfem.cases.provenance.source_sha1` of the library that ran
+it), so a study is resumable: a configuration whose folder holds a summary with
+the same parameters from the same library source is not run again, one with a
+checkpoint but no summary continues from it (``--resume``), and a failed one
+is tried again on the next call.  After a change of the library every
+configuration runs afresh (its old checkpoints are deleted): a study measures
+one version of the code.
 """
 
 from __future__ import annotations
@@ -25,8 +29,9 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from ..cases.provenance import source_sha1
 from ..errors import NpfemError
-from ..io import dumps, latest_checkpoint, to_jsonable
+from ..io import dumps, latest_checkpoint, to_jsonable, write_bytes
 
 __all__ = [
     "Case",
@@ -58,10 +63,30 @@ def case_args(params: Mapping[str, Any]) -> list[str]:
     return out
 
 
+def _source(folder: Path) -> str | None:
+    """The library source hash a run folder was made with (None: unknown)."""
+    path = folder / "source.txt"
+    return path.read_text().strip() if path.is_file() else None
+
+
+def _prepare(folder: Path) -> bool:
+    """Make ``folder`` ready for a run of this library; True: resume in it.
+
+    Checkpoints and summaries of another library source are deleted.
+    """
+    folder.mkdir(parents=True, exist_ok=True)
+    sha = source_sha1()
+    if _source(folder) != sha:
+        for old in [*folder.glob("checkpoint_*.npz"), folder / "summary.json"]:
+            old.unlink(missing_ok=True)
+        write_bytes(folder / "source.txt", sha.encode())
+    return latest_checkpoint(folder) is not None
+
+
 def _finished(folder: Path, scene: str, params: Mapping[str, Any]) -> dict | None:
-    """The folder's summary if it is of this configuration, else None."""
+    """The folder's summary if it is of this configuration and code, else None."""
     path = folder / "summary.json"
-    if not path.is_file():
+    if not path.is_file() or _source(folder) != source_sha1():
         return None
     try:
         summary = json.loads(path.read_text())
@@ -98,11 +123,11 @@ def run_case(scene: str, params: Mapping[str, Any], folder: str | Path) -> dict:
     done = _finished(folder, scene, params)
     if done is not None:
         return done
-    folder.mkdir(parents=True, exist_ok=True)
+    resume = _prepare(folder)
     summary, log = folder / "summary.json", folder / "log.txt"
     cmd = [sys.executable, "-m", "skfem_npfem", "run", scene, "--quiet"]
     cmd += ["--out", str(folder), "--summary", str(summary), *case_args(params)]
-    if latest_checkpoint(folder) is not None:
+    if resume:
         cmd.append("--resume")
     env = dict(os.environ)
     for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
@@ -169,7 +194,7 @@ def _in_process(scene: str, params: dict, folder: str) -> dict:
     from ..scenes import run_scene
 
     folder_ = Path(folder)
-    resume = folder_.is_dir() and latest_checkpoint(folder_) is not None
+    resume = _prepare(folder_)
     clean = {k: v for k, v in params.items() if v is not None}
     summary = run_scene(
         scene,
