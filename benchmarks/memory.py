@@ -95,7 +95,8 @@ def markdown(rows: list[dict]) -> str:
     lines = [
         "# Peak memory against particles (one step, fresh process)",
         "",
-        "| case | solver | particles | peak MB | baseline MB | (peak - base) kB/particle |",
+        "| case | solver | particles | peak MB | baseline MB "
+        "| (peak - base) kB/particle |",
         "|---|---|---|---|---|---|",
     ]
     for r in rows:

@@ -79,6 +79,14 @@ class Simulation:
         the first and last steps); see :mod:`skfem_npfem.runcontrol`.
     meta : dict
         Stored in checkpoints (scene name, parameters).
+    extra_point_data : callable or None
+        ``f(particles) -> dict`` of more point data for the VTU files.
+    stepper : callable or None
+        The step, ``stepper(particles, model, dt, mesh_source, step=k) ->
+        (particles, StepResult)``; None: N-PFEM's
+        :func:`~skfem_npfem.step.advance`.  Another method (FEM with remapping,
+        explicit SPFEM: :mod:`skfem_npfem.baseline`) plugs in here and may keep
+        more state in a subclass of :class:`Particles`; checkpoints keep it.
     """
 
     def __init__(
@@ -100,6 +108,7 @@ class Simulation:
         progress: bool | None = None,
         meta: dict | None = None,
         extra_point_data: Callable[[Particles], dict[str, np.ndarray]] | None = None,
+        stepper: Callable[..., tuple[Particles, StepResult]] | None = None,
     ) -> None:
         if not (isinstance(dt, int | float) and math.isfinite(dt) and dt > 0):
             raise ParameterError("dt", dt, "a finite time step > 0 (s)")
@@ -131,6 +140,7 @@ class Simulation:
         self._last_checkpoint: dict[int, Path] = {}
         self.meta = dict(meta or {})
         self.extra_point_data = extra_point_data
+        self.stepper = stepper
         self.time = 0.0
         self.step = 0
         self.records: list[StepRecord] = []
@@ -197,9 +207,11 @@ class Simulation:
 
         Restores the particles, step, time, the adaptive time-step state and the
         step records, so that the continued run repeats the uninterrupted one
-        step for step.  Returns the checkpoint's metadata.
+        step for step.  The particles are read back as the class of the current
+        ones (a method's state subclass keeps its extra arrays).  Returns the
+        checkpoint's metadata.
         """
-        self.particles, meta = read_checkpoint(path)
+        self.particles, meta = read_checkpoint(path, type(self.particles))
         self.step = int(meta["step"])
         self.time = float(meta["time"])
         self.dt = float(meta["dt"])
@@ -382,7 +394,8 @@ class Simulation:
             self.dt = min(self.dt_max, 2 * dt, 0.9 * dt * limit / du)
 
     def _advance(self, dt: float) -> tuple[Particles, StepResult]:
-        return advance(
+        step = self.stepper if self.stepper is not None else advance
+        return step(
             self.particles, self.model, dt, self.mesh_source, step=self.step + 1
         )
 

@@ -64,6 +64,7 @@ from .common import (
     solver_from,
     solver_params,
 )
+from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
 
 MATERIALS = ("mohr-coulomb", "drucker-prager")
 #: Largest cohesion in units of rho g H0 (beyond it, displacements of a
@@ -220,6 +221,7 @@ PARAMS = [
         int,
         lo=1,
     ),
+    *METHOD_PARAMS,
     *solver_params(),
 ]
 
@@ -244,6 +246,7 @@ METRICS = {
     "final_kinetic_energy": "kinetic energy at the end, J",
     "n_inactive_final": "particles outside every element at the end (ballistic)",
     "n_particles": "number of particles",
+    **METHOD_METRICS,
 }
 
 
@@ -529,7 +532,7 @@ def build(
         if min_time is None:
             min_time = 2 * math.sqrt(H0 / values["gravity"])
         stop = run_kwargs["stop"] = AtRest(values["rest_fraction"], min_time)
-    return SceneRun(sim, run_kwargs, _metrics(values, h, stop))
+    return with_method(values, SceneRun(sim, run_kwargs, _metrics(values, h, stop)))
 
 
 SCENE = Scene(

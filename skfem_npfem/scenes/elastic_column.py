@@ -30,6 +30,7 @@ from .common import (
     solver_from,
     solver_params,
 )
+from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
 
 PARAMS = [
     Param("dim", 2, "-", "spatial dimension (2: plane strain, 3: 3D)", int, (2, 3)),
@@ -50,6 +51,7 @@ PARAMS = [
     Param(
         "theta2", 1.0, "-", "time-integration parameter theta2", float, lo=0.5, hi=1.0
     ),
+    *METHOD_PARAMS,
     *solver_params(),
 ]
 
@@ -62,6 +64,7 @@ METRICS = {
     "period": "oscillation period of the top (dynamic, >= 1 period run), s",
     "period_exact": "first oedometric period 4 H / c_p, s",
     "n_particles": "number of particles",
+    **METHOD_METRICS,
 }
 
 
@@ -180,7 +183,7 @@ def build(
             "n_particles": int(p.n),
         }
 
-    return SceneRun(sim, {"steps": values["steps"]}, metrics)
+    return with_method(values, SceneRun(sim, {"steps": values["steps"]}, metrics))
 
 
 def _rel(a: np.ndarray, b: np.ndarray, scale: np.ndarray | None = None) -> float:

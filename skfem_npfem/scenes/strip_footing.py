@@ -43,6 +43,7 @@ from .common import (
     solver_from,
     solver_params,
 )
+from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
 from .plateau import PlateauRule
 
 MATERIALS = ("tresca", "mohr-coulomb", "drucker-prager")
@@ -166,6 +167,7 @@ PARAMS = [
         "small-strain limit analysis",
         bool,
     ),
+    *METHOD_PARAMS,
     *solver_params(),
 ]
 
@@ -187,6 +189,7 @@ METRICS = {
     "warnings": "list of one-line warnings (a cap stopped the run before the "
     "plateau); the CLI prints each on stderr",
     "n_particles": "number of particles",
+    **METHOD_METRICS,
 }
 
 
@@ -376,7 +379,9 @@ def build(
             "n_particles": int(particles.n),
         }
 
-    return SceneRun(sim, {"steps": rule.step_cap, "stop": finished}, metrics)
+    return with_method(
+        values, SceneRun(sim, {"steps": rule.step_cap, "stop": finished}, metrics)
+    )
 
 
 def load_curve(sim: Simulation) -> list[list[float]]:
