@@ -137,10 +137,10 @@ def test_every_method_gives_the_same_outputs(collapses):
 def test_method_metrics_are_the_methods_own(collapses):
     fem = collapses["fem-remapp1"][0]["metrics"]
     assert fem["remapped_steps"] >= 1 and fem["yield_violations"] >= 0
-    assert math.isnan(fem["explicit_steps"])
+    assert fem["explicit_steps"] is None
     sp = collapses["spfem"][0]["metrics"]
     assert sp["explicit_steps"] >= 12 and 0 < sp["explicit_dt"] < sp["stable_dt"]
-    assert math.isnan(sp["remapped_steps"])
+    assert sp["remapped_steps"] is None
     for res, _ in collapses.values():
         hist = [h["stress_roughness"] for h in res["history"]]
         assert res["metrics"]["stress_roughness"] == hist[-1]
