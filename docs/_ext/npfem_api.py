@@ -25,7 +25,7 @@ SKIP = {"__version__"}
 
 
 def slug(title: str) -> str:
-    """A file name for a group title (``"Particles and their meshes"``: ``particles-meshes``)."""
+    """File name of a group title: "Particles and their meshes" -> particles-meshes."""
     words = re.findall(r"[a-z0-9]+", title.lower())
     stop = {"and", "the", "their", "of", "a"}
     words = [w for w in words if w not in stop] or ["other"]
