@@ -49,9 +49,9 @@ class PendingSection(SphinxDirective):
     ``pattern`` is a regular expression matched against the headings of the
     page named by ``:page:`` (default: the current one).  If a heading
     matches, the directive renders the body (the pointer) with ``{heading}``
-    replaced by the heading's text; otherwise a clearly marked "pending" note
-    with the ``:pending:`` text.  So the page updates itself when the section
-    lands.
+    replaced by the heading's text and ``{slug}`` by its anchor; otherwise a
+    clearly marked "pending" note with the ``:pending:`` text.  So the page
+    updates itself when the section lands.
     """
 
     required_arguments = 1
@@ -77,8 +77,13 @@ class PendingSection(SphinxDirective):
                 heading = m.group(1)
                 break
         if heading is not None:
+            from myst_parser.mdit_to_docutils.base import default_slugify
+
             text = "\n".join(self.content).replace("{heading}", heading)
+            text = text.replace("{slug}", default_slugify(heading))
             return self.parse_text_to_nodes(text)
+        if "pending" not in self.options:
+            return []
         note = nodes.admonition(classes=["pending-section"])
         note += nodes.title(text="Pending")
         note += self.parse_text_to_nodes(self.options.get("pending", ""))
