@@ -14,6 +14,7 @@ name added to ``__all__`` therefore appears without editing the docs, and
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import re
 from pathlib import Path
@@ -49,16 +50,38 @@ def groups() -> list[tuple[str, list[str]]]:
     return found
 
 
+def _bare_fields(cls: type) -> list[str]:
+    """Dataclass fields without a ``#:`` comment of their own.
+
+    The class docstring documents them (Parameters or Attributes); autodoc
+    would list them a second time, bare, as annotated attributes.
+    """
+    if not dataclasses.is_dataclass(cls):
+        return []
+    from sphinx.pycode import ModuleAnalyzer
+
+    try:
+        docs = ModuleAnalyzer.for_module(cls.__module__).find_attr_docs()
+    except Exception:  # no source: keep everything
+        return []
+    own = {attr for (scope, attr) in docs if scope == cls.__qualname__}
+    return [f.name for f in dataclasses.fields(cls) if f.name not in own]
+
+
 def directive(name: str) -> str:
     """The autodoc directive for one public name."""
     obj = getattr(skfem_npfem, name)
     if inspect.isclass(obj) and issubclass(obj, BaseException):
         return f".. autoexception:: {name}\n   :members:\n   :show-inheritance:\n"
     if inspect.isclass(obj):
-        return (
+        text = (
             f".. autoclass:: {name}\n   :members:\n   :show-inheritance:\n"
             "   :special-members: __call__\n"
         )
+        bare = _bare_fields(obj)
+        if bare:
+            text += f"   :exclude-members: {', '.join(bare)}\n"
+        return text
     if callable(obj):
         return f".. autofunction:: {name}\n"
     return f".. py:data:: {name}\n\n   {_data_doc(name)}\n"
