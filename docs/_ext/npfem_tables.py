@@ -145,6 +145,73 @@ def footing_plateau() -> str:
     )
 
 
+VERIFICATION = "docs/validation/verification.json"
+
+
+@table(VERIFICATION)
+def elastic_column() -> str:
+    """Static elastic column: stress and settlement errors (verification_tables.py)."""
+    out = []
+    for c in load(VERIFICATION)["columns"]:
+        o = c["overrides"]
+        out.append(
+            [
+                f"{o['dim']}D, spacing {o['spacing']:g} ({count(c['n_particles'])})",
+                pct(c["sigma_v_rel_l2"], 2, sign=False),
+                pct(c["sigma_h_rel_l2"], 2, sign=False),
+                sci(abs(c["settlement_error"]), 1),
+            ]
+        )
+    return md(["case", "σ_v rel. L2", "σ_h rel. L2", "settlement error"], out)
+
+
+@table(VERIFICATION)
+def column_period() -> str:
+    """Sudden gravity: the top's period against 4H/c_p (verification_tables.py)."""
+    p = load(VERIFICATION)["period"]
+    row = [
+        f"{p['period']:.5f}",
+        f"{p['period_exact']:.5f}",
+        pct(p["period_error"], 2),
+        pct(p["trapezoidal_elongation"], 2),
+    ]
+    return md(
+        ["period (s)", "4H/c_p (s)", "error", "trapezoidal rule's own elongation"],
+        [row],
+    )
+
+
+@table(VERIFICATION)
+def prandtl() -> str:
+    """The Prandtl footing against 2 + pi (verification_tables.py)."""
+    out = []
+    for f in load(VERIFICATION)["footings"]:
+        o = f["overrides"]
+        names = {"tresca": "Tresca", "drucker-prager": "Drucker–Prager (φ = 0)"}
+        kind = [names.get(o.get("material", "tresca")), o.get("footing", "smooth")]
+        out.append(
+            [
+                f"{f['elements_across']} ({count(f['n_particles'])})",
+                ", ".join(kind),
+                f"{f['bearing_factor']:.4f}",
+                pct(f["relative_error"], 3),
+                "yes" if f["plateau_reached"] else "no",
+                f["steps"],
+            ]
+        )
+    return md(
+        [
+            "elements across the half-footing (particles)",
+            "soil, footing",
+            "q/c",
+            "error vs 2 + π",
+            "plateau",
+            "steps",
+        ],
+        out,
+    )
+
+
 # ---------------------------------------------------------------------------
 # Validation: the column collapse (demos/collapse_validation.py).
 
