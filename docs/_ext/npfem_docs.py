@@ -12,10 +12,18 @@ At ``builder-inited`` it writes the generated pages (never committed):
 It also registers the directives that build tables from the JSON the demos
 and benchmarks commit (:mod:`npfem_tables`) and the ``pending-section``
 directive of the theory page.
+
+A page that no toctree lists (say a page another branch adds without
+touching ``index.md``) would fail the ``-W`` build; instead it is listed
+under "More" in the site's navigation (:func:`list_unlisted_pages`) and the
+build says so in its log.
 """
 
 from __future__ import annotations
 
+import fnmatch
+import posixpath
+import re
 from pathlib import Path
 from typing import ClassVar
 
@@ -24,7 +32,12 @@ import npfem_gallery
 import npfem_tables
 from docutils import nodes
 from sphinx.application import Sphinx
+from sphinx.util import logging
 from sphinx.util.docutils import SphinxDirective
+
+logger = logging.getLogger(__name__)
+
+TOCTREE = re.compile(r"^(`{3,}|:{3,})\{toctree\}[^\n]*\n(.*?)^\1[ \t]*$", re.M | re.S)
 
 
 def write_if_changed(path: Path, text: str) -> None:
@@ -41,6 +54,60 @@ def generate(app: Sphinx) -> None:
         write_if_changed(src / "api" / rel, text)
     for rel, text in npfem_gallery.pages(src).items():
         write_if_changed(src / "gallery" / rel, text)
+
+
+def toctree_entries(srcdir: Path, docnames: set[str]) -> set[str]:
+    """The documents the toctrees of the Markdown sources list.
+
+    Reads the fenced ``{toctree}`` blocks of every source (entries relative
+    to their page, ``Title <entry>`` links, ``:glob:`` patterns).
+    """
+    listed: set[str] = set()
+    for doc in docnames:
+        path = srcdir / f"{doc}.md"
+        if not path.exists():
+            continue
+        base = posixpath.dirname(doc)
+        for block in TOCTREE.finditer(path.read_text(encoding="utf-8")):
+            body = block.group(2)
+            glob = re.search(r"^:glob:", body, re.M) is not None
+            for line in body.splitlines():
+                entry = line.strip()
+                if not entry or entry.startswith(":"):
+                    continue
+                m = re.fullmatch(r".*<(.+)>", entry)
+                entry = (m.group(1) if m else entry).removesuffix(".md")
+                if entry.startswith("/"):
+                    target = entry.lstrip("/")
+                else:
+                    target = posixpath.normpath(posixpath.join(base, entry))
+                if glob:
+                    listed.update(fnmatch.filter(docnames, target))
+                else:
+                    listed.add(target)
+    return listed
+
+
+def list_unlisted_pages(app: Sphinx, docname: str, source: list[str]) -> None:
+    """Append a hidden "More" toctree of unlisted pages to the root page."""
+    if docname != app.config.root_doc:
+        return
+    docnames = set(app.env.found_docs)
+    unlisted = sorted(
+        docnames - toctree_entries(Path(app.srcdir), docnames) - {docname}
+    )
+    if not unlisted:
+        return
+    logger.info("pages in no toctree, listed under 'More': %s", ", ".join(unlisted))
+    entries = "\n".join(unlisted)
+    source[0] += f"\n\n```{{toctree}}\n:hidden:\n:caption: More\n\n{entries}\n```\n"
+
+
+def reread_root_on_new_pages(
+    app: Sphinx, env, added: set[str], changed: set[str], removed: set[str]
+) -> list[str]:
+    """Rebuild the root page's navigation when pages come or go."""
+    return [app.config.root_doc] if added or removed else []
 
 
 class PendingSection(SphinxDirective):
@@ -61,8 +128,6 @@ class PendingSection(SphinxDirective):
 
     def run(self) -> list[nodes.Node]:
         """Render the pointer, or the pending note."""
-        import re
-
         pattern = re.compile(self.arguments[0], re.IGNORECASE)
         page = self.options.get("page")
         if page:
@@ -93,6 +158,8 @@ class PendingSection(SphinxDirective):
 def setup(app: Sphinx) -> dict:
     """Register the extension."""
     app.connect("builder-inited", generate)
+    app.connect("source-read", list_unlisted_pages)
+    app.connect("env-get-outdated", reread_root_on_new_pages)
     app.add_directive("pending-section", PendingSection)
     npfem_tables.setup(app)
     return {"parallel_read_safe": True, "parallel_write_safe": True}
