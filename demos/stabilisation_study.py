@@ -25,6 +25,14 @@ Writes ``docs/validation/stabilisation.json`` and the page generated from it,
     python demos/stabilisation_study.py            # ~20 CPU-min
     python demos/stabilisation_study.py --quick    # reduced (tests)
     python demos/stabilisation_study.py --page     # page from the JSON only
+
+The aspect-ratio sweep with the new defaults runs through the validation demo
+and is condensed here (the committed ``collapse_validation.json`` holds the
+sweep before the change)::
+
+    python demos/collapse_validation.py --aspects 0.5,1,2,4,8 \
+        --particles-across 12 --refinement "" --variants "" --out DIR
+    python demos/stabilisation_study.py --sweep DIR   # adds it to the JSON
 """
 
 from __future__ import annotations
@@ -45,6 +53,7 @@ from skfem_npfem.sweeps import run_tasks
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "docs" / "validation" / "stabilisation.json"
+BEFORE = ROOT / "docs" / "validation" / "collapse_validation.json"
 PAGE_TITLE = "# Stress oscillation: node masses and the stabilisation factor"
 
 #: Collapse cases: label -> scene parameters.
@@ -180,6 +189,28 @@ def page(result: dict[str, Any]) -> str:
             f"| {label} | {_f(r['R_final'], '.4f')} | {_f(r['R_max'], '.4f')} | "
             f"{_f(r['max_displacement'], '.2e')} | {_f(r['max_speed_end'], '.2e')} |"
         )
+    if result.get("sweep"):
+        lines += [
+            "",
+            "## Aspect-ratio sweep (12 particles across L0)",
+            "",
+            "After: the current defaults (mesh masses, beta = 30).  Before: the",
+            "committed validation sweep (particle masses, no stabilisation), which",
+            "did not record R.",
+            "",
+            "| a | particles | R max | R at rest | run-out after | run-out before | "
+            "H/L0 after | H/L0 before | volume after | volume before |",
+            "|---|---|---|---|---|---|---|---|---|---|",
+        ]
+        for r in result["sweep"]:
+            b = r["before"]
+            lines.append(
+                f"| {r['aspect']:g} | {r['particles']} | {_f(r['R_max'], '.3f')} | "
+                f"{_f(r['R_final'], '.3f')} | {_f(r['normalised_runout'], '.2f')} | "
+                f"{_f(b['normalised_runout'], '.2f')} | "
+                f"{_f(r['final_height'], '.2f')} | {_f(b['final_height_L0'], '.2f')} | "
+                f"{_f(r['volume_change'], '+.1%')} | {_f(b['volume_change'], '+.1%')} |"
+            )
     c = result["cost"]
     med = c["median_step_s"]
     lines += [
@@ -195,6 +226,45 @@ def page(result: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def condense_sweep(folder: Path) -> list[dict[str, Any]]:
+    """Per aspect ratio: the validation demo's cases in ``folder`` against before.
+
+    ``before`` is the primary sweep of the committed ``collapse_validation.json``
+    (made before issue 10: particle masses, no stabilisation).
+    """
+    before = {}
+    if BEFORE.exists():
+        for row in json.loads(BEFORE.read_text())["sweep"]:
+            if row.get("variant") is None:
+                before[(row["aspect"], row["N"])] = row
+    rows = []
+    for path in sorted(Path(folder, "cases").glob("a*_N*.json")):
+        case = json.loads(path.read_text())
+        m, par = case["metrics"], case["parameters"]
+        a = float(par["aspect"])
+        n = round(0.2 / float(par["spacing"])) if par.get("spacing") else None
+        old = before.get((a, n), {})
+        rows.append(
+            {
+                "aspect": a,
+                "N": n,
+                "particles": m["n_particles"],
+                "steps": case["solver"]["steps"],
+                "R_max": m["stress_roughness_max"],
+                "R_final": m["stress_roughness"],
+                "normalised_runout": m["normalised_runout"],
+                "final_height": m["final_height"],
+                "volume_change": m["volume_change"],
+                "at_rest": m["at_rest"],
+                "before": {
+                    k: old.get(k)
+                    for k in ("normalised_runout", "final_height_L0", "volume_change")
+                },
+            }
+        )
+    return sorted(rows, key=lambda r: r["aspect"])
+
+
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Run the study and write the JSON (returned)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -202,9 +272,13 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", type=Path, default=OUT)
     ap.add_argument("--page", action="store_true", help="only the page from the JSON")
+    ap.add_argument("--sweep", type=Path, help="add a validation-demo sweep folder")
     args = ap.parse_args(argv)
-    if args.page:
+    if args.page or args.sweep:
         result = json.loads(args.out.read_text())
+        if args.sweep:
+            result["sweep"] = condense_sweep(args.sweep)
+            write_json(args.out, result)
         args.out.with_suffix(".md").write_text(page(result))
         return result
     steps = 20 if args.quick else None
