@@ -25,12 +25,13 @@ from typing import Any, Protocol
 import numpy as np
 from skfem import MeshTet, MeshTri
 
+from .axisymmetric import axisymmetric_integration
 from .boundary import RigidWall
 from .conic import Contacts, SolverOptions, StepData, solve_step
 from .errors import NpfemError, ParameterError, SolverError
 from .materials import Material
 from .particles import Particles
-from .smoothing import nodal_integration
+from .smoothing import NodalIntegration, nodal_integration
 
 __all__ = [
     "AtRest",
@@ -74,6 +75,14 @@ class Model:
         Stress scale for non-dimensionalisation (None: automatic).
     solver : SolverOptions
         Clarabel settings.
+    axisymmetric : bool
+        2D only: the mesh is the ``(r, z)`` half-section of a body of revolution
+        about ``x = 0`` (:mod:`skfem_npfem.axisymmetric`).  Stresses are
+        ``(rr, zz, tt, rz)`` with the hoop component in the ``zz`` slot, the
+        cells are weighted by ``2 pi r`` and particle masses must be the full-ring
+        masses ``rho V_i`` of those cells.  Needs cones with ``sigma_tt`` as a
+        variable (Drucker-Prager, von Mises); particles on the axis should have
+        ``u_r`` fixed.
     """
 
     dim: int
@@ -87,6 +96,7 @@ class Model:
     update_geometry: bool = True
     stress_scale: float | None = None
     solver: SolverOptions = field(default_factory=SolverOptions)
+    axisymmetric: bool = False
 
     def __post_init__(self) -> None:
         if self.dim not in (2, 3):
@@ -112,13 +122,31 @@ class Model:
         for w in self.walls:
             if w.normal.size != self.dim:
                 raise ParameterError("walls", w, f"walls must be {self.dim}D")
+        if self.axisymmetric:  # axisymmetric N-PFEM (axisymmetric.py)
+            self._check_axisymmetric()
+
+    def _check_axisymmetric(self) -> None:
+        """Axisymmetry is 2D, and every plastic cone must see sigma_tt."""
+        if self.dim != 2:
+            raise ParameterError(
+                "axisymmetric", True, "only with dim=2 (the (r, z) half-section)"
+            )
+        for m in self.materials:
+            if m.plastic and not m.needs_zz(2):
+                raise ParameterError(
+                    "materials",
+                    type(m).__name__,
+                    "a cone with the hoop stress as a variable in axisymmetry: "
+                    "DruckerPrager or VonMises (plane-strain Mohr-Coulomb/Tresca "
+                    "ignore sigma_tt)",
+                )
 
     @property
     def components(self) -> tuple[int, ...]:
         """Full-Voigt components carried as cone variables."""
         if self.dim == 3:
             return (0, 1, 2, 3, 4, 5)
-        if any(m.needs_zz(2) for m in self.materials):
+        if self.axisymmetric or any(m.needs_zz(2) for m in self.materials):
             return (0, 1, 2, 3)
         return (0, 1, 3)
 
@@ -399,6 +427,20 @@ def _contacts(
     return c, np.concatenate(wall_ids), c.node
 
 
+def _integration(mesh, model: Model) -> tuple[NodalIntegration, float]:
+    """Nodal-integration operators of one step's mesh and the particle spacing.
+
+    Axisymmetric models get the ``2 pi r``-weighted operators with the hoop
+    strain (:mod:`skfem_npfem.axisymmetric`); their spacing comes from the planar
+    cell areas, not from the (m^3) ring volumes.
+    """
+    if model.axisymmetric:
+        ni = axisymmetric_integration(mesh, model.components)
+        return ni, ni.length_scale
+    ni = nodal_integration(mesh, model.components)
+    return ni, float(np.mean(ni.volumes)) ** (1.0 / model.dim)
+
+
 def advance(
     p: Particles,
     model: Model,
@@ -445,9 +487,8 @@ def advance(
     pts, conn = np.ascontiguousarray(xa.T), np.ascontiguousarray(local_t)
     # sort_t=False: scikit-fem would otherwise reorder (and flip) triangles.
     mesh = MeshTri(pts, conn, sort_t=False) if d == 2 else MeshTet(pts, conn)
-    ni = nodal_integration(mesh, model.components)
+    ni, h = _integration(mesh, model)
     t_mesh = time.perf_counter() - t0
-    h = float(np.mean(ni.volumes)) ** (1.0 / d)
     mass = p.mass[active]
     g = model.gravity_vector
     force = mass[:, None] * g[None, :]
