@@ -39,12 +39,15 @@ import numpy as np
 import scipy.sparse as sp
 from skfem import CellBasis, ElementTriP1, Mesh
 
+from .materials import ConeRows, MohrCoulomb
 from .smoothing import FULL_VOIGT, NodalIntegration
 
 __all__ = [
     "MASS_BASIS",
     "AxisymmetricIntegration",
+    "AxisymmetricMohrCoulomb",
     "axisymmetric_integration",
+    "mohr_coulomb_cones",
 ]
 
 #: How volumes and masses of an axisymmetric model are counted (for summaries).
@@ -225,3 +228,98 @@ def _assemble_G(
         ),
         shape=(2 * n, ns * n),
     )
+
+
+def mohr_coulomb_cones(
+    phi: float, c: float
+) -> list[tuple[np.ndarray, float, np.ndarray]]:
+    """Axisymmetric Mohr-Coulomb as three second-order cones ``k - a.s >= |M s|``.
+
+    With ``sigma_tt`` principal, the in-plane principal stresses ``p +- R``
+    (``p = (s_rr + s_zz)/2``, ``R = |((s_rr - s_zz)/2, s_rz)|``) and
+    ``N = (1 + sin phi)/(1 - sin phi)``, Mohr-Coulomb (``max_{i != j} s_i (1 + sin
+    phi) - s_j (1 - sin phi) <= 2 c cos phi``, tension positive) is exactly
+
+    * ``R + p sin phi <= c cos phi`` (the plane-strain cone, in-plane pair),
+    * ``R + p - s_tt / N <= 2 c / sqrt(N)`` (in-plane major, hoop minor),
+    * ``R - p + N s_tt <= 2 c sqrt(N)`` (hoop major, in-plane minor).
+
+    Not used by the step yet (the program takes one cone per node); see
+    docs/theory.md.
+
+    Parameters
+    ----------
+    phi : float
+        Friction angle, degrees.
+    c : float
+        Cohesion, Pa.
+
+    Returns
+    -------
+    list of (a (4,), k, M (2, 4))
+        In the order ``(rr, zz, tt, rz)``.
+    """
+    s = math.sin(math.radians(phi))
+    cos = math.cos(math.radians(phi))
+    n = (1.0 + s) / (1.0 - s)
+    M = np.array([[0.5, -0.5, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+    return [
+        (np.array([0.5 * s, 0.5 * s, 0.0, 0.0]), c * cos, M),
+        (np.array([0.5, 0.5, -1.0 / n, 0.0]), 2.0 * c / math.sqrt(n), M),
+        (np.array([-0.5, -0.5, n, 0.0]), 2.0 * c * math.sqrt(n), M),
+    ]
+
+
+class AxisymmetricMohrCoulomb(MohrCoulomb):
+    """Mohr-Coulomb with the hoop stress as a variable: three SOC(3) per node.
+
+    Exact Mohr-Coulomb whenever the ``zz`` slot is a principal stress: the hoop
+    stress in axisymmetry (``Model(axisymmetric=True)``), and equally
+    ``sigma_zz`` of plane strain.  The cones are :func:`mohr_coulomb_cones`;
+    ``psi < phi`` uses frozen friction cone by cone (each cone is linear in its
+    friction coefficient once the coefficient of ``R`` is 1), and the tension
+    cut-off bounds the mean stress by the apex, ``I1 / 3 <= c cot(phi)``.
+
+    Parameters
+    ----------
+    E, nu, rho, c, phi, psi, tension_cutoff
+        As :class:`~skfem_npfem.materials.MohrCoulomb`.
+
+    Examples
+    --------
+    >>> mc = AxisymmetricMohrCoulomb(1e7, 0.3, c=1e3, phi=30.0)
+    >>> [round(float(r.k[0]), 3) for r in mc.cone(2, (0, 1, 2, 3), np.zeros((1, 4)))]
+    [866.025, 1154.701, 3464.102]
+    """
+
+    def needs_zz(self, dim: int) -> bool:  # noqa: D102
+        return True
+
+    def cone(  # type: ignore[override]
+        self, dim: int, components: tuple[int, ...], sigma_n: np.ndarray
+    ) -> list[ConeRows]:
+        """Three cone rows per node, with the frozen-friction strengths."""
+        sigma_n = np.atleast_2d(sigma_n)[:, :4]
+        comp = list(components)
+        n = sigma_n.shape[0]
+        out = []
+        cones = zip(
+            mohr_coulomb_cones(self.phi, self.c),
+            mohr_coulomb_cones(self.psi, self.c),
+            strict=True,
+        )
+        for j, ((a_phi, k0, M), (a_psi, _, _)) in enumerate(cones):
+            cut_a = cut_k = None
+            if j == 0 and self.tension_cutoff and self.phi > 0.0:
+                cut_a = np.array([1.0, 1.0, 1.0, 0.0])[comp] / 3.0
+                cut_k = self.c / math.tan(math.radians(self.phi))
+            out.append(
+                ConeRows(
+                    a=np.broadcast_to(a_psi[comp], (n, len(comp))).copy(),
+                    k=np.maximum(k0 - sigma_n @ (a_phi - a_psi), 0.0),
+                    M=M[:, comp],
+                    cutoff_a=cut_a,
+                    cutoff_k=cut_k,
+                )
+            )
+        return out

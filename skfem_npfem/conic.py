@@ -483,17 +483,27 @@ class _Program:
         A = _coo(rows, cols, vals, nrow, self.nx)
         return A, (np.concatenate(b) if b else np.zeros(0)), nrow
 
-    def yield_rows(self):
-        """Cut-off rows (nonnegative) and one SOC per plastic node."""
+    def cones(self):
+        """``(nodes, ConeRows)`` of every plastic material, one per cone.
+
+        A material may return a list of cones per node (axisymmetric
+        Mohr-Coulomb: three SOC(3), ``skfem_npfem.axisymmetric``).
+        """
         data = self.data
-        ns = self.ns
-        soc_blocks = []  # (A coo parts, b, cone dims)
-        cut_rows, cut_cols, cut_vals, cut_b = [], [], [], []
         for m_id, mat in enumerate(data.materials):
             nodes = np.flatnonzero(data.material == m_id)
             if nodes.size == 0 or not mat.plastic:
                 continue
-            cone = mat.cone(self.dim, tuple(self.comp), data.sigma_n[nodes])
+            rows = mat.cone(self.dim, tuple(self.comp), data.sigma_n[nodes])
+            for cone in _cone_list(rows):
+                yield nodes, cone
+
+    def yield_rows(self):
+        """Cut-off rows (nonnegative) and one SOC per plastic node (and cone)."""
+        ns = self.ns
+        soc_blocks = []  # (A coo parts, b, cone dims)
+        cut_rows, cut_cols, cut_vals, cut_b = [], [], [], []
+        for nodes, cone in self.cones():
             m = cone.M.shape[0]
             # Rows per node: [a^T ; -M] on ds_i, b = (k - a^T s_n ; M s_n).
             rowmat = np.concatenate(
@@ -522,6 +532,11 @@ class _Program:
         b = np.zeros((nf, 3))
         b[:, 0] = self.data.contacts.mu_lambda[self.fric]
         return A, b.ravel(), nf
+
+
+def _cone_list(rows) -> list:
+    """A material's cone rows as a list (one ConeRows, or several)."""
+    return list(rows) if isinstance(rows, list | tuple) else [rows]
 
 
 def _coo(rows, cols, vals, nrow, ncol) -> sp.csc_matrix:
@@ -627,7 +642,7 @@ def _stress_scale(data: StepData) -> float:
         sel = data.material == m_id
         if mat.plastic and np.any(sel):
             rows = mat.cone(ni.dim, ni.components, data.sigma_n[sel])
-            cands.append(float(np.max(rows.k)))
+            cands += [float(np.max(r.k)) for r in _cone_list(rows)]
     s = max(cands)
     if not s > 0.0:
         s = min(m.E for m in data.materials) * 1e-6

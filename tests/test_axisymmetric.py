@@ -24,7 +24,11 @@ from skfem import (
     MeshTri,
 )
 
-from skfem_npfem.axisymmetric import axisymmetric_integration
+from skfem_npfem.axisymmetric import (
+    AxisymmetricMohrCoulomb,
+    axisymmetric_integration,
+    mohr_coulomb_cones,
+)
 from skfem_npfem.conic import Contacts, SolverOptions, StepData, solve_step
 from skfem_npfem.errors import ParameterError, SolverError
 from skfem_npfem.materials import (
@@ -448,3 +452,98 @@ def test_drucker_prager_uniform_step_is_the_closed_form_return(factor):
         assert np.allclose(f, k, rtol=1e-7, atol=0)
     else:
         assert np.all(f < k)
+
+
+# ------------------------------------------ Mohr-Coulomb as three cones ----
+@pytest.mark.parametrize(("phi", "c"), [(30.0, 0.0), (20.0, 1e4), (0.0, 1e4)])
+def test_axisymmetric_mohr_coulomb_is_three_second_order_cones(phi, c):
+    # Random axisymmetric stresses scaled onto the Mohr-Coulomb surface (from
+    # the principal stresses): the largest of the three cone residuals is 0
+    # there (1e-9 relative), negative inside (scale 0.9), positive outside (1.1).
+    rng = np.random.default_rng(7)
+    s, cos = math.sin(math.radians(phi)), math.cos(math.radians(phi))
+    cones = mohr_coulomb_cones(phi, c)
+
+    def mc(sig):  # max over ordered pairs of principal stresses
+        T = np.array([[sig[0], sig[3], 0], [sig[3], sig[1], 0], [0, 0, sig[2]]])
+        e = np.linalg.eigvalsh(T)
+        return (
+            max(
+                e[i] * (1 + s) - e[j] * (1 - s)
+                for i in range(3)
+                for j in range(3)
+                if i != j
+            )
+            - 2 * c * cos
+        )
+
+    def worst(sig):
+        return max(a @ sig + np.linalg.norm(M @ sig) - k for a, k, M in cones)
+
+    apex = np.array([1.0, 1.0, 1.0, 0.0]) * (
+        c / math.tan(math.radians(phi)) if phi else 0
+    )
+    for _ in range(40):
+        dev = rng.normal(size=4) * 1e4
+        dev[:3] -= dev[:3].mean()  # deviatoric: the ray leaves the cone
+        base = apex - np.array([1.0, 1.0, 1.0, 0.0]) * rng.uniform(0, 5e4)
+        lo, hi = 0.0, 1.0  # find t with mc(base + t dev) = 0 (mc(base) <= 0)
+        while mc(base + hi * dev) < 0:
+            hi *= 2
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if mc(base + mid * dev) < 0 else (lo, mid)
+        on = base + lo * dev
+        scale = 1e4 + abs(on).max()
+        assert abs(worst(on)) < 1e-9 * scale
+        assert worst(base + 0.9 * lo * dev) < 0 < worst(base + 1.1 * lo * dev)
+
+
+@pytest.mark.parametrize("phi", [0.0, 10.0, 30.0])
+@pytest.mark.parametrize(("factor", "feasible"), [(0.99, True), (1.01, False)])
+def test_mohr_coulomb_thick_cylinder_limit_pressure(phi, factor, feasible):
+    # benchmarks.md P5, Mohr-Coulomb cylinder in plane strain (hoop stress
+    # major, radial minor, axial intermediate): p_lim = c cot(phi) [(b/a)^((N-1)
+    # /N) - 1] = 1.2911 c (10 deg), 1.0174 c (30 deg); Tresca 2 c ln(b/a) =
+    # 1.3863 c.  The hoop-major cone is the active one.  Bisection on this
+    # 16 x 4 mesh: 1.0006, 1.00006, 1.0053 p_lim; gate +-1 % (P5's tolerance).
+    a, b, c = 1.0, 2.0, 1.0
+    s = math.sin(math.radians(phi))
+    if phi == 0.0:
+        p_lim = 2 * c * math.log(b / a)
+    else:
+        n = (1 + s) / (1 - s)
+        p_lim = c / math.tan(math.radians(phi)) * ((b / a) ** ((n - 1) / n) - 1)
+    ref = {0.0: 1.3863, 10.0: 1.2911, 30.0: 1.0174}[phi]
+    assert abs(p_lim - ref) < 1e-4
+    mesh, fixed = lame_setup(16, 4, a, b)
+    mat = AxisymmetricMohrCoulomb(1e3, 0.3, c=c, phi=phi)
+    force = pressure_load(mesh, a, factor * p_lim)
+    if feasible:
+        sol = static_step(mesh, mat, fixed, force)
+        worst = max(
+            np.max(sol.sigma @ a_ + np.linalg.norm(sol.sigma @ M.T, axis=1) - k)
+            for a_, k, M in mohr_coulomb_cones(phi, c)
+        )
+        assert worst <= 1e-7 * c
+    else:
+        with pytest.raises(SolverError, match="Infeasible"):
+            static_step(mesh, mat, fixed, force)
+
+
+def test_axisymmetric_mohr_coulomb_frozen_friction_and_model():
+    # psi < phi: each cone has friction psi and a strength lagged on sigma_n
+    # such that, at sigma = sigma_n, it is exactly the phi cone (1e-9).
+    mat = AxisymmetricMohrCoulomb(1e7, 0.3, c=2e3, phi=30.0, psi=0.0)
+    sig_n = np.array([[-3e4, -6e4, -2.5e4, 4e3]])
+    rows = mat.cone(2, (0, 1, 2, 3), sig_n)
+    assert len(rows) == 3
+    for r, (a_phi, k_phi, M) in zip(rows, mohr_coulomb_cones(30.0, 2e3), strict=True):
+        assert np.allclose(r.M, M)
+        frozen = r.k[0] - r.a[0] @ sig_n[0]
+        assert abs(frozen - (k_phi - a_phi @ sig_n[0])) < 1e-9 * 6e4
+    # psi = 0: the cones' a have no friction left (isochoric flow).
+    assert np.allclose(rows[0].a, 0.0)
+    assert np.allclose(rows[1].a[0], [0.5, 0.5, -1.0, 0.0])
+    m = Model(dim=2, materials=[mat], axisymmetric=True)
+    assert m.components == (0, 1, 2, 3)

@@ -164,6 +164,8 @@ def test_builders_refuse_bad_input():
         cylinder_column("box")
     with pytest.raises(ParameterError, match="aspect"):
         cylinder_column("axisymmetric", aspect=2.0)
+    with pytest.raises(ParameterError, match="material"):
+        cylinder_column("quarter-cylinder", material="mohr-coulomb")
 
 
 def test_radial_front_is_a_mass_quantile():

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from ..axisymmetric import axisymmetric_integration
+from ..axisymmetric import AxisymmetricMohrCoulomb, axisymmetric_integration
 from ..boundary import RigidWall, floor, wall_x
 from ..conic import SolverOptions
 from ..errors import ParameterError
@@ -253,6 +253,7 @@ def cylinder_column(
     *,
     floor_friction: float | None = None,
     match: str = "compression",
+    material: str = "drucker-prager",
     solver: SolverOptions | None = None,
     **overrides: float,
 ) -> CylinderColumn:
@@ -268,6 +269,10 @@ def cylinder_column(
         Floor friction angle, degrees (default ``phi``).
     match : str
         Drucker-Prager match to Mohr-Coulomb (default triaxial compression).
+    material : {"drucker-prager", "mohr-coulomb"}
+        Yield criterion; Mohr-Coulomb (three cones with the hoop stress,
+        :class:`~skfem_npfem.axisymmetric.AxisymmetricMohrCoulomb`) only in
+        axisymmetry (3D Mohr-Coulomb is not a second-order cone).
     solver : SolverOptions, optional
         Clarabel settings.
     **overrides
@@ -303,16 +308,15 @@ def cylinder_column(
         K0=v["K0"],
         n_walls=len(walls),
     )
-    mat = DruckerPrager(
-        v["E"],
-        v["nu"],
-        v["rho"],
-        c=v["c"],
-        phi=v["phi"],
-        psi=v["psi"],
-        match=match,
-        tension_cutoff=True,
-    )
+    strength = {"c": v["c"], "phi": v["phi"], "psi": v["psi"], "tension_cutoff": True}
+    if material == "mohr-coulomb" and geometry == "axisymmetric":
+        mat = AxisymmetricMohrCoulomb(v["E"], v["nu"], v["rho"], **strength)
+    elif material == "drucker-prager":
+        mat = DruckerPrager(v["E"], v["nu"], v["rho"], match=match, **strength)
+    else:
+        raise ParameterError(
+            "material", material, "drucker-prager, or mohr-coulomb in axisymmetry"
+        )
     model = Model(
         dim=x.shape[1],
         materials=[mat],
