@@ -122,6 +122,8 @@ class Model:
         for w in self.walls:
             if w.normal.size != self.dim:
                 raise ParameterError("walls", w, f"walls must be {self.dim}D")
+        if not isinstance(self.axisymmetric, bool):
+            raise ParameterError("axisymmetric", self.axisymmetric, "True or False")
         if self.axisymmetric:  # axisymmetric N-PFEM (axisymmetric.py)
             self._check_axisymmetric()
 

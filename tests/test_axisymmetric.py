@@ -236,6 +236,8 @@ def test_model_refuses_what_axisymmetry_cannot_use():
         Model(dim=2, materials=[mc], axisymmetric=True)
     with pytest.raises(ParameterError, match="dim=2"):
         Model(dim=3, materials=[LinearElastic(1e7, 0.3)], axisymmetric=True)
+    with pytest.raises(ParameterError, match="True or False"):
+        Model(dim=2, materials=[LinearElastic(1e7, 0.3)], axisymmetric="yes")
     m = Model(dim=2, materials=[DruckerPrager(1e7, 0.3, phi=30.0)], axisymmetric=True)
     assert m.components == (0, 1, 2, 3)
     with pytest.raises(ValueError, match="r < 0"):
