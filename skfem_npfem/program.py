@@ -227,7 +227,8 @@ class Program:
         ``sigma`` (stress), ``r``, ``lambda_n``, ``lambda_t`` (force).
     compliance : ndarray (n_p, n_s, n_s)
     yield_cones : list of (points, ConeRows)
-        Yield cones of the plastic materials.
+        Yield cones of the plastic materials (one entry per cone: a material
+        may return a list of cones per point).
     """
 
     def __init__(self, data: StepData) -> None:
@@ -262,8 +263,11 @@ class Program:
                 continue
             self.compliance[points] = mat.compliance(d, self.comp)
             if mat.plastic:
-                cone = mat.cone(d, self.comp, data.sigma_n[points])
-                self.yield_cones.append((points, cone))
+                # A material may return several cones per point (axisymmetric
+                # Mohr-Coulomb: three SOC(3), skfem_npfem.axisymmetric).
+                rows = mat.cone(d, self.comp, data.sigma_n[points])
+                for cone in rows if isinstance(rows, list | tuple) else [rows]:
+                    self.yield_cones.append((points, cone))
 
     def _generalised_force(self) -> np.ndarray:
         """``f~``: the external force plus inertia of the theta scheme (§3)."""
