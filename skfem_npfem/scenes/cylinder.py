@@ -46,16 +46,24 @@ from ..solver import SolverOptions
 __all__ = [
     "GEOMETRIES",
     "SEED",
-    "CylinderColumn",
+    "SEED_DIVISIONS",
+    "ColumnSetup",
+    "column_model",
     "column_particles",
     "column_walls",
     "cylinder_column",
     "half_section_lattice",
+    "mass_quantile",
     "quarter_cylinder_lattice",
     "radial_front",
 ]
 
 GEOMETRIES = ("axisymmetric", "quarter-cylinder")
+
+#: Lattice spacings over the seed radius at the seed's resolution: 10 027
+#: particles in the 3D quarter (the paper's mesh has 10 759 nodes), 703 in the
+#: axisymmetric half-section.
+SEED_DIVISIONS = 18
 
 #: The reference paper's column (SI units, angles in degrees).
 SEED: dict[str, Any] = {
@@ -212,15 +220,18 @@ def column_particles(
 
 
 @dataclass
-class CylinderColumn:
-    """A ready cylindrical-column problem (see :func:`cylinder_column`).
+class ColumnSetup:
+    """A ready column problem: particles, model, remesher and time step.
+
+    Built by :func:`cylinder_column` or, for the 3D slab,
+    :func:`~skfem_npfem.scenes.box_column.box_column`.
 
     Attributes
     ----------
     geometry : str
-        ``"axisymmetric"`` or ``"quarter-cylinder"``.
+        ``"axisymmetric"``, ``"quarter-cylinder"`` or ``"box"``.
     particles : Particles
-        Initial state (masses: full ring in axisymmetry, the quarter in 3D).
+        Initial state (masses: full ring in axisymmetry, the modelled part in 3D).
     model : Model
         Physics and solver settings.
     mesher : AlphaShapeMesher
@@ -256,7 +267,7 @@ def cylinder_column(
     material: str = "drucker-prager",
     solver: SolverOptions | None = None,
     **overrides: float,
-) -> CylinderColumn:
+) -> ColumnSetup:
     """The seed column (or a variant) as particles, model and remesher.
 
     Parameters
@@ -264,7 +275,7 @@ def cylinder_column(
     geometry : {"axisymmetric", "quarter-cylinder"}
         Model of the column.
     spacing : float, optional
-        Lattice spacing, m (default ``r0 / 12``).
+        Lattice spacing, m (default ``r0 / 18``: :data:`SEED_DIVISIONS`).
     floor_friction : float, optional
         Floor friction angle, degrees (default ``phi``).
     match : str
@@ -280,7 +291,7 @@ def cylinder_column(
 
     Returns
     -------
-    CylinderColumn
+    ColumnSetup
     """
     unknown = sorted(set(overrides) - set(SEED))
     if unknown:
@@ -288,7 +299,7 @@ def cylinder_column(
         raise ParameterError(name, overrides[name], f"one of {sorted(SEED)}")
     v = {**SEED, **overrides}
     r0, h0 = v["radius"], v["height"]
-    h = r0 / 12.0 if spacing is None else spacing
+    h = r0 / SEED_DIVISIONS if spacing is None else spacing
     if not (math.isfinite(h) and 0 < h <= r0 / 4):
         raise ParameterError("spacing", h, f"a length in (0, r0/4 = {r0 / 4:g}] m")
     phi_floor = v["phi"] if floor_friction is None else floor_friction
@@ -308,17 +319,49 @@ def cylinder_column(
         K0=v["K0"],
         n_walls=len(walls),
     )
+    model = column_model(
+        x.shape[1],
+        v,
+        walls,
+        material=material,
+        match=match,
+        solver=solver,
+        axisymmetric=geometry == "axisymmetric",
+    )
+    return ColumnSetup(geometry, particles, model, mesher, h_lat, v["dt"], v)
+
+
+def column_model(
+    dim: int,
+    v: dict[str, Any],
+    walls: list[RigidWall],
+    *,
+    material: str = "drucker-prager",
+    match: str = "compression",
+    solver: SolverOptions | None = None,
+    axisymmetric: bool = False,
+) -> Model:
+    """The dynamic model of a column: the soil of ``v`` (keys of :data:`SEED`).
+
+    ``material="mohr-coulomb"`` is exact Mohr-Coulomb with the hoop stress
+    (:class:`~skfem_npfem.axisymmetric.AxisymmetricMohrCoulomb`, three cones)
+    and exists only in axisymmetry: in 3D Mohr-Coulomb is not a second-order
+    cone.  Drucker-Prager takes the fit ``match`` to Mohr-Coulomb.
+    """
     strength = {"c": v["c"], "phi": v["phi"], "psi": v["psi"], "tension_cutoff": True}
-    if material == "mohr-coulomb" and geometry == "axisymmetric":
+    if material == "mohr-coulomb" and axisymmetric:
         mat = AxisymmetricMohrCoulomb(v["E"], v["nu"], v["rho"], **strength)
     elif material == "drucker-prager":
         mat = DruckerPrager(v["E"], v["nu"], v["rho"], match=match, **strength)
     else:
         raise ParameterError(
-            "material", material, "drucker-prager, or mohr-coulomb in axisymmetry"
+            "material",
+            material,
+            "drucker-prager, or mohr-coulomb in axisymmetry (3D Mohr-Coulomb is "
+            "not a second-order cone)",
         )
-    model = Model(
-        dim=x.shape[1],
+    return Model(
+        dim=dim,
         materials=[mat],
         gravity=v["gravity"],
         mode="dynamic",
@@ -326,9 +369,24 @@ def cylinder_column(
         theta2=v["theta2"],
         walls=walls,
         solver=solver or SolverOptions(),
-        axisymmetric=geometry == "axisymmetric",
+        axisymmetric=axisymmetric,
     )
-    return CylinderColumn(geometry, particles, model, mesher, h_lat, v["dt"], v)
+
+
+def mass_quantile(coord: np.ndarray, mass: np.ndarray, q: float) -> float:
+    """Coordinate below which a fraction ``q`` of the mass lies.
+
+    The particles are sorted by ``coord``; each counts half of its mass at its
+    own position (midpoint rule), and the quantile is interpolated linearly.
+
+    Examples
+    --------
+    >>> mass_quantile(np.array([2.0, 1.0]), np.array([1.0, 1.0]), 0.5)
+    1.5
+    """
+    order = np.argsort(coord)
+    cum = np.cumsum(mass[order]) - 0.5 * mass[order]
+    return float(np.interp(q * mass.sum(), cum, coord[order]))
 
 
 def radial_front(x: np.ndarray, mass: np.ndarray, q: float = 0.99) -> float:
@@ -343,6 +401,4 @@ def radial_front(x: np.ndarray, mass: np.ndarray, q: float = 0.99) -> float:
     1.5
     """
     r = x[:, 0] if x.shape[1] == 2 else np.hypot(x[:, 0], x[:, 1])
-    order = np.argsort(r)
-    cum = np.cumsum(mass[order]) - 0.5 * mass[order]
-    return float(np.interp(q * mass.sum(), cum, r[order]))
+    return mass_quantile(r, mass, q)
