@@ -43,6 +43,7 @@ __all__ = [
     "GEOMETRIES",
     "GEOMETRY_METRICS",
     "GEOMETRY_PARAMS",
+    "SIZE_CHECK",
     "GeometryScene",
     "finalize",
     "metrics_doc",
@@ -98,6 +99,18 @@ GEOMETRY_PARAMS = [
         lo_open=True,
     ),
     Param(
+        "strength_floor",
+        1e-6,
+        "-",
+        "3D and axisymmetric: raise yield strengths below this fraction of the "
+        "largest to it (stress-free cohesionless particles otherwise stall the "
+        "interior-point method; 0: off; plane strain: off)",
+        float,
+        lo=0,
+        hi=1e-2,
+        hi_open=True,
+    ),
+    Param(
         "dp_match",
         None,
         "-",
@@ -106,15 +119,19 @@ GEOMETRY_PARAMS = [
         str,
         DP_MATCHES,
     ),
-    Param(
-        "check_memory",
-        True,
-        "-",
-        "3D and axisymmetric: refuse a run whose estimated memory exceeds the "
-        "machine's available memory (false: run anyway)",
-        bool,
-    ),
 ]
+
+#: The override of the up-front size check (issue 13 adds the same parameter
+#: to every scene; the scene takes this one only when the plane-strain scene
+#: has none).
+SIZE_CHECK = Param(
+    "size_check",
+    True,
+    "-",
+    "refuse a run whose estimated memory exceeds the machine's available memory "
+    "(false: run anyway; checked for the 3D and axisymmetric geometries)",
+    bool,
+)
 
 #: Summary metrics of the cylindrical geometries and the box (which also has
 #: the plane-strain metrics, measured along x and with heights along z).
@@ -156,15 +173,19 @@ def metrics_doc(plane: dict[str, str]) -> dict[str, str]:
     return {**doc, **GEOMETRY_METRICS}
 
 
-def used_parameters(geometry: str, given: frozenset[str], all_names) -> set[str]:
-    """Parameters a geometry uses (the others may not be given)."""
+def used_parameters(
+    geometry: str, given: frozenset[str], plane_names: frozenset[str]
+) -> set[str]:
+    """Parameters a geometry uses (the others may not be given).
+
+    ``plane_names`` are the parameters of the plane-strain scene: plane strain
+    uses exactly those (and ``geometry``); the other geometries use the
+    parameters listed here, so a parameter added to the plane-strain scene
+    later is refused for them until they use it.
+    """
     if geometry == "plane-strain":
-        return (
-            set(all_names)
-            - {"radius", "height", "depth", "dp_match"}
-            - {"check_memory"}
-        )
-    common = {p.name for p in GEOMETRY_PARAMS} - {"radius", "height", "depth"}
+        return set(plane_names) | {"geometry"}
+    common = {"geometry", "dp_match", "size_check", "strength_floor"}
     common |= {
         "spacing", "material", "rho", "E", "nu", "phi", "psi", "c",
         "floor_friction", "K0", "gravity", "dt", "t_end", "rest_fraction",
@@ -182,7 +203,9 @@ def used_parameters(geometry: str, given: frozenset[str], all_names) -> set[str]
     return used
 
 
-def finalize(values: dict[str, Any], given: frozenset[str], names) -> None:
+def finalize(
+    values: dict[str, Any], given: frozenset[str], plane_names: frozenset[str]
+) -> None:
     """Geometry defaults and refusals (in place; see the module notes).
 
     Parameters
@@ -191,11 +214,11 @@ def finalize(values: dict[str, Any], given: frozenset[str], names) -> None:
         Resolved values (defaults and the given overrides).
     given : frozenset of str
         Names set explicitly.
-    names : iterable of str
-        All parameter names of the scene.
+    plane_names : frozenset of str
+        The parameters of the plane-strain scene.
     """
     geo = values["geometry"]
-    unused = sorted(given - used_parameters(geo, given, names))
+    unused = sorted(given - used_parameters(geo, given, plane_names))
     if unused:
         name = unused[0]
         why = _unused_reason(geo, name)
@@ -213,7 +236,7 @@ def finalize(values: dict[str, Any], given: frozenset[str], names) -> None:
             values["depth"] = DEPTH_SPACINGS * h
     _material(values, given)
     _check_values(values)
-    if values["check_memory"]:
+    if values["size_check"]:
         dim = 2 if geo == "axisymmetric" else 3
         check_memory(geo, values, values["spacing"], dim)
 
@@ -223,7 +246,7 @@ def _unused_reason(geometry: str, name: str) -> str:
         return "not with both radius and height (they fix the aspect ratio h0/r0)"
     if name == "max_displacement":
         return "not in axisymmetry (its spacing would come from ring volumes)"
-    if name == "check_memory":
+    if name == "size_check":
         return "a 3D or axisymmetric geometry (plane strain does not check memory)"
     if geometry == "plane-strain":
         return f"a geometry that uses it; geometry=plane-strain does not use {name}"
@@ -308,9 +331,11 @@ class GeometryScene(Scene):
     their values.
     """
 
+    #: Names of the plane-strain scene's parameters.
+    plane_names: frozenset[str] = frozenset()
+
     def resolve(self, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
         """Defaults updated with validated overrides, then the geometry rules."""
         values = super().resolve(overrides)
-        names = [p.name for p in self.params]
-        finalize(values, frozenset(overrides or {}), names)
+        finalize(values, frozenset(overrides or {}), self.plane_names)
         return values

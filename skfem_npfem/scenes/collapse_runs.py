@@ -16,6 +16,7 @@ parameters; plane strain runs the plane-strain build unchanged.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -27,7 +28,13 @@ from ..simulation import AtRest, Simulation
 from ..step import StepResult
 from .base import Scene, SceneRun
 from .box_column import box_column
-from .collapse_geometry import CYLINDRICAL, GEOMETRY_PARAMS, GeometryScene, metrics_doc
+from .collapse_geometry import (
+    CYLINDRICAL,
+    GEOMETRY_PARAMS,
+    SIZE_CHECK,
+    GeometryScene,
+    metrics_doc,
+)
 from .column_collapse import SCENE as PLANE_STRAIN
 from .column_collapse import collapse_time, lube_runout
 from .common import make_writer, solver_from
@@ -70,7 +77,7 @@ def column_setup(values: dict[str, Any]) -> ColumnSetup:
     kw = {
         "floor_friction": values["floor_friction"],
         "match": values["dp_match"] or "compression",
-        "solver": solver_from(values),
+        "solver": replace(solver_from(values), strength_floor=values["strength_floor"]),
     }
     if geo in CYLINDRICAL:
         soil.update(radius=values["radius"], height=values["height"])
@@ -222,15 +229,18 @@ def with_geometries(plane: Scene) -> GeometryScene:
             return plane.build(values, out=out, progress=progress, resume=resume)
         return build_geometry(values, out, progress, resume)
 
+    names = frozenset(p.name for p in plane.params)
+    extra = [] if SIZE_CHECK.name in names else [SIZE_CHECK]
     return GeometryScene(
         name=plane.name,
         description=plane.description.replace(
             "2D (plane-strain) granular column collapse",
             "granular column collapse: plane strain, axisymmetric or 3D",
         ),
-        params=[*GEOMETRY_PARAMS, *plane.params],
+        params=[*GEOMETRY_PARAMS, *plane.params, *extra],
         build=build,
         metrics_doc=metrics_doc(plane.metrics_doc),
+        plane_names=names,
     )
 
 

@@ -69,8 +69,9 @@ def lattice_particles(geometry: str, values: dict, spacing: float) -> float:
 
     ``values`` holds ``radius`` and ``height`` (cylindrical geometries) or
     ``length``, ``aspect``, ``depth`` and ``symmetric`` (box).  The quarter
-    cylinder's count is the area of the quarter disc in lattice cells plus its
-    two edges (exact to a few per cent).
+    cylinder's count per layer is the quarter disc's area in lattice cells plus
+    one edge and the centre, ``pi n^2 / 4 + n + 1`` (Gauss's circle problem:
+    273.5 for ``n = 18`` spacings over the radius, 271 counted).
     """
     h = float(spacing)
     if geometry in ("axisymmetric", "quarter-cylinder"):
@@ -78,7 +79,7 @@ def lattice_particles(geometry: str, values: dict, spacing: float) -> float:
         layers = max(1.0, round(values["height"] / h)) + 1.0
         if geometry == "axisymmetric":
             return (nr + 1.0) * layers
-        return (math.pi / 4.0 * nr * nr + 2.0 * nr + 1.0) * layers
+        return (math.pi / 4.0 * nr * nr + nr + 1.0) * layers
     width = values["length"] * (1.0 if values["symmetric"] else 2.0)
     height = values["aspect"] * values["length"]
     per = [max(1.0, round(v / h)) + 1.0 for v in (width, values["depth"], height)]
@@ -94,7 +95,7 @@ def check_memory(geometry: str, values: dict, spacing: float, dim: int) -> float
     ------
     ParameterError
         Naming ``spacing``, with the estimate, the machine's memory, the largest
-        particle count that fits and the override ``check_memory=false``.
+        particle count that fits and the override ``size_check=false``.
     """
     n = lattice_particles(geometry, values, spacing)
     need = estimate_memory_mb(n, dim)
@@ -114,5 +115,5 @@ def check_memory(geometry: str, values: dict, spacing: float, dim: int) -> float
         f"particles and needs ~{need / 1024:.3g} GB, but the machine has "
         f"{avail / 1024:.3g} GB available ({total / 1024:.3g} GB total); about "
         f"{fit:.3g} particles fit (spacing >= ~{spacing * scale:.3g} m), or set "
-        "check_memory=false to run anyway",
+        "size_check=false to run anyway",
     )
