@@ -147,8 +147,9 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
         times = np.array([r.time for r in recs])
         runs = np.array([r.extra.get(key, np.nan) for r in recs])
         run = float(runs[-1]) if recs else L0
-        top = float(last.get("max_height", H0))
-        rough = np.array([r.extra.get("stress_roughness", np.nan) for r in recs])
+        top = float(last.get("max_height") or H0)
+        # (NaN is stored as None in checkpoints: a resumed run reads None.)
+        rough = np.array([r.extra.get("stress_roughness") for r in recs], dtype=float)
         t_c = collapse_time(times, runs, h)
         summ = sim_.summary()
         out: dict[str, Any] = {key: run, "normalised_runout": (run - L0) / L0}
