@@ -155,6 +155,18 @@ def load_step(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return m.points[:, :dim], cells, np.asarray(m.point_data["stress"])
 
 
+def vtu_roughness(folder: Path) -> list[float]:
+    """Stress roughness of every written step (skfem_npfem.roughness)."""
+    from skfem_npfem.io import read_pvd
+    from skfem_npfem.roughness import roughness_of_step
+
+    out = []
+    for _, path in read_pvd(folder / "result.pvd")[1:]:
+        points, cells, stress = load_step(path)
+        out.append(roughness_of_step(points, cells, stress))
+    return out
+
+
 def at_time(history: list[dict], t: float) -> dict:
     """The step record nearest to time ``t``."""
     times = np.array([h["time"] for h in history])
@@ -177,6 +189,11 @@ def analyse(name: str, summ: dict, work: Path) -> dict:
     last, _, _ = load_step(read_pvd(work / name / "result.pvd")[-1][1])
     rough = [h.get("stress_roughness") for h in hist]
     rough = [v for v in rough if v is not None and math.isfinite(v)]
+    rough_end = m.get("stress_roughness")
+    if not rough:  # a scene without the per-step index: from the written steps
+        rough = vtu_roughness(work / name)
+        rough_end = rough[-1] if rough else None
+        rough = [v for v in rough if math.isfinite(v)]
     return {
         "label": LABELS.get(name, name),
         "geometry": geo,
@@ -195,7 +212,7 @@ def analyse(name: str, summ: dict, work: Path) -> dict:
         "reference_runout_lube2004": lube2004(h0 / r0),
         "volume_change": m["volume_change"],
         "mass_change": m["mass_change"],
-        "stress_roughness": m.get("stress_roughness"),
+        "stress_roughness": rough_end,
         "stress_roughness_max": max(rough) if rough else None,
         "wall_time_s": float(sum(step_s)),
         "wall_time_t3_s": float(sum(step_s[: i3 + 1])),
@@ -251,7 +268,7 @@ def render_panels(results: dict, work: Path, out: Path) -> Path | None:
 
     names = list(results)
     fig, axes = plt.subplots(
-        len(names), len(SNAPSHOTS), figsize=(3.2 * len(SNAPSHOTS), 1.9 * len(names)),
+        len(names), len(SNAPSHOTS), figsize=(3.6 * len(SNAPSHOTS), 1.5 * len(names)),
         squeeze=False,
     )  # fmt: skip
     lo = -RHO * G * H0 / 1e3
@@ -263,15 +280,15 @@ def render_panels(results: dict, work: Path, out: Path) -> Path | None:
             points, cells, stress = load_step(entries[k][1])
             sv = stress[:, points.shape[1] - 1]
             mesh = _section_mesh(pv, points, cells, sv)
-            pl = pv.Plotter(off_screen=True, window_size=(900, 400))
+            pl = pv.Plotter(off_screen=True, window_size=(960, 320))
             pl.add_mesh(mesh, scalars="sv", cmap="viridis", clim=(lo, 0.0),
                         show_scalar_bar=False)  # fmt: skip
             floor = pv.Plane(center=(0, 0.02, -0.0005), direction=(0, 0, 1),
                              i_size=0.36, j_size=0.1)  # fmt: skip
             pl.add_mesh(floor, color="lightgray")
-            pl.camera_position = [(0.02, -0.5, 0.15), (0.0, 0.0, 0.03), (0, 0, 1)]
+            pl.camera_position = [(0.02, -0.5, 0.12), (0.0, 0.0, 0.037), (0, 0, 1)]
             pl.camera.parallel_projection = True
-            pl.camera.parallel_scale = 0.06
+            pl.camera.parallel_scale = 0.046
             img = pl.screenshot(return_img=True)
             pl.close()
             ax = axes[i, j]
