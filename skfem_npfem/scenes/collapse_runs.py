@@ -217,6 +217,24 @@ def build_geometry(
     return SceneRun(sim, run_kwargs, _metrics(values, h, stop))
 
 
+#: What the plane-strain parameters mean for the other geometries (appended to
+#: their help).
+GEOMETRY_NOTES = {
+    "aspect": "cylindrical: h0/r0, unless radius and height are both given",
+    "length": "plane-strain and box only",
+    "symmetric": "plane-strain and box only",
+    "spacing": "cylindrical: default r0/18; box: L0/22",
+    "material": "3D: drucker-prager only; cylindrical and box default drucker-prager",
+    "dt": "cylindrical: default 2 ms",
+    "max_displacement": "not in axisymmetry",
+}
+
+
+def _annotated(param):
+    note = GEOMETRY_NOTES.get(param.name)
+    return param if note is None else replace(param, help=f"{param.help} ({note})")
+
+
 def with_geometries(plane: Scene) -> GeometryScene:
     """The plane-strain column-collapse scene extended by ``geometry``."""
 
@@ -236,9 +254,9 @@ def with_geometries(plane: Scene) -> GeometryScene:
         name=plane.name,
         description=plane.description.replace(
             "2D (plane-strain) granular column collapse",
-            "granular column collapse: plane strain, axisymmetric or 3D",
+            "Granular column collapse: plane strain, axisymmetric or 3D",
         ),
-        params=[*GEOMETRY_PARAMS, *plane.params, *extra],
+        params=[*GEOMETRY_PARAMS, *map(_annotated, plane.params), *extra],
         build=build,
         metrics_doc=metrics_doc(plane.metrics_doc),
         plane_names=names,
