@@ -244,11 +244,17 @@ def markdown(rows: list[dict], summary: dict) -> str:
         "elements and corrupted checkpoints, each with a `ParameterError` (a "
         "`ValueError`) or `CheckpointError` naming the parameter, the value "
         "and what is allowed; the CLI prints it as one `error:` line and exits "
-        "with 2. Known gaps (strict xfails, in modules owned elsewhere): "
-        "`--out`/`--summary` below a regular file give an OSError text without "
-        "the option name; a checkpoint whose zip header flags are corrupted "
-        "raises zipfile's NotImplementedError/RuntimeError; particles of the "
-        "wrong dimension and `FixedMesh` indices out of range raise IndexError.",
+        "with 2. No known gaps: the former ones (`--out`/`--summary` below a "
+        "regular file, a checkpoint whose zip header flags are corrupted, "
+        "particles of the wrong dimension, `FixedMesh` indices out of range) "
+        "now give the same one-line errors. `tests/test_reliability.py` (issue "
+        "13) adds: tiny or huge values outside the magnitudes the scenes run "
+        "at (`scenes/limits.py`, listed in docs/scenes.md), runs estimated to "
+        "need more than this machine's memory or more than 1e6 steps "
+        "(refused before anything is built; `size_check=false` overrides), "
+        "numpy scalars (accepted), a repeated `--set`, an empty `--out`, "
+        "non-Material materials, a zero-area element shared by others and a "
+        "tangled fixed mesh (refused at the source).",
         "",
     ]
     return "\n".join(lines)

@@ -46,7 +46,13 @@ from .step import StepRecord, StepResult, advance
 from .sweeps import sweep
 
 # isort: split
-from .errors import CheckpointError, NpfemError, ParameterError, SolverError
+from .errors import (
+    CheckpointError,
+    NpfemError,
+    ParameterError,
+    RunInterrupted,
+    SolverError,
+)
 
 #: High level: ready scenes and the time loop.
 __all__ = ["SCENES", "AtRest", "Simulation", "__version__", "get_scene", "run_scene"]
@@ -86,4 +92,10 @@ __all__ += [
     "sweep",
 ]
 #: Errors.
-__all__ += ["CheckpointError", "NpfemError", "ParameterError", "SolverError"]
+__all__ += [
+    "CheckpointError",
+    "NpfemError",
+    "ParameterError",
+    "RunInterrupted",
+    "SolverError",
+]

@@ -3,7 +3,8 @@
 Fixed and roller supports and prescribed displacements are particle flags
 (:attr:`Particles.fixed`, :attr:`Particles.v_prescribed`); this module holds the
 rigid walls that particles may touch and leave: the contact candidates of one
-step (:func:`wall_contacts`, handed to the cone program as :class:`Contacts`)
+step (:func:`wall_contacts` for particles, :func:`node_contacts` for any
+displacement nodes, handed to the cone program as :class:`Contacts`)
 and the projection of particles that ended behind a wall
 (:func:`project_to_walls`).
 """
@@ -23,6 +24,7 @@ __all__ = [
     "Contacts",
     "RigidWall",
     "floor",
+    "node_contacts",
     "project_to_walls",
     "wall_contacts",
     "wall_x",
@@ -197,12 +199,8 @@ def wall_contacts(
 ) -> tuple[Contacts, np.ndarray]:
     """Contact candidates of the active particles against every wall.
 
-    A particle is a candidate when its gap is below ``h + 2|v| dt + g dt^2`` so
-    that fast particles cannot tunnel through a wall within one step.  The gap
-    handed to the cone program includes the normal part of any prescribed
-    displacement increment of the particle (the program only sees the free dofs).
-    The friction bound is ``mu`` times the particle's lagged normal force
-    :attr:`Particles.wall_force` of the wall.
+    :func:`node_contacts` on the particles of the step's mesh, with the lagged
+    normal forces :attr:`Particles.wall_force`.
 
     Returns
     -------
@@ -211,7 +209,6 @@ def wall_contacts(
     ndarray (nc,) int
         The wall of each candidate.
     """
-    d = p.dim
     if p.wall_force.shape[1] < len(walls):
         raise ParameterError(
             "wall_force",
@@ -219,15 +216,72 @@ def wall_contacts(
             f"one column per wall ({len(walls)}): create the particles with "
             "Particles.create(..., n_walls=len(walls))",
         )
+    return node_contacts(
+        walls,
+        p.x[active],
+        p.v[active],
+        p.fixed[active],
+        p.v_prescribed[active],
+        p.wall_force[active],
+        dt,
+        h,
+        gravity,
+        noise_ref=p.wall_force,
+    )
+
+
+def node_contacts(
+    walls: Sequence[RigidWall],
+    x: np.ndarray,
+    v: np.ndarray,
+    fixed: np.ndarray,
+    v_prescribed: np.ndarray,
+    lagged: np.ndarray,
+    dt: float,
+    h: float,
+    gravity: float,
+    noise_ref: np.ndarray | None = None,
+) -> tuple[Contacts, np.ndarray]:
+    """Contact candidates of displacement nodes (particles or not) against walls.
+
+    A node is a candidate when its gap is below ``h + 2|v| dt + g dt^2`` so
+    that fast nodes cannot tunnel through a wall within one step.  The gap
+    handed to the cone program includes the normal part of any prescribed
+    displacement increment of the node (the program only sees the free dofs).
+    The friction bound is ``mu`` times the node's lagged normal force
+    ``lagged[:, wall]``.
+
+    Parameters
+    ----------
+    walls : sequence of RigidWall
+    x, v : ndarray (n, d)
+        Node positions and velocities at the start of the step.
+    fixed : ndarray (n, d) bool
+        Prescribed dofs; ``v_prescribed`` (n, d) their velocities.
+    lagged : ndarray (n, n_walls)
+        Normal force of each wall on the node in the previous step, N.
+    dt, h, gravity : float
+        Time step (s), mesh size (m), gravitational acceleration (m/s^2).
+    noise_ref : ndarray (m, n_walls), optional
+        Forces that set the noise level of ``lagged`` per wall (default
+        ``lagged``; the particles pass all of theirs, not only the active ones).
+
+    Returns
+    -------
+    Contacts
+        Candidates (``node`` indexes the given nodes).
+    ndarray (nc,) int
+        The wall of each candidate.
+    """
+    d = x.shape[1]
+    noise_ref = lagged if noise_ref is None else noise_ref
     nodes, normals, gaps, bounds, wall_ids = [], [], [], [], []
-    x, v = p.x[active], p.v[active]
-    fixed = p.fixed[active]
-    du_pres = np.where(fixed, p.v_prescribed[active] * dt, 0.0)
+    du_pres = np.where(fixed, v_prescribed * dt, 0.0)
     reach = h + 2.0 * np.linalg.norm(v, axis=1) * dt + gravity * dt**2
     for w_id, wall in enumerate(walls):
         g = wall.gap(x)
         cand = np.flatnonzero(g < reach)
-        # A particle whose dofs along the normal are all fixed needs no contact row.
+        # A node whose dofs along the normal are all fixed needs no contact row.
         cand = cand[~np.all(fixed[cand][:, np.abs(wall.normal) > 0], axis=1)]
         nodes.append(cand)
         normals.append(np.broadcast_to(wall.normal, (cand.size, d)))
@@ -235,8 +289,8 @@ def wall_contacts(
         # Lagged normal force; values at the solver's noise level (a node that
         # was only a candidate, lambda_n ~ +-1e-8 of the load) give no friction
         # rather than a near-degenerate |lambda_t| <= tiny constraint.
-        lam = p.wall_force[active[cand], w_id]
-        noise = 1e-8 * np.max(np.abs(p.wall_force[:, w_id]), initial=0.0)
+        lam = lagged[cand, w_id]
+        noise = 1e-8 * np.max(np.abs(noise_ref[:, w_id]), initial=0.0)
         bounds.append(np.where(lam > noise, wall.mu * lam, 0.0))
         wall_ids.append(np.full(cand.size, w_id))
     if not nodes:

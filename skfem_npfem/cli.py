@@ -26,8 +26,9 @@ import sys
 from collections.abc import Sequence
 
 from . import __version__
-from .errors import NpfemError, ParameterError
+from .errors import NpfemError, ParameterError, RunInterrupted
 from .io import dumps
+from .runcontrol import end_line
 from .sweeps.cli import add_sweep_commands
 
 __all__ = ["main"]
@@ -39,8 +40,34 @@ def _parse_sets(items: Sequence[str]) -> dict[str, str]:
         if "=" not in item:
             raise ParameterError("--set", item, "name=value")
         key, val = item.split("=", 1)
-        out[key.strip()] = val
+        key = key.strip()
+        if key in out:
+            raise ParameterError(
+                "--set",
+                item,
+                f"each parameter once ({key} is also set to {out[key]!r})",
+            )
+        out[key] = val
     return out
+
+
+def format_value(value: object) -> str:
+    """A metric for the terminal: floats to 4 significant digits, None/NaN as null.
+
+    Examples
+    --------
+    >>> format_value(0.20018114348384494), format_value(None), format_value(True)
+    ('0.2002', 'null', 'true')
+    >>> format_value(2.4675063972e-05), format_value(1035)
+    ('2.468e-05', '1035')
+    """
+    if value is None or (isinstance(value, float) and value != value):
+        return "null"
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    return str(value)
 
 
 def _format_default(p) -> str:
@@ -146,6 +173,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                 resume=args.resume,
             )
         finally:
+            end_line()
             for msg in dict.fromkeys(str(w.message) for w in caught):
                 print(f"warning: {msg}", file=sys.stderr)
     if not args.quiet:
@@ -159,12 +187,35 @@ def cmd_run(args: argparse.Namespace) -> int:
             f"{result['wall_time_total']:.2f} s"
         )
         for k, v in metrics.items():
-            print(f"  {k} = {v}")
+            print(f"  {k} = {format_value(v)}")
         if args.out:
             print(f"  results: {args.out}/result.pvd")
         if args.summary:
-            print(f"  summary: {args.summary}")
+            print(f"  summary: {args.summary} (full precision)")
     return 0
+
+
+def interrupted_message(err: KeyboardInterrupt) -> str:
+    """The one line printed when a run is stopped by a signal."""
+    if not isinstance(err, RunInterrupted):
+        return (
+            "interrupted; every file written so far is complete, and --resume "
+            "continues from the latest checkpoint in --out, if there is one"
+        )
+    how = "abandoned the step in progress; " if err.abandoned else ""
+    msg = (
+        f"interrupted by {err.signal_name} after step {err.step} "
+        f"(t = {err.time:.6g} s): {how}"
+    )
+    saved = []
+    if err.checkpoint is not None:
+        saved.append(f"checkpoint {err.checkpoint}")
+    if err.summary_path is not None:
+        saved.append(f'partial summary {err.summary_path} ("interrupted": true)')
+    msg += ", ".join(saved) if saved else "nothing written (no --out)"
+    if err.checkpoint is not None:
+        msg += "; continue with --resume"
+    return msg
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
@@ -272,6 +323,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         print(f"error: {err}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("interrupted; finished steps are on disk", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as err:
+        end_line()
+        print(interrupted_message(err), file=sys.stderr)
+        return err.exit_code if isinstance(err, RunInterrupted) else 130

@@ -54,6 +54,7 @@ __all__ = [
     "Scaled",
     "StepSolution",
     "build_program",
+    "cell_size",
     "check_step_data",
     "displacement_scale",
     "recover",
@@ -193,8 +194,8 @@ def scale_program(prog: Program, program: Assembled, scaling: bool = True) -> Sc
     Variables and rows in stress units are divided by ``s*``, those in force
     units by ``F* = s* h^(d-1)``; the objective by ``J* = F* U*``.
     """
-    d, op = prog.dim, prog.data.operator
-    h = float(np.mean(op.volumes)) ** (1.0 / d)
+    d = prog.dim
+    h = cell_size(prog)
     if scaling:
         s_star = stress_scale(prog)
         F_star = s_star * h ** (d - 1)
@@ -219,6 +220,18 @@ def scale_program(prog: Program, program: Assembled, scaling: bool = True) -> Sc
         row=row,
         J=J_star,
     )
+
+
+def cell_size(prog: Program) -> float:
+    """Length scale ``h = (|Omega| / N)^(1/d)``: the volume per displacement node.
+
+    The displacement scale (and with it the scaling of the equilibrium duals)
+    is per node, so ``h`` counts nodes, not stress points: an operator with
+    several stress points per node (Gauss points of FEM elements) has the same
+    ``h`` as nodal integration on the same mesh.
+    """
+    op = prog.data.operator
+    return float(np.sum(op.volumes) / max(op.n_nodes, 1)) ** (1.0 / prog.dim)
 
 
 def recover(

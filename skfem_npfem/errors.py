@@ -56,3 +56,62 @@ class SolverError(NpfemError):
 
 class CheckpointError(NpfemError, ValueError):
     """A checkpoint or result folder is missing, corrupted or incompatible."""
+
+
+class RunInterrupted(KeyboardInterrupt):
+    """A run was stopped by SIGINT (Ctrl-C) or SIGTERM between two steps.
+
+    Raised by :meth:`~skfem_npfem.simulation.Simulation.run` after the step in
+    progress finished (or was abandoned at a second signal) and a checkpoint
+    was written.  It is a :class:`KeyboardInterrupt`, so code that stops on
+    Ctrl-C keeps doing so.
+
+    Attributes
+    ----------
+    signum : int
+        The signal (``signal.SIGINT`` or ``signal.SIGTERM``).
+    step : int
+        The last finished step.
+    time : float
+        Its time, s.
+    checkpoint : pathlib.Path or None
+        The checkpoint written (None without a checkpoint folder).
+    abandoned : bool
+        True if a second signal abandoned the step in progress.
+    summary : dict or None
+        The partial summary (set by the scene runner).
+    summary_path : pathlib.Path or None
+        Where the partial summary was written (set by the scene runner).
+    """
+
+    def __init__(
+        self,
+        signum: int,
+        step: int,
+        time: float,
+        checkpoint: object = None,
+        abandoned: bool = False,
+    ) -> None:
+        self.signum = int(signum)
+        self.step = int(step)
+        self.time = float(time)
+        self.checkpoint = checkpoint
+        self.abandoned = abandoned
+        self.summary: dict | None = None
+        self.summary_path: object = None
+        super().__init__(f"{self.signal_name} after step {step} (t = {time:.6g} s)")
+
+    @property
+    def signal_name(self) -> str:
+        """``"SIGINT"``, ``"SIGTERM"`` or ``"signal N"``."""
+        import signal
+
+        try:
+            return signal.Signals(self.signum).name
+        except ValueError:
+            return f"signal {self.signum}"
+
+    @property
+    def exit_code(self) -> int:
+        """The shell's exit code of a process ended by the signal (128 + N)."""
+        return 128 + self.signum

@@ -40,12 +40,32 @@ def rotate_stress(stress: np.ndarray, grad_du: np.ndarray) -> np.ndarray:
     ndarray (N, n_full)
     """
     n, d, _ = grad_du.shape
+    if d == 2:
+        return _rotate_plane(stress, grad_du)
     W = np.zeros((n, 3, 3))
     W[:, :d, :d] = 0.5 * (grad_du - np.swapaxes(grad_du, 1, 2))
     eye = np.eye(3)
     R = np.linalg.solve(eye - 0.5 * W, eye + 0.5 * W)
     S = voigt_to_tensor(stress)
     return tensor_to_voigt(R @ S @ np.swapaxes(R, 1, 2), stress.shape[1])
+
+
+def _rotate_plane(stress: np.ndarray, grad_du: np.ndarray) -> np.ndarray:
+    """The 2D Cayley rotation in closed form (no 3x3 solves).
+
+    With ``W = [[0, w], [-w, 0]]`` and ``t = w/2``, ``R = [[c, s], [-s, c]]``,
+    ``c = (1 - t^2)/(1 + t^2)``, ``s = 2t/(1 + t^2)`` (exactly orthogonal);
+    ``zz`` is unchanged.
+    """
+    t = 0.25 * (grad_du[:, 0, 1] - grad_du[:, 1, 0])
+    q = 1.0 + t * t
+    c, s = (1.0 - t * t) / q, 2.0 * t / q
+    xx, yy, xy = stress[:, 0], stress[:, 1], stress[:, 3]
+    out = np.array(stress, dtype=float, copy=True)
+    out[:, 0] = c * c * xx + 2 * c * s * xy + s * s * yy
+    out[:, 1] = s * s * xx - 2 * c * s * xy + c * c * yy
+    out[:, 3] = c * s * (yy - xx) + (c * c - s * s) * xy
+    return out
 
 
 def voigt_to_tensor(s: np.ndarray) -> np.ndarray:

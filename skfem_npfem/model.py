@@ -70,9 +70,17 @@ class Model:
     def __post_init__(self) -> None:
         if self.dim not in (2, 3):
             raise ParameterError("dim", self.dim, "2 or 3")
-        if not self.materials:
-            raise ParameterError("materials", self.materials, "at least one material")
-        for m in self.materials:
+        if isinstance(self.materials, Material | str) or not self.materials:
+            raise ParameterError(
+                "materials", self.materials, "a list of at least one Material"
+            )
+        for i, m in enumerate(self.materials):
+            if not isinstance(m, Material):
+                raise ParameterError(
+                    f"materials[{i}]",
+                    m,
+                    "a Material object, e.g. MohrCoulomb(E, nu, rho, c=0, phi=30)",
+                )
             m.check_dim(self.dim)
         if self.mode not in ("dynamic", "static"):
             raise ParameterError("mode", self.mode, "'dynamic' or 'static'")

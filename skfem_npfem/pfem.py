@@ -29,7 +29,7 @@ from .errors import NpfemError, ParameterError
 from .remesh import Triangulation, alpha_shape
 from .surface import free_surface
 
-__all__ = ["AlphaShapeMesher", "FixedMesh", "MeshSource", "main_body"]
+__all__ = ["AlphaShapeMesher", "FixedMesh", "MeshSource", "folded_facets", "main_body"]
 
 
 class MeshSource(Protocol):
@@ -58,13 +58,23 @@ class FixedMesh:
         self._signs: np.ndarray | None = None
 
     def _check_orientation(self, x: np.ndarray) -> None:
-        """Refuse a folded mesh: an element whose orientation has flipped."""
+        """Refuse a folded mesh: tangled at the start, or an element flipped later."""
         d = x.shape[1]
         if self.t.shape[0] != d + 1:
             return
         v = x[self.t[1:]] - x[self.t[0]][None]  # (d, ne, d)
         signs = np.sign(np.linalg.det(np.moveaxis(v, 0, 1)))
         if self._signs is None:
+            folded = folded_facets(x, self.t)
+            if folded.size:
+                a, b = (int(e) for e in folded[0])
+                raise ParameterError(
+                    "t",
+                    f"a tangled mesh: {len(folded)} shared side(s) with both "
+                    f"elements on the same side, first elements {a} and {b}",
+                    "a mesh whose elements do not overlap (an inverted element "
+                    "folds over its neighbours; check the node order and positions)",
+                )
             self._signs = signs
             return
         flipped = (signs * self._signs) < 0
@@ -73,7 +83,8 @@ class FixedMesh:
             raise NpfemError(
                 f"{int(flipped.sum())} element(s) of the fixed mesh turned inside "
                 f"out (first: element {e}); the deformation is too large for a "
-                "fixed connectivity: reduce dt or use remeshing (AlphaShapeMesher)"
+                "fixed connectivity: use smaller steps (dt, or the load increment "
+                "of a static run) or remeshing (AlphaShapeMesher)"
             )
 
     def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # noqa: D102
@@ -190,6 +201,64 @@ class AlphaShapeMesher:
         if self.last is None:
             return None
         return free_surface(self.last, self.on_wall())
+
+
+def folded_facets(x: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Pairs of elements that lie on the same side of the facet they share.
+
+    In a valid mesh the two elements sharing an interior edge (2D) or face
+    (3D) lie on opposite sides of it, whatever the order of their nodes; an
+    inverted (tangled) element lies on the same side as its neighbour.  A
+    facet shared by more than two elements also folds the mesh.
+
+    Parameters
+    ----------
+    x : ndarray (N, d)
+        Node positions.
+    t : ndarray (d+1, ne)
+        Connectivity.
+
+    Returns
+    -------
+    ndarray (n_folded, 2)
+        Element pairs, empty for a valid mesh.
+
+    Examples
+    --------
+    >>> x = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
+    >>> folded_facets(x, np.array([[0, 1, 2], [1, 3, 2]]).T).shape
+    (0, 2)
+    >>> x[3] = [0.2, 0.2]  # node 3 pulled across the shared edge 1-2
+    >>> folded_facets(x, np.array([[0, 1, 2], [1, 3, 2]]).T).tolist()
+    [[0, 1]]
+    """
+    t = np.asarray(t, dtype=np.int64)
+    nv, ne = t.shape
+    d = nv - 1
+    if ne < 2 or x.shape[1] != d:
+        return np.zeros((0, 2), np.int64)
+    # facet k of element e: all nodes but the k-th; the k-th is "opposite"
+    local = np.array([[j for j in range(nv) if j != k] for k in range(nv)])
+    facets = np.sort(t[local].transpose(2, 0, 1).reshape(ne * nv, d), axis=1)
+    opposite = t.T.reshape(-1)  # element-major: (e, k) -> t[k, e]
+    owner = np.repeat(np.arange(ne), nv)
+    _, inv, counts = np.unique(facets, axis=0, return_inverse=True, return_counts=True)
+    inv = inv.ravel()
+    order = np.argsort(inv, kind="stable")
+    shared = np.flatnonzero(counts[inv[order]] == 2)[::2]
+    i, j = order[shared], order[shared + 1]
+    base = x[facets[i, 0]]
+    span = np.stack([x[facets[i, k]] - base for k in range(1, d)], axis=1)
+
+    def side(p: np.ndarray) -> np.ndarray:
+        return np.sign(np.linalg.det(np.concatenate([span, (p - base)[:, None]], 1)))
+
+    same = side(x[opposite[i]]) * side(x[opposite[j]]) > 0
+    pairs = [np.stack([owner[i[same]], owner[j[same]]], axis=1)]
+    for f in np.flatnonzero(counts > 2)[:10]:  # facets in 3+ elements (rare)
+        e = owner[inv == f]
+        pairs.append(np.array([[e[0], e[1]]]))
+    return np.concatenate(pairs).astype(np.int64)
 
 
 def main_body(x: np.ndarray, radius: float) -> np.ndarray:

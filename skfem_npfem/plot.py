@@ -2,7 +2,11 @@
 
 :func:`plot_results` reads the ``result.pvd`` collection written by
 :class:`skfem_npfem.io.ResultWriter` (and the ``scene.json`` the scene runner puts
-next to it), and renders with pyvista/VTK without a display.
+next to it).  2D results are drawn with matplotlib (:mod:`skfem_npfem.figures`:
+axes in metres, the scene's floor, walls and footing, the initial outline, the
+collapse's run-out against Lube et al. 2005, the footing's load-settlement
+curve); 3D results are rendered with pyvista/VTK without a display.  A step
+file that cannot be read is skipped with a warning.
 
 Needs the ``viz`` extra (``pip install 'skfem-npfem[viz]'``): pyvista, matplotlib
 (colour maps), imageio (GIF; frames are encoded through Pillow, which imageio
@@ -15,17 +19,18 @@ what is missing.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import warnings
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from .errors import CheckpointError, ParameterError
-from .io import check_writable_dir, read_pvd, read_step
+from .figures import Frames2D, crop, load_settlement_figure
+from .io import atomic_path, check_writable_dir, read_pvd, read_step
 from .render import (
     Renderer,
     Step,
@@ -34,6 +39,7 @@ from .render import (
     import_pyvista,
     write_animation,
 )
+from .scenery import scenery
 
 __all__ = ["FIELDS", "plot_results"]
 
@@ -65,6 +71,8 @@ _DEFAULT_FIELD = "stress_yy"
 _GRAVITY = 9.81
 #: Values per step pooled for the colour range, and the share cut at each end.
 _SAMPLE, _TAIL = 4000, 0.01
+#: Top of the plastic-strain colour range: this quantile of the plastic values.
+_PLASTIC_QUANTILE = 0.95
 #: Smallest top of the colour range of the plastic strain (round-off below it).
 _EPS_P_FLOOR = 1e-6
 
@@ -86,24 +94,6 @@ def _find_pvd(result_dir: Path) -> Path:
         f"{result_dir}: {what}; not a result folder written by "
         "'skfem-npfem run SCENE --out DIR'"
     )
-
-
-def _scene_info(folder: Path) -> tuple[str, float | None]:
-    """Return ``(scene name, sqrt(H0/g) or None)`` from ``folder/scene.json``."""
-    try:
-        info = json.loads((folder / "scene.json").read_text())
-        params = info.get("parameters", {})
-        name = str(info.get("scene", ""))
-    except (OSError, ValueError, AttributeError):
-        return "", None
-    try:
-        h0 = float(params["aspect"]) * float(params["length"])
-        g = float(params.get("gravity", _GRAVITY))
-    except (KeyError, TypeError, ValueError):
-        return name, None
-    if not (math.isfinite(h0) and h0 > 0 and math.isfinite(g) and g > 0):
-        return name, None
-    return name, math.sqrt(h0 / g)
 
 
 def _field_values(name: str, pdata: Mapping[str, np.ndarray]) -> np.ndarray:
@@ -148,6 +138,8 @@ def _read(path: Path, time: float, fields: Sequence[str]) -> tuple[Step, int]:
     if "active" in mesh.point_data:
         in_cell &= np.asarray(mesh.point_data["active"]).ravel() != 0
     step = Step(time, points, cells, np.flatnonzero(~in_cell))
+    if "mass" in mesh.point_data:
+        step.mass = np.asarray(mesh.point_data["mass"], dtype=float).ravel()
     for name in fields:
         if dim == 2 and name in ("stress_yz", "stress_zx"):
             raise ParameterError("field", name, "a field of 2D results (3D only)")
@@ -155,12 +147,32 @@ def _read(path: Path, time: float, fields: Sequence[str]) -> tuple[Step, int]:
     return step, dim
 
 
-def _robust_range(values: np.ndarray) -> tuple[float, float]:
-    """Range of pooled values without the outermost 1 % on either side."""
+def _robust_range(values: np.ndarray, name: str = "") -> tuple[float, float]:
+    """Range of pooled values without the outermost 1 % on either side.
+
+    Plastic strain: 0 up to the 95th percentile of the plastic values (those
+    above 1e-6 of the largest), so that a thin band of very large strains (the
+    grains sliding on the floor) does not leave the body in one colour.
+    """
     if not values.size:
         return 0.0, 0.0
+    if name == "plastic_strain_eq":
+        plastic = values[values > 1e-6 * values.max()]
+        if plastic.size:
+            return 0.0, float(np.quantile(plastic, _PLASTIC_QUANTILE))
+        return 0.0, float(values.max())
     lo, hi = np.quantile(values, [_TAIL, 1 - _TAIL])
     return float(lo), float(hi)
+
+
+def _extend(style: Style, lo: float, hi: float) -> str:
+    """Colour bar arrows for values beyond the range (SI values lo..hi)."""
+    a, b = (v * style.scale for v in style.clim)
+    tol = 1e-9 * max(abs(a), abs(b), 1e-300)
+    low, high = lo < a - tol, hi > b + tol
+    return {(0, 0): "neither", (1, 0): "min", (0, 1): "max"}.get(
+        (int(low), int(high)), "both"
+    )
 
 
 def _style(name: str, lo: float, hi: float, fixed: bool = False) -> Style:
@@ -299,37 +311,57 @@ def _pick_snapshots(
     return snaps
 
 
+@dataclass
+class _Loaded:
+    """The steps of a result read once (see :func:`_load`)."""
+
+    dim: int
+    names: list[str]
+    kept: dict[int, Step]
+    ranges: dict[str, tuple[float, float]]
+    extremes: dict[str, tuple[float, float]]
+    bad: list[int]
+
+
 def _load(
     entries: list[tuple[float, Path]],
     field_arg: str | Sequence[str],
     needed: set[int],
-) -> tuple[int, list[str], dict[int, Step], dict[str, tuple[float, float]]]:
-    """Read every step once.
+) -> _Loaded:
+    """Read every step once; keep those in ``needed``.
 
-    Returns
-    -------
-    dim : int
-        Spatial dimension.
-    names : list of str
-        Fields to draw.
-    kept : dict of int to Step
-        The steps in ``needed``.
-    ranges : dict of str to (float, float)
-        Colour range per field (robust range over all steps).
+    A step that cannot be read is skipped with a warning and listed in
+    ``bad``.  ``ranges`` is the robust colour range of each field over all
+    steps, ``extremes`` its true minimum and maximum.
     """
-    _, dim = _read(entries[0][1], entries[0][0], [])
-    names = _resolve_fields(field_arg, dim)
+    dim, names = 0, []
     kept: dict[int, Step] = {}
-    pooled: dict[str, list[np.ndarray]] = {name: [] for name in names}
+    pooled: dict[str, list[np.ndarray]] = {}
+    extremes: dict[str, tuple[float, float]] = {}
+    bad: list[int] = []
     for i, (t, path) in enumerate(entries):
-        step, _ = _read(path, t, names)
+        try:
+            if not names:
+                _, dim = _read(path, t, [])
+                names = _resolve_fields(field_arg, dim)
+                pooled = {name: [] for name in names}
+            step, _ = _read(path, t, names)
+        except CheckpointError as err:
+            warnings.warn(f"skipped an unreadable step: {err}", UserWarning, 3)
+            bad.append(i)
+            continue
         for name in names:
             v = step.values[name]
             pooled[name].append(v[:: max(1, v.size // _SAMPLE)])
+            lo, hi = extremes.get(name, (np.inf, -np.inf))
+            if v.size:
+                extremes[name] = (min(lo, float(v.min())), max(hi, float(v.max())))
         if i in needed:
             kept[i] = step
-    ranges = {name: _robust_range(np.concatenate(pooled[name])) for name in names}
-    return dim, names, kept, ranges
+    if not names:
+        raise CheckpointError(f"{entries[0][1].parent}: no readable step")
+    ranges = {name: _robust_range(np.concatenate(pooled[name]), name) for name in names}
+    return _Loaded(dim, names, kept, ranges, extremes, bad)
 
 
 def plot_results(
@@ -379,7 +411,8 @@ def plot_results(
     window_size : (int, int) or None, default None
         Image size ``(width, height)`` in pixels, at least 200 each. None: a
         size that fits the view of the domain (union of all steps) plus text
-        and colour bar, at most 1024 x 1024, multiples of 16.
+        and colour bar (2D: 1100 px wide, 1500 with the footing's curve, at
+        most 1104 high; 3D: at most 1024 x 1024), multiples of 16.
     max_frames : int, default 150
         Most frames per animation.
     clim : mapping of str to (float, float) or None, default None
@@ -391,7 +424,8 @@ def plot_results(
     list of pathlib.Path
         Files written, per field: ``<field>_t<time>.png`` per snapshot (time
         as requested, in the unit of ``times``, up to 4 significant digits),
-        then ``<field>.gif`` or ``<field>.mp4``.
+        then ``<field>.gif`` or ``<field>.mp4``; for the strip footing (2D)
+        finally ``load_settlement.png``.
 
     Raises
     ------
@@ -404,15 +438,26 @@ def plot_results(
 
     Notes
     -----
-    2D results are viewed from +z with equal axes, cells coloured by the field
-    (mesh edges when cells are at least 8 px wide) and particles in no cell
-    (``active == 0``) drawn as dots in the same colours. 3D results are shown
-    in an isometric view (surface of the tetrahedra). The colour range is the
-    same in every picture of a field: the range over all stored steps; for
-    stresses ``min..0`` (compression only), ``0..max`` (tension only) or
-    symmetric, in Pa/kPa/MPa; for magnitudes and plastic strain ``0..max``
-    (plastic strain at least up to 1e-6, so round-off is not coloured). Each
-    picture shows the scene, field, ``t`` and ``t/sqrt(H0/g)``.
+    2D results (matplotlib, :mod:`skfem_npfem.figures`): axes in metres with
+    equal scales, cells coloured by the field (thin mesh edges up to 4000
+    cells), particles in no cell (``active == 0``) as dots in the same colours,
+    and the scenery of ``scene.json`` (:mod:`skfem_npfem.scenery`): the floor
+    or fixed base, walls, the footing at its current settlement, the symmetry
+    axis, the initial outline; for the collapse the run-out (99 % mass front)
+    of the step and the final run-out of Lube et al. (2005); for the strip
+    footing the load-settlement curve beside the field with the step marked
+    (and ``load_settlement.png`` on its own), and the settlement instead of
+    the pseudo-time in titles.  The frame is cropped to the meshed body over
+    all steps (grains that flew off may lie outside).  3D results are shown
+    in an isometric view (pyvista, surface of the tetrahedra).  The colour
+    range is the same in every picture of a field, over all stored steps: for
+    stresses the 1-99 % range, ``min..0`` (compression only), ``0..max``
+    (tension only) or symmetric, in Pa/kPa/MPa; for magnitudes ``0..max``; for
+    plastic strain ``0`` to the 95th percentile of the plastic values (a thin
+    band of very large strains, e.g. on the floor, does not swamp the body; at
+    least 1e-6, so round-off is not coloured).  Arrows on the colour bar show
+    values beyond its range.  A step file that cannot be read is skipped with
+    a warning naming it.
 
     Examples
     --------
@@ -425,31 +470,47 @@ def plot_results(
     entries = read_pvd(pvd)
     if not entries:
         raise CheckpointError(f"{pvd}: the collection lists no steps")
-    ts = np.array([t for t, _ in entries])
-    scene, tau = _scene_info(folder)
-    if normalised and tau is None and req:
+    sc = scenery(folder)
+    if normalised and sc.tau is None and req:
         warnings.warn(
             f"{folder}: scene.json has no 'aspect' and 'length' parameters, so "
             "times are taken as absolute seconds instead of t/sqrt(H0/g)",
             UserWarning,
             stacklevel=2,
         )
-    snaps = _pick_snapshots(ts, req, tau if normalised else None)
-    frames = [] if animation == "none" else list(_frame_indices(len(ts), max_frames))
-    pv = import_pyvista()
-    check_rendering()
-    dim, names, kept, ranges = _load(entries, field, set(snaps) | set(frames))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        loaded, entries, snaps, frames = _load_picked(
+            entries, field, req, sc.tau if normalised else None, animation, max_frames
+        )
+    for w in caught:
+        warnings.warn(str(w.message), w.category, stacklevel=2)
     out = folder / "plots" if out_dir is None else Path(out_dir)
+    ts = np.array([t for t, _ in entries])
+    if loaded.dim == 3:
+        pv = import_pyvista()
+        check_rendering()
+    else:
+        view = crop(list(loaded.kept.values()), sc, window_size)
     check_writable_dir("out_dir", out)
 
     written: list[Path] = []
-    for name in names:
+    for name in loaded.names:
         fixed = clim is not None and name in clim
-        lo, hi = (float(v) for v in clim[name]) if fixed else ranges[name]
+        lo, hi = (float(v) for v in clim[name]) if fixed else loaded.ranges[name]
         style = _style(name, lo, hi, fixed=fixed)
-        title = f"{scene + ': ' if scene else ''}{FIELDS[name]}"
-        args = (pv, kept, dim, name, style, title, tau, window_size)
-        renderer = Renderer(*args)
+        title = f"{sc.scene + ': ' if sc.scene else ''}{FIELDS[name]}"
+
+        def make(fast: bool, name=name, style=style, title=title):
+            if loaded.dim == 2:
+                label = f"{FIELDS[name]} [{style.unit}]"
+                ext = _extend(style, *loaded.extremes.get(name, (0.0, 0.0)))
+                return Frames2D(loaded.kept, name, style, title, label, sc, view, ext)
+            return Renderer(
+                pv, loaded.kept, 3, name, style, title, sc.tau, window_size, fast=fast
+            )
+
+        renderer = make(False)
         try:
             for i in sorted(snaps, key=lambda k: ts[k]):
                 path = out / f"{name}_t{_time_label(snaps[i])}.png"
@@ -459,11 +520,43 @@ def plot_results(
         finally:
             renderer.close()
         if animation != "none":
-            renderer = Renderer(*args, fast=True)
+            renderer = make(True)
             try:
                 path = out / f"{name}.{animation}"
                 write_animation(renderer, frames, path, animation)
                 written.append(path)
             finally:
                 renderer.close()
+    if loaded.dim == 2 and sc.load_curve is not None:
+        path = out / "load_settlement.png"
+        fig = load_settlement_figure(sc)
+        fig.canvas.draw()
+        _save_rgb(np.asarray(fig.canvas.buffer_rgba())[..., :3], path)
+        written.append(path)
     return written
+
+
+def _load_picked(entries, field, req, tau, animation, max_frames):
+    """Read the steps; pick the snapshots and frames among the readable ones."""
+    ts = np.array([t for t, _ in entries])
+    snaps = _pick_snapshots(ts, req, tau)
+    n_frames = 0 if animation == "none" else max_frames
+    frames = list(_frame_indices(len(ts), n_frames)) if n_frames else []
+    loaded = _load(entries, field, set(snaps) | set(frames))
+    if loaded.bad:  # pick again among the readable steps (rare)
+        entries = [e for k, e in enumerate(entries) if k not in set(loaded.bad)]
+        ts = np.array([t for t, _ in entries])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # said on the first pass
+            snaps = _pick_snapshots(ts, req, tau)
+            frames = list(_frame_indices(len(ts), n_frames)) if n_frames else []
+            loaded = _load(entries, field, set(snaps) | set(frames))
+        loaded.bad = []
+    return loaded, entries, snaps, frames
+
+
+def _save_rgb(img: np.ndarray, path: Path) -> None:
+    from PIL import Image
+
+    with atomic_path(path) as tmp:
+        Image.fromarray(img).save(tmp, format="PNG")

@@ -82,6 +82,7 @@ class Step:
     cells: np.ndarray  # (ne, 3) triangles or (ne, 4) tetrahedra
     free: np.ndarray  # indices of particles drawn as points
     values: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
+    mass: np.ndarray | None = None  # particle masses (the run-out marker)
 
 
 @dataclass

@@ -13,6 +13,7 @@ dropped after them; the run keeps one scalar
 from __future__ import annotations
 
 import math
+import signal
 import sys
 import time
 from collections.abc import Callable
@@ -22,12 +23,13 @@ from typing import Any
 
 import numpy as np
 
-from .errors import ParameterError, SolverError
+from .errors import ParameterError, RunInterrupted, SolverError
 from .io import read_checkpoint, write_checkpoint
 from .kinematics import energies
 from .model import Model
 from .particles import Particles
 from .pfem import MeshSource
+from .runcontrol import INTERVAL, AbandonStep, Progress, SignalGuard
 from .step import StepRecord, StepResult, advance
 
 __all__ = ["AtRest", "Simulation", "peak_memory_mb"]
@@ -72,9 +74,19 @@ class Simulation:
         the kept :class:`~skfem_npfem.step.StepRecord`: store scene values in
         ``result.record.extra``); return True to stop.
     progress : bool or None
-        Progress line on stderr (None: only when stderr is a terminal).
+        Progress on stderr (None: on): on a terminal one line rewritten after
+        every step, otherwise a line every ``progress_interval`` seconds (and
+        the first and last steps); see :mod:`skfem_npfem.runcontrol`.
     meta : dict
         Stored in checkpoints (scene name, parameters).
+    extra_point_data : callable or None
+        ``f(particles) -> dict`` of more point data for the VTU files.
+    stepper : callable or None
+        The step, ``stepper(particles, model, dt, mesh_source, step=k) ->
+        (particles, StepResult)``; None: N-PFEM's
+        :func:`~skfem_npfem.step.advance`.  Another method (FEM with remapping,
+        explicit SPFEM: :mod:`skfem_npfem.baseline`) plugs in here and may keep
+        more state in a subclass of :class:`Particles`; checkpoints keep it.
     """
 
     def __init__(
@@ -96,6 +108,7 @@ class Simulation:
         progress: bool | None = None,
         meta: dict | None = None,
         extra_point_data: Callable[[Particles], dict[str, np.ndarray]] | None = None,
+        stepper: Callable[..., tuple[Particles, StepResult]] | None = None,
     ) -> None:
         if not (isinstance(dt, int | float) and math.isfinite(dt) and dt > 0):
             raise ParameterError("dt", dt, "a finite time step > 0 (s)")
@@ -121,9 +134,13 @@ class Simulation:
         self.checkpoint_dir = Path(checkpoint_dir) if checkpoint_dir else None
         self.checkpoint_every = int(checkpoint_every)
         self.callbacks = list(callbacks or [])
-        self.progress = sys.stderr.isatty() if progress is None else progress
+        self.progress = True if progress is None else bool(progress)
+        #: Seconds between progress lines when stderr is not a terminal.
+        self.progress_interval = INTERVAL
+        self._last_checkpoint: dict[int, Path] = {}
         self.meta = dict(meta or {})
         self.extra_point_data = extra_point_data
+        self.stepper = stepper
         self.time = 0.0
         self.step = 0
         self.records: list[StepRecord] = []
@@ -181,16 +198,20 @@ class Simulation:
             "initial": self.initial,
             "records": [r.as_dict() for r in self.records],
         }
-        return write_checkpoint(self.checkpoint_dir, self.step, self.particles, state)
+        path = write_checkpoint(self.checkpoint_dir, self.step, self.particles, state)
+        self._last_checkpoint = {self.step: path}
+        return path
 
     def restore(self, path: str | Path) -> dict:
         """Continue from a checkpoint written by :meth:`save_checkpoint`.
 
         Restores the particles, step, time, the adaptive time-step state and the
         step records, so that the continued run repeats the uninterrupted one
-        step for step.  Returns the checkpoint's metadata.
+        step for step.  The particles are read back as the class of the current
+        ones (a method's state subclass keeps its extra arrays).  Returns the
+        checkpoint's metadata.
         """
-        self.particles, meta = read_checkpoint(path)
+        self.particles, meta = read_checkpoint(path, type(self.particles))
         self.step = int(meta["step"])
         self.time = float(meta["time"])
         self.dt = float(meta["dt"])
@@ -211,7 +232,10 @@ class Simulation:
         """Advance until a step count, an end time or a stop rule is reached.
 
         The run stops after ``steps`` more steps, at ``t_end``, or when
-        ``stop(sim)`` returns True, whichever comes first.
+        ``stop(sim)`` returns True, whichever comes first.  On SIGINT (Ctrl-C)
+        or SIGTERM it stops after the step in progress (a second signal
+        abandons that step), writes a checkpoint (with a ``checkpoint_dir``) and
+        raises :class:`~skfem_npfem.errors.RunInterrupted`.
 
         Returns
         -------
@@ -224,8 +248,21 @@ class Simulation:
             # The initial state, with the mesh the first step will be built on.
             active, local_t = self.mesh_source(self.particles.x)
             self.write_output(active[local_t].T, active)
-        start = time.perf_counter()
         n_target = None if steps is None else self.step + int(steps)
+        progress = Progress(
+            bool(self.progress), n_target, t_end, self.progress_interval
+        )
+        first = (self.step, self.time)
+        guard = SignalGuard()
+        try:
+            with guard:
+                self._loop(n_target, t_end, stop, progress, first, guard)
+        finally:
+            progress.close()
+        return self.records
+
+    def _loop(self, n_target, t_end, stop, progress, first, guard) -> None:
+        """The steps of :meth:`run`; stops at a signal after the step."""
         while True:
             if n_target is not None and self.step >= n_target:
                 break
@@ -237,14 +274,28 @@ class Simulation:
             if t_end is not None and t_end - self.time < dt * (1 - 1e-9):
                 # Land on t_end, but never shorten a step by round-off only.
                 dt = t_end - self.time
-            last = self._step_once(dt, n_target, t_end, stop)
-            if self.progress:
-                self._print_progress(self.records[-1], start, n_target, t_end)
+            try:
+                last = self._step_once(dt, n_target, t_end, stop, guard)
+            except AbandonStep:
+                self._interrupted(guard.signum, abandoned=True)
+            progress.update(self.records[-1], self.time, *first)
             if last:
                 break
-        if self.progress:
-            print(file=sys.stderr)
-        return self.records
+            if guard.signum is not None:
+                self._interrupted(guard.signum)
+
+    def _interrupted(self, signum: int | None, abandoned: bool = False) -> None:
+        """Checkpoint the last finished step and raise RunInterrupted."""
+        path = self._last_checkpoint.get(self.step)
+        if path is None:
+            path = self.save_checkpoint()
+        raise RunInterrupted(
+            signal.SIGINT if signum is None else signum,
+            self.step,
+            self.time,
+            path,
+            abandoned,
+        )
 
     def _step_once(
         self,
@@ -252,13 +303,18 @@ class Simulation:
         n_target: int | None,
         t_end: float | None,
         stop: Callable[[Simulation], bool] | None,
+        guard: SignalGuard | None = None,
     ) -> bool:
         """One step with its output, callbacks and checkpoint; True: stop now.
 
         The step's :class:`~skfem_npfem.step.StepResult` lives only here: the
         run keeps its record.
         """
+        if guard is not None:
+            guard.in_step = True  # a second signal abandons this step
         new, result = self._try_step(dt)
+        if guard is not None:
+            guard.in_step = False
         rec = result.record
         self.particles = new
         self.step += 1
@@ -295,7 +351,8 @@ class Simulation:
                     # Keep the solver's own advice (e.g. "use displacement
                     # control" for a static overload) and add the loop's context.
                     advice = str(err).split("; ", 1)[1] if "; " in str(err) else ""
-                    where = f"dt={dt:g} s" + (
+                    unit = " s" if self.model.mode == "dynamic" else " (load step)"
+                    where = f"dt={dt:g}{unit}" + (
                         f" (floor {self.dt_min:g} s)" if self.adaptive else ""
                     )
                     if saved is not None:
@@ -337,22 +394,10 @@ class Simulation:
             self.dt = min(self.dt_max, 2 * dt, 0.9 * dt * limit / du)
 
     def _advance(self, dt: float) -> tuple[Particles, StepResult]:
-        return advance(
+        step = self.stepper if self.stepper is not None else advance
+        return step(
             self.particles, self.model, dt, self.mesh_source, step=self.step + 1
         )
-
-    def _print_progress(self, rec, start, n_target, t_end) -> None:
-        done = (
-            rec.step / n_target if n_target else (self.time / t_end if t_end else 0.0)
-        )
-        el = time.perf_counter() - start
-        eta = el * (1 - done) / done if done > 0 else float("nan")
-        msg = (
-            f"\rstep {rec.step:5d}  t={self.time:.4g} s  dt={rec.dt:.3g}  "
-            f"{rec.status} ({rec.iterations} it)  {100 * done:5.1f}%  "
-            f"elapsed {el:6.1f} s  eta {eta:6.1f} s"
-        )
-        print(msg, end="", file=sys.stderr, flush=True)
 
     def summary(self) -> dict[str, Any]:
         """Solver statistics of the run (steps, iterations, time per phase)."""

@@ -163,18 +163,7 @@ class NodalIntegration:
         ParameterError
             Naming the first element of zero area/volume and its nodes.
         """
-        degenerate = ~np.all(np.isfinite(self.grads), axis=(1, 2))
-        if np.any(degenerate):
-            e = int(np.flatnonzero(degenerate)[0])
-            raise ParameterError(
-                "mesh",
-                f"{int(degenerate.sum())} degenerate element(s) of zero "
-                f"{'area' if self.dim == 2 else 'volume'}, first {e} with nodes "
-                f"{self.t[:, e].tolist()}",
-                "elements of nonzero size; drop them (remesh.alpha_shape does) or "
-                "separate coincident/collinear nodes (near-degenerate elements "
-                "are fine)",
-            )
+        _refuse_degenerate(~np.all(np.isfinite(self.grads), axis=(1, 2)), self.t)
 
     def strain(self, u: np.ndarray) -> np.ndarray:
         """Smoothed nodal strains ``Bbar_i u`` (engineering shear).
@@ -209,6 +198,38 @@ class NodalIntegration:
         return (self.averaging @ grad_e.reshape(-1, d * d)).reshape(-1, d, d)
 
 
+def _refuse_degenerate(degenerate: np.ndarray, t: np.ndarray) -> None:
+    """Raise ParameterError naming the first degenerate element, if any."""
+    if not np.any(degenerate):
+        return
+    e = int(np.flatnonzero(degenerate)[0])
+    raise ParameterError(
+        "mesh",
+        f"{int(degenerate.sum())} degenerate element(s) of zero "
+        f"{'area' if t.shape[0] == 3 else 'volume'}, first {e} with nodes "
+        f"{t[:, e].tolist()}",
+        "elements of nonzero size; drop them (remesh.alpha_shape does) or "
+        "separate coincident/collinear nodes (near-degenerate elements "
+        "are fine)",
+    )
+
+
+def signed_volumes(p: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Signed areas (2D) or volumes (3D) of simplices ``t`` (d+1, ne) at ``p`` (d, N).
+
+    Examples
+    --------
+    >>> p = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    >>> signed_volumes(p, np.array([[0], [1], [2]])).tolist(), signed_volumes(
+    ...     p, np.array([[0], [2], [1]])
+    ... ).tolist()
+    ([0.5], [-0.5])
+    """
+    d = p.shape[0]
+    edges = p[:, t[1:]] - p[:, t[:1]]  # (d, d, ne): coordinate, edge, element
+    return np.linalg.det(np.moveaxis(edges, 2, 0)) / (2.0 if d == 2 else 6.0)
+
+
 def nodal_integration(
     mesh: Mesh, components: tuple[int, ...] | None = None
 ) -> NodalIntegration:
@@ -225,6 +246,12 @@ def nodal_integration(
     Returns
     -------
     NodalIntegration
+
+    Raises
+    ------
+    ParameterError
+        If an element has zero area (2D) or volume (3D), naming it and its
+        nodes.
 
     Examples
     --------
@@ -247,12 +274,16 @@ def nodal_integration(
             "every mesh node must belong to an element; build the mesh on the "
             "active nodes only"
         )
+    # Refuse zero-size elements here, before their infinite gradients enter G
+    # (an element shared with others would otherwise give NaN in G).
+    _refuse_degenerate(signed_volumes(np.asarray(mesh.p, float), t) == 0.0, t)
     grads, vol = p1_gradients(mesh)
+    _refuse_degenerate(~np.all(np.isfinite(grads), axis=(1, 2)), t)
     nv = dim + 1
     w = vol / nv
     volumes = np.bincount(t.ravel(), weights=np.tile(w, nv), minlength=n)
-    if np.any(volumes <= 0.0):
-        raise ValueError("mesh has nodes with zero smoothing-cell volume")
+    if np.any(volumes <= 0.0):  # pragma: no cover - refused above
+        raise ParameterError("mesh", "nodes of zero cell volume", "nonzero elements")
 
     # Map full-Voigt rows to positions in the selected component list.
     pos = -np.ones(nfull, dtype=int)

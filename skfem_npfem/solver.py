@@ -266,9 +266,13 @@ def hint(status: str, dynamic: bool) -> str:
                 "the collapse load; use displacement control or mode='dynamic'"
             )
         return "no admissible stress field; check strengths (c, phi) and cut-offs"
+    # Static steps have no time step to reduce: their dt is a load increment
+    # (the footing's settlement), so the advice names smaller load steps.
+    smaller = "reduce dt" if dynamic else "use smaller load steps (more steps)"
     if status in ("MaxIterations", "MaxTime"):
-        return "raise max_iter/time_limit, reduce dt, or use accuracy='fast'"
+        return f"raise max_iter/time_limit, {smaller}, or use accuracy='fast'"
+    retried = " (the step is retried automatically when adaptive stepping is on)"
     return (
-        "reduce dt (the step is retried automatically when adaptive stepping is on), "
-        "check material parameters for extreme ratios, or try linear_solver='qdldl'"
+        f"{smaller}{retried if dynamic else ''}, check material parameters for "
+        "extreme ratios, or try linear_solver='qdldl'"
     )

@@ -32,7 +32,7 @@ from .kinematics import energies, equivalent_strain, rotate_stress
 from .model import Model
 from .particles import Particles
 from .pfem import MeshSource
-from .program import StepData
+from .program import StepData, StrainOperator
 from .remesh import p1_mesh
 from .smoothing import NodalIntegration, nodal_integration
 
@@ -42,6 +42,7 @@ __all__ = [
     "StepResult",
     "advance",
     "build_operators",
+    "move_particles",
     "strain_operator",
     "update_particles",
 ]
@@ -74,6 +75,41 @@ class StepRecord:
     linear_solver: str = ""
     #: Scene diagnostics (numbers) added by callbacks, e.g. ``runout``.
     extra: dict[str, Any] = field(default_factory=dict)
+
+    @classmethod
+    def of_step(
+        cls,
+        step: int | None,
+        dt: float,
+        new: Particles,
+        gravity: float,
+        active: np.ndarray,
+        operator: StrainOperator,
+        sol: StepSolution,
+        timings: dict[str, float],
+        **extra: Any,
+    ) -> StepRecord:
+        """The record of a finished step of any method.
+
+        Solver status, mesh size and volume, contacts (``sol.lambda_n``) and
+        the energies of the new particles; ``extra`` goes to :attr:`extra`,
+        ``time`` is set by the time loop.
+        """
+        return cls(
+            step=-1 if step is None else step,
+            time=float("nan"),
+            dt=dt,
+            status=sol.status,
+            iterations=sol.iterations,
+            timings=timings,
+            n_active=int(active.size),
+            n_inactive=int(new.n - active.size),
+            mesh_volume=float(operator.volumes.sum()),
+            n_contacts=int(sol.lambda_n.size),
+            linear_solver=str(sol.sizes.get("linear_solver", "")),
+            extra=dict(extra),
+            **energies(new, gravity),
+        )
 
     def as_dict(self) -> dict[str, Any]:
         """Plain dict of the diagnostics (for JSON); ``extra`` is merged in."""
@@ -135,15 +171,16 @@ class StepResult:
         Particles of the step's mesh.
     local_t : ndarray (d+1, ne) int
         Its connectivity in positions of ``active``.
-    operator : NodalIntegration
-        Its smoothing cells.
+    operator : StrainOperator
+        Its strain operator (N-PFEM: the smoothing cells; FEM-remap: the
+        Gauss points of its elements).
     """
 
     record: StepRecord
     solution: StepSolution
     active: np.ndarray
     local_t: np.ndarray
-    operator: NodalIntegration
+    operator: StrainOperator
 
     @property
     def cells(self) -> np.ndarray:
@@ -201,12 +238,9 @@ def update_particles(
     """Stage 3: new particles from the solution of the step.
 
     Active particles take the increment, the (rotated) stress and the plastic
-    strain of the solution; the others move ballistically under gravity
-    (formulation.md §2); particles behind a wall are put back on it.
+    strain of the solution; all move as in :func:`move_particles`.
     """
-    active, g = ops.active, model.gravity_vector
-    du = np.zeros_like(p.x)
-    du[active] = sol.du
+    active = ops.active
     stress = p.stress.copy()
     sig = sol.sigma
     if model.objective_rotation:
@@ -214,12 +248,43 @@ def update_particles(
     stress[active] = sig
     eps_p = p.eps_p.copy()
     eps_p[active] += equivalent_strain(sol.deps_p)
+    wall_force = np.zeros_like(p.wall_force)
+    if ops.contacts.size:
+        wall_force[active[ops.contacts.node], ops.wall_ids] = sol.lambda_n
+    motion = move_particles(p, model, dt, active, sol.du, ops.data.dynamic)
+    return p.replace(**motion, stress=stress, eps_p=eps_p, wall_force=wall_force)
+
+
+def move_particles(
+    p: Particles,
+    model: Model,
+    dt: float,
+    active: np.ndarray,
+    du_active: np.ndarray,
+    dynamic: bool,
+) -> dict[str, np.ndarray]:
+    """Positions, velocities, accelerations and displacements after a step.
+
+    Active particles take the increments ``du_active`` of the step's solution
+    (theta-scheme velocities and accelerations in dynamic steps); the others
+    move ballistically under gravity (formulation.md §2); particles behind a
+    wall are put back on it.  Shared by every method that moves the particles
+    with the nodal increments of an implicit step (N-PFEM, FEM-remap).
+
+    Returns
+    -------
+    dict
+        ``x``, ``v``, ``a``, ``u`` of the new particles.
+    """
+    g = model.gravity_vector
+    du = np.zeros_like(p.x)
+    du[active] = du_active
     th1, th2 = model.theta1, model.theta2
     inactive = np.ones(p.n, bool)
     inactive[active] = False
     if np.any(inactive):
         du[inactive] = dt * p.v[inactive] + th2 * dt**2 * g
-    if ops.data.dynamic:
+    if dynamic:
         v = p.v + (du - dt * p.v) / (th2 * dt)
         a = ((v - p.v) / dt - (1 - th1) * p.a) / th1
     else:
@@ -236,12 +301,7 @@ def update_particles(
         u = p.u + du + (x - moved)
     else:
         x, u = p.x, p.u + du
-    wall_force = np.zeros_like(p.wall_force)
-    if ops.contacts.size:
-        wall_force[active[ops.contacts.node], ops.wall_ids] = sol.lambda_n
-    return p.replace(
-        x=x, v=v, a=a, u=u, stress=stress, eps_p=eps_p, wall_force=wall_force
-    )
+    return {"x": x, "v": v, "a": a, "u": u}
 
 
 def advance(
@@ -294,18 +354,8 @@ def advance(
     t2 = time.perf_counter()
     new = update_particles(p, model, dt, ops, sol)
     timings = {"mesh": t1 - t0, **sol.timings, "update": time.perf_counter() - t2}
-    rec = StepRecord(
-        step=-1 if step is None else step,
-        time=float("nan"),
-        dt=dt,
-        status=sol.status,
-        iterations=sol.iterations,
-        timings=timings,
-        n_active=int(ops.active.size),
-        n_inactive=int(p.n - ops.active.size),
-        mesh_volume=float(ops.operator.volumes.sum()),
-        n_contacts=ops.contacts.size,
-        linear_solver=str(sol.sizes.get("linear_solver", "")),
-        **energies(new, model.gravity),
+    rec = StepRecord.of_step(
+        step, dt, new, model.gravity, ops.active, ops.operator, sol, timings
     )
+    rec.n_contacts = ops.contacts.size
     return new, StepResult(rec, sol, ops.active, ops.local_t, ops.operator)

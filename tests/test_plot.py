@@ -181,7 +181,8 @@ def test_times_fields_and_downsampled_gif(result2d, tmp_path):
     # velocity is zero at t = 0 (one colour), not later (several colours)
     v0, v1 = _rgb(tmp_path / "velocity_t0.png"), _rgb(tmp_path / "velocity_t0.35.png")
     v0[-140:], v1[-140:] = 255, 255  # leave out the colour bar
-    assert _mode_share(v0[_body_mask(v0)]) > 0.8
+    # (most of the body: thin mesh edges are drawn over the cells)
+    assert _mode_share(v0[_body_mask(v0)]) > 0.6
     assert _mode_share(v1[_body_mask(v1)]) < 0.3
     assert v1[_body_mask(v1)].std(axis=0).max() > 20
 
@@ -243,7 +244,8 @@ def test_mp4(result2d, tmp_path):
         reader.close()
 
 
-def test_3d_default_is_vertical_stress(tmp_path):
+def _write_3d(folder: Path) -> Path:
+    """Two unit cubes stacked (12 tetrahedra), two steps of rising stress."""
     pts = np.array(
         [[x, y, z] for z in (0.0, 1.0, 2.0) for y in (0.0, 1.0) for x in (0.0, 1.0)]
     )
@@ -252,7 +254,7 @@ def test_3d_default_is_vertical_stress(tmp_path):
         c = base + np.array([0, 1, 2, 3, 4, 5, 6, 7])
         for a, b in ((1, 3), (3, 2), (2, 6), (6, 4), (4, 5), (5, 1)):
             tets.append([c[0], c[7], c[a], c[b]])
-    writer = ResultWriter(tmp_path)
+    writer = ResultWriter(folder)
     for k in range(2):
         stress = np.zeros((len(pts), 6))
         stress[:, 2] = -RHO_G * (2.0 - pts[:, 2]) * (1 + k)
@@ -263,6 +265,11 @@ def test_3d_default_is_vertical_stress(tmp_path):
             np.array(tets),
             {"stress": stress, "plastic_strain_eq": np.zeros(len(pts))},
         )
+    return folder
+
+
+def test_3d_default_is_vertical_stress(tmp_path):
+    _write_3d(tmp_path)
     paths = plot_results(tmp_path, animation="none", window_size=SIZE)
     names = sorted(p.name for p in paths)
     assert names == [
@@ -314,15 +321,19 @@ def test_errors(result2d, tmp_path):
     assert not list(tmp_path.glob("*.png"))
 
 
-def test_no_opengl_gives_clear_error(result2d, tmp_path):
-    """Without a usable OpenGL backend: a library error, not a VTK crash."""
+def test_no_opengl_gives_clear_error(tmp_path):
+    """Without a usable OpenGL backend: a library error, not a VTK crash.
+
+    (Only 3D results need VTK; 2D pictures are drawn with matplotlib.)
+    """
+    result3d = _write_3d(tmp_path / "r3d")
     script = textwrap.dedent(
         f"""
         import sys
         from skfem_npfem.errors import NpfemError
         from skfem_npfem.plot import plot_results
         try:
-            plot_results({str(result2d)!r}, out_dir={str(tmp_path)!r},
+            plot_results({str(result3d)!r}, out_dir={str(tmp_path)!r},
                          animation="none", times=[0])
         except NpfemError as err:
             print(err)

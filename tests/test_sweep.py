@@ -54,8 +54,8 @@ def _by_hand(varied: dict, fixed: dict = FIXED) -> dict:
 
 def _assert_row_matches(row, summary: dict) -> None:
     for key, val in summary["metrics"].items():
-        if isinstance(val, float) and np.isnan(val):
-            assert np.isnan(row[key]), key
+        if val is None or (isinstance(val, float) and np.isnan(val)):
+            assert row[key] is None or np.isnan(row[key]), key
         elif not isinstance(val, list):
             assert row[key] == pytest.approx(val, rel=1e-12, abs=1e-15), key
     assert row["solver.steps"] == summary["solver"]["steps"]

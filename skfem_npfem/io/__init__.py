@@ -19,6 +19,7 @@ from .checkpoints import (
     CHECKPOINT_FORMAT,
     checkpoint_path,
     checkpoint_step,
+    clear_run_files,
     latest_checkpoint,
     load_checkpoint,
     read_checkpoint,
@@ -33,7 +34,7 @@ from .files import (
     write_bytes,
     write_json,
 )
-from .results import ResultWriter, read_pvd, read_step
+from .results import ResultWriter, read_pvd, read_step, step_time
 
 __all__ = [
     "CHECKPOINT_FORMAT",
@@ -42,6 +43,7 @@ __all__ = [
     "check_writable_dir",
     "checkpoint_path",
     "checkpoint_step",
+    "clear_run_files",
     "dumps",
     "latest_checkpoint",
     "load_checkpoint",
@@ -49,6 +51,7 @@ __all__ = [
     "read_pvd",
     "read_step",
     "save_checkpoint",
+    "step_time",
     "to_jsonable",
     "write_bytes",
     "write_checkpoint",

@@ -14,7 +14,10 @@ any other key
     One particle array each, first dimension = number of particles, for example
     ``x`` and ``v`` and ``a`` (N, d) positions, velocities and accelerations,
     ``stress`` (N, ...) Cauchy stress, ``eps_p`` (N,) equivalent plastic strain,
-    ``mass`` (N,) and ``material`` (N,) integer material ids.
+    ``mass`` (N,) and ``material`` (N,) integer material ids.  A subclass of
+    :class:`~skfem_npfem.particles.Particles` adds its own arrays, which may
+    have other lengths (FEM with remapping stores its elements ``cells`` and
+    the Gauss-point state ``gp_stress``, ``gp_eps_p``).
 
 Arrays must be numeric or bool (no object arrays) and finite.
 
@@ -46,6 +49,7 @@ __all__ = [
     "CHECKPOINT_FORMAT",
     "checkpoint_path",
     "checkpoint_step",
+    "clear_run_files",
     "latest_checkpoint",
     "load_checkpoint",
     "read_checkpoint",
@@ -213,7 +217,44 @@ def write_checkpoint(
     return save_checkpoint(path, particles.arrays(), meta)
 
 
-def read_checkpoint(path: str | os.PathLike) -> tuple[Particles, dict]:
-    """The particles and metadata of a checkpoint (see :func:`load_checkpoint`)."""
+def read_checkpoint(
+    path: str | os.PathLike, cls: type[Particles] = Particles
+) -> tuple[Particles, dict]:
+    """The particles and metadata of a checkpoint (see :func:`load_checkpoint`).
+
+    ``cls`` is :class:`Particles` or a subclass with more fields (for example
+    the Gauss-point state of FEM with remapping); its ``from_arrays`` reads
+    them back and raises :class:`~skfem_npfem.errors.ParameterError` if one is
+    missing.
+    """
     arrays, meta = load_checkpoint(path)
-    return Particles.from_arrays(arrays), meta
+    return cls.from_arrays(arrays), meta
+
+
+#: Names of a run's files in its folder (and in ``plots/``), removed before a
+#: fresh run.
+RUN_FILES = re.compile(
+    r"\.?(?:\.tmp_)?(?:checkpoint_\d+\.npz|result_\d+\.vtu|result\.pvd"
+    r"|result\.vtu\.series|scene\.json)"
+)
+PLOT_FILES = re.compile(r"[\w.+-]+\.(?:png|gif|mp4)")
+
+
+def clear_run_files(folder: str | os.PathLike) -> list[Path]:
+    """Remove the files an earlier run left in ``folder``; return them.
+
+    Only the package's own names are touched (:data:`RUN_FILES`: checkpoints,
+    result steps and their indexes, ``scene.json``, and the pictures in
+    ``plots/``); other files stay.  A fresh run calls this first, so that a
+    later ``--resume`` can never pick up another run's checkpoint.
+    """
+    folder = Path(folder)
+    removed = []
+    for sub, pattern in ((folder, RUN_FILES), (folder / "plots", PLOT_FILES)):
+        if not sub.is_dir():
+            continue
+        for f in sorted(sub.iterdir()):
+            if pattern.fullmatch(f.name) and f.is_file():
+                f.unlink(missing_ok=True)
+                removed.append(f)
+    return removed

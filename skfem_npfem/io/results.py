@@ -5,7 +5,9 @@ step, because particle meshes change topology every step, plus a ParaView
 ``<basename>.pvd`` collection and a ``<basename>.vtu.series`` JSON file that
 list every step with its physical time.  Every file goes through the atomic
 writer of :mod:`skfem_npfem.io.files`.  :func:`read_pvd` and :func:`read_step`
-read them back.
+read them back, and :func:`step_time` reads a step's time from its own file
+(its ``TimeValue`` field data), so an index that was lost is rebuilt from the
+VTU files on disk when a run is resumed.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from __future__ import annotations
 import operator
 import os
 import re
+import warnings
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from pathlib import Path
@@ -24,7 +27,7 @@ import numpy as np
 from ..errors import CheckpointError, ParameterError
 from .files import atomic_path, check_writable_dir, write_bytes, write_json
 
-__all__ = ["ResultWriter", "read_pvd", "read_step", "step_number"]
+__all__ = ["ResultWriter", "read_pvd", "read_step", "step_number", "step_time"]
 
 _BAD_NAME = re.compile(r"[<>&\"']")
 
@@ -105,16 +108,55 @@ class ResultWriter:
                 f.unlink(missing_ok=True)
         if resume_after_step is not None:
             resume_after_step = step_number("resume_after_step", resume_after_step)
-            if self.pvd_path.exists():
-                for time, file in read_pvd(self.pvd_path):
-                    m = self._pattern.fullmatch(file.name)
-                    if m and int(m[1]) <= resume_after_step and file.exists():
-                        self._entries[int(m[1])] = (time, file.name)
+            self._entries = self._kept_steps(resume_after_step)
         for f in self.out_dir.glob(f"{basename}_*.vtu"):
             m = self._pattern.fullmatch(f.name)
             if m and (resume_after_step is None or int(m[1]) > resume_after_step):
                 f.unlink()
         self._write_index()
+
+    def _kept_steps(self, last: int) -> dict[int, tuple[float, str]]:
+        """Steps ``<= last`` to keep on resuming: the index plus the files on disk.
+
+        The ``.pvd`` gives the times of the steps it lists; a step file on disk
+        that it does not list (the index was lost, damaged or older) is added
+        with the time stored in the file.  A step file that cannot be read is
+        left out with a warning.
+        """
+        kept: dict[int, tuple[float, str]] = {}
+        if self.pvd_path.exists():
+            try:
+                listed = read_pvd(self.pvd_path)
+            except CheckpointError as err:
+                warnings.warn(f"{err}; rebuilding it from the VTU files", stacklevel=3)
+                listed = []
+            for time, file in listed:
+                m = self._pattern.fullmatch(file.name)
+                if m and int(m[1]) <= last and file.exists():
+                    kept[int(m[1])] = (time, file.name)
+        added, unreadable = 0, []
+        for f in sorted(self.out_dir.glob(f"{self.basename}_*.vtu")):
+            m = self._pattern.fullmatch(f.name)
+            if not m or int(m[1]) > last or int(m[1]) in kept:
+                continue
+            try:
+                kept[int(m[1])] = (step_time(f), f.name)
+                added += 1
+            except CheckpointError:
+                unreadable.append(f.name)
+        if added:
+            warnings.warn(
+                f"{self.pvd_path.name} did not list {added} step file(s) on disk; "
+                "added them with the times stored in the files",
+                stacklevel=3,
+            )
+        if unreadable:
+            warnings.warn(
+                f"left out {len(unreadable)} unreadable step file(s): "
+                + ", ".join(unreadable[:5]),
+                stacklevel=3,
+            )
+        return kept
 
     @property
     def entries(self) -> list[tuple[int, float, str]]:
@@ -292,6 +334,29 @@ def read_step(path: str | os.PathLike) -> meshio.Mesh:
     if not path.is_file():
         raise CheckpointError(f"{path}: VTU file does not exist")
     try:
-        return meshio.read(path, file_format="vtu")
-    except (OSError, ValueError, ET.ParseError, meshio.ReadError) as exc:
-        raise CheckpointError(f"{path}: unreadable VTU file ({exc})") from exc
+        # The VTU reader itself: meshio.read() prints and calls sys.exit(1)
+        # when a file cannot be parsed.
+        return meshio.vtu.read(path)
+    except (OSError, ValueError, EOFError, ET.ParseError, meshio.ReadError) as exc:
+        why = str(exc) or type(exc).__name__
+        raise CheckpointError(f"{path}: unreadable VTU file ({why})") from exc
+    except SystemExit as exc:  # pragma: no cover - older meshio versions
+        raise CheckpointError(f"{path}: unreadable VTU file") from exc
+
+
+def step_time(path: str | os.PathLike) -> float:
+    """The physical time stored in a VTU step (its ``TimeValue`` field data).
+
+    Raises
+    ------
+    CheckpointError
+        If the file cannot be read or holds no finite ``TimeValue``.
+    """
+    mesh = read_step(path)
+    try:
+        time = float(np.ravel(mesh.field_data["TimeValue"])[0])
+        if not np.isfinite(time):
+            raise ValueError(time)
+    except (KeyError, IndexError, TypeError, ValueError) as exc:
+        raise CheckpointError(f"{path}: no finite TimeValue in the VTU file") from exc
+    return time

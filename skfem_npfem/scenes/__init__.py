@@ -49,7 +49,18 @@ def run_scene(
     progress : bool or None
         Progress line on stderr (None: when stderr is a terminal).
     resume : bool
-        Continue from the latest checkpoint in ``out``.
+        Continue from the latest checkpoint in ``out``.  Without it, a run
+        into ``out`` first removes the files of an earlier run there.
+
+    Raises
+    ------
+    ParameterError
+        For a bad value, or a run estimated to need more memory than this
+        machine has or more than 1e6 steps (``size_check=False`` overrides).
+    RunInterrupted
+        On SIGINT/SIGTERM, after the step in progress, a checkpoint (with
+        ``out``) and the partial summary (``"interrupted": true``, also in
+        ``err.summary``).
     """
     return get_scene(name).run(
         overrides, out=out, summary=summary, progress=progress, resume=resume

@@ -11,19 +11,23 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import CheckpointError, ParameterError
+import numpy as np
+
+from ..errors import CheckpointError, ParameterError, RunInterrupted
 from ..io import (
     check_writable_dir,
     checkpoint_step,
+    clear_run_files,
     load_checkpoint,
     to_jsonable,
     write_json,
 )
+from .limits import MAGNITUDES, check_steps
 
 __all__ = ["DEFAULT_CHECKPOINT_EVERY", "Param", "Scene", "SceneRun", "parse_value"]
 
@@ -70,16 +74,42 @@ class Param:
             return "one of " + ", ".join(map(str, self.choices))
         if self.kind is bool:
             return "true or false"
-        lo = "(" if self.lo_open or math.isinf(self.lo) else "["
-        hi = ")" if self.hi_open or math.isinf(self.hi) else "]"
         what = "an integer" if self.kind is int else "a finite number"
-        return f"{what} in {lo}{self.lo:g}, {self.hi:g}{hi}"
+        lo, hi, lo_open, hi_open, zero = self.bounds()
+        left = "(" if lo_open or math.isinf(lo) else "["
+        right = ")" if hi_open or math.isinf(hi) else "]"
+        text = f"{what} in {left}{lo:g}, {hi:g}{right}"
+        return f"0 or {text}" if zero else text
+
+    def bounds(self) -> tuple[float, float, bool, bool, bool]:
+        """``(lo, hi, lo_open, hi_open, zero_allowed)`` of a number.
+
+        The parameter's own range intersected with the magnitudes the scenes
+        run at (:data:`~skfem_npfem.scenes.limits.MAGNITUDES`); ``zero_allowed``
+        says that 0 is allowed besides ``lo..hi``.
+        """
+        lo, hi, lo_open, hi_open = self.lo, self.hi, self.lo_open, self.hi_open
+        window = MAGNITUDES.get(self.name)
+        if window is None or not lo >= 0:
+            return lo, hi, lo_open, hi_open, False
+        zero = lo == 0 and not lo_open
+        if window[0] > lo:
+            lo, lo_open = window[0], False
+        if window[1] < hi:
+            hi, hi_open = window[1], False
+        return lo, hi, lo_open, hi_open, zero
 
     def check(self, value: Any) -> Any:
-        """Convert and validate a value (strings are parsed)."""
+        """Convert and validate a value (strings are parsed).
+
+        Numbers may be Python or numpy scalars (``np.int64(2)``,
+        ``np.float32(0.3)``); booleans Python or numpy bools.
+        """
         if value is None and self.default is None:
             return None
         v = parse_value(self, value) if isinstance(value, str) else value
+        if isinstance(v, np.generic) and v.ndim == 0:
+            v = v.item()  # numpy scalar -> Python bool/int/float/str
         if self.kind is bool:
             if not isinstance(v, bool):
                 raise ParameterError(self.name, value, self.allowed())
@@ -87,14 +117,17 @@ class Param:
         if self.kind in (int, float):
             if isinstance(v, bool) or not isinstance(v, int | float):
                 raise ParameterError(self.name, value, self.allowed())
-            if self.kind is int and int(v) != v:
+            if self.kind is int and not (math.isfinite(v) and int(v) == v):
                 raise ParameterError(self.name, value, self.allowed())
             v = self.kind(v)
+            lo, hi, lo_open, hi_open, zero = self.bounds()
             ok = math.isfinite(v)
-            ok = ok and (v > self.lo if self.lo_open else v >= self.lo)
-            ok = ok and (v < self.hi if self.hi_open else v <= self.hi)
-            if not ok:
+            ok = ok and (v > lo if lo_open else v >= lo)
+            ok = ok and (v < hi if hi_open else v <= hi)
+            if not (ok or (zero and v == 0)):
                 raise ParameterError(self.name, value, self.allowed())
+        if self.kind is str and not isinstance(v, str):
+            raise ParameterError(self.name, value, self.allowed())
         if self.choices is not None and v not in self.choices:
             raise ParameterError(self.name, value, self.allowed())
         return v
@@ -167,10 +200,16 @@ class Scene:
     build: Callable[..., SceneRun]
     metrics_doc: dict[str, str]
 
-    def resolve(self, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
+    def resolve(self, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
         """Defaults updated with validated overrides."""
         by_name = {p.name: p for p in self.params}
         values = {p.name: p.default for p in self.params}
+        if overrides is not None and not isinstance(overrides, Mapping):
+            raise ParameterError(
+                "overrides",
+                overrides,
+                "a dict of parameter name -> value, e.g. {'E': 2e7}",
+            )
         for key, val in (overrides or {}).items():
             if key not in by_name:
                 raise ParameterError(
@@ -183,22 +222,35 @@ class Scene:
 
     def run(
         self,
-        overrides: dict[str, Any] | None = None,
+        overrides: Mapping[str, Any] | None = None,
         *,
         out: str | Path | None = None,
         summary: str | Path | None = None,
         progress: bool | None = None,
         resume: bool = False,
     ) -> dict[str, Any]:
-        """Build and run the scene; return (and optionally write) the summary."""
+        """Build and run the scene; return (and optionally write) the summary.
+
+        A fresh run (``resume=False``) owns ``out``: the files of an earlier run
+        there (steps, index, checkpoints, ``scene.json``, ``plots/``) are
+        removed first.  On SIGINT/SIGTERM the run stops after its current step,
+        writes a checkpoint and the partial summary (``"interrupted": true``)
+        and raises :class:`~skfem_npfem.errors.RunInterrupted`.
+        """
         values = self.resolve(overrides)
         start = time.perf_counter()
+        for name, path in (("out", out), ("--summary", summary)):
+            if path is not None and not str(path).strip():
+                raise ParameterError(name, str(path), "a path (not empty)")
         if out is not None:
             check_writable_dir("out", out)
         if summary is not None:
             check_writable_dir("--summary", Path(summary).parent, summary)
         checkpoint = self._resume_point(out, values) if resume else None
-        if out is not None:  # lets `skfem-npfem plot DIR` find the scene scales
+        if out is not None:
+            if checkpoint is None:
+                clear_run_files(out)
+            # lets `skfem-npfem plot DIR` find the scene and its scales
             write_json(
                 Path(out) / "scene.json", {"scene": self.name, "parameters": values}
             )
@@ -208,9 +260,34 @@ class Scene:
         _attach_checkpoints(sim, out, values)
         if checkpoint is not None:
             sim.restore(checkpoint)
+            _check_not_past_end(sim, run_kwargs, checkpoint)
             if run_kwargs.get("steps") is not None:  # steps counts from step 0
-                run_kwargs["steps"] = max(0, run_kwargs["steps"] - sim.step)
-        sim.run(**run_kwargs)
+                run_kwargs["steps"] = run_kwargs["steps"] - sim.step
+        _check_step_count(sim, run_kwargs, values)
+        try:
+            sim.run(**run_kwargs)
+        except RunInterrupted as err:
+            err.summary = self._result(srun, values, start, err)
+            if summary is not None:
+                write_json(summary, err.summary)
+                err.summary_path = Path(summary)
+            raise
+        result = self._result(srun, values, start)
+        if summary is not None:
+            write_json(summary, result)
+        return result
+
+    def _result(
+        self,
+        srun: SceneRun,
+        values: dict[str, Any],
+        start: float,
+        interrupt: RunInterrupted | None = None,
+    ) -> dict[str, Any]:
+        """The summary of a finished (or interrupted) run."""
+        from .. import __version__
+
+        sim = srun.simulation
         result = {
             "scene": self.name,
             "parameters": values,
@@ -218,12 +295,14 @@ class Scene:
             "solver": sim.summary(),
             "wall_time_total": time.perf_counter() - start,
             "history": [r.as_dict() for r in sim.records],
+            "version": __version__,
+            "interrupted": interrupt is not None,
         }
-        from .. import __version__
-
-        result["version"] = __version__
-        if summary is not None:
-            write_json(summary, result)
+        if interrupt is not None:
+            result["interrupted_by"] = interrupt.signal_name
+            result["checkpoint"] = (
+                None if interrupt.checkpoint is None else str(interrupt.checkpoint)
+            )
         return result
 
     def _resume_point(self, out: str | Path | None, values: dict[str, Any]) -> Path:
@@ -254,10 +333,56 @@ class Scene:
         return path
 
 
+def _check_not_past_end(sim: Any, run_kwargs: dict, checkpoint: Path) -> None:
+    """Refuse to resume from a checkpoint beyond the requested end."""
+    t_end, steps = run_kwargs.get("t_end"), run_kwargs.get("steps")
+    where = f"{checkpoint.name} is at step {sim.step}, t = {sim.time:.6g} s"
+    fresh = "a shorter run needs a fresh run (without --resume)"
+    if t_end is not None and sim.time > t_end * (1 + 1e-12):
+        raise ParameterError(
+            "t_end", t_end, f"at least {sim.time:.6g} s to resume: {where}; {fresh}"
+        )
+    if steps is not None and sim.step > steps:
+        raise ParameterError(
+            "steps", steps, f"at least {sim.step} to resume: {where}; {fresh}"
+        )
+
+
+def _check_step_count(sim: Any, run_kwargs: dict, values: dict[str, Any]) -> None:
+    """Refuse a run that plans more than :data:`~.limits.MAX_STEPS` steps."""
+    t_end, steps = run_kwargs.get("t_end"), run_kwargs.get("steps")
+    by_time = math.inf
+    if t_end is not None:
+        by_time = max(t_end - sim.time, 0.0) / sim.dt_max
+    if by_time <= (math.inf if steps is None else steps):
+        if t_end is not None:
+            name = "dt" if "dt" in values else "t_end"
+            check_steps(
+                by_time,
+                values,
+                name,
+                f"t_end/dt = {t_end:g}/{sim.dt_max:g} s",
+                "raise dt or lower t_end",
+            )
+    else:
+        name = next(
+            (k for k in ("steps", "max_steps") if values.get(k) == steps), "steps"
+        )
+        check_steps(steps, values, name, "", "use fewer steps")
+
+
 #: Parameters that may differ when a run is resumed (they do not change the
 #: steps already taken).
 RESUME_MAY_CHANGE = frozenset(
-    {"t_end", "steps", "output_every", "checkpoint_every", "threads", "reproducible"}
+    {
+        "t_end",
+        "steps",
+        "output_every",
+        "checkpoint_every",
+        "threads",
+        "reproducible",
+        "size_check",
+    }
 )
 
 

@@ -57,9 +57,22 @@ from ..simulation import AtRest, Simulation
 from ..smoothing import nodal_integration
 from ..step import StepResult
 from .base import Param, Scene, SceneRun
-from .common import elastic_params, make_writer, solver_from, solver_params
+from .common import (
+    check_size,
+    elastic_params,
+    make_writer,
+    solver_from,
+    solver_params,
+)
+from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
 
 MATERIALS = ("mohr-coulomb", "drucker-prager")
+#: Largest cohesion in units of rho g H0 (beyond it, displacements of a
+#: standing column grow with c: measured 3x at 1.4e4, 36x at 1.4e5).
+MAX_STRENGTH_RATIO = 1e4
+#: Largest Young's modulus in units of rho g H0 (measured over 0.3 s: 1.4e9
+#: and 1.9e9 run, 9.9e9 fails at step 38, 2.5e12 at step 5).
+MAX_STIFFNESS_RATIO = 2e9
 
 PARAMS = [
     Param("aspect", 2.0, "-", "aspect ratio a = H0/L0", float, lo=0, lo_open=True),
@@ -208,6 +221,7 @@ PARAMS = [
         int,
         lo=1,
     ),
+    *METHOD_PARAMS,
     *solver_params(),
 ]
 
@@ -223,7 +237,7 @@ METRICS = {
     "final_height": "H_inf / L0 (highest particle of the main body)",
     "height_ratio": "H_inf / H0",
     "collapse_time": "time the front stops (stays within one spacing of its final "
-    "position), s",
+    "position), s; null when the run ended before rest (t_end)",
     "collapse_time_normalised": "collapse_time / sqrt(H0 / g)",
     "at_rest": "the run ended by the at-rest rule (not t_end)",
     "volume_change": "relative mesh-volume (area) change, end vs t = 0",
@@ -232,6 +246,7 @@ METRICS = {
     "final_kinetic_energy": "kinetic energy at the end, J",
     "n_inactive_final": "particles outside every element at the end (ballistic)",
     "n_particles": "number of particles",
+    **METHOD_METRICS,
 }
 
 
@@ -336,10 +351,40 @@ def _check(values: dict[str, Any]) -> float:
     L0, H0 = values["length"], values["aspect"] * values["length"]
     h = values["spacing"] if values["spacing"] is not None else L0 / 22.0
     if h > L0 / 2 or h > H0 / 2:
+        if values["spacing"] is None:  # the user set aspect, not the spacing
+            raise ParameterError(
+                "aspect",
+                values["aspect"],
+                f"at least {2 * h / L0:.3g} with the default spacing L0/22 (the "
+                "column must be 2 spacings high), or set a smaller spacing",
+            )
         raise ParameterError(
             "spacing", h, f"at most min(L0, H0)/2 = {min(L0, H0) / 2:g} m"
         )
+    # Up-front size check (scenes/limits.py), before anything is built.
+    width = L0 if values["symmetric"] else 2 * L0
+    n = (max(1, round(width / h)) + 1) * (max(1, round(H0 / h)) + 1)
+    blame = "spacing" if values["spacing"] is not None else "aspect"
+    check_size(n, 2, values, blame, "use a larger spacing or a smaller column")
     phi, psi, c, K0 = values["phi"], values["psi"], values["c"], values["K0"]
+    weight = values["rho"] * values["gravity"] * H0
+    if c > MAX_STRENGTH_RATIO * weight:
+        raise ParameterError(
+            "c",
+            c,
+            f"at most {MAX_STRENGTH_RATIO:g} rho g H0 = "
+            f"{MAX_STRENGTH_RATIO * weight:.3g} Pa: a column that strong stands "
+            "still, and the solver tolerance no longer resolves its weight",
+        )
+    if values["E"] > MAX_STIFFNESS_RATIO * weight:
+        raise ParameterError(
+            "E",
+            values["E"],
+            f"at most {MAX_STIFFNESS_RATIO:g} rho g H0 = "
+            f"{MAX_STIFFNESS_RATIO * weight:.3g} Pa: the elastic strains fall "
+            "below the solver tolerance (the flow is rate-independent long "
+            "before: E = 10 GPa and 10 MPa give the same run-out)",
+        )
     if psi > phi:
         raise ParameterError("psi", psi, f"at most phi = {phi:g} degrees")
     if values["material"] == "mohr-coulomb" and c == 0:
@@ -420,7 +465,9 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
         runouts = np.array([r.extra.get("runout", np.nan) for r in recs])
         runout = float(runouts[-1]) if recs else L0
         top = float(last.get("max_height", H0))
-        t_c = collapse_time(times, runouts, h)
+        at_rest = bool(stop is not None and stop(sim_))
+        # Before rest (stopped by t_end) the front may still move: unknown.
+        t_c = collapse_time(times, runouts, h) if at_rest else float("nan")
         summ = sim_.summary()
         return {
             "runout": runout,
@@ -432,7 +479,7 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
             "height_ratio": top / H0,
             "collapse_time": t_c,
             "collapse_time_normalised": t_c / t_scale,
-            "at_rest": bool(stop is not None and stop(sim_)),
+            "at_rest": at_rest,
             "volume_change": summ["volume_change"],
             "mass_change": summ["mass_change"],
             "max_kinetic_energy": summ["max_kinetic_energy"],
@@ -485,7 +532,7 @@ def build(
         if min_time is None:
             min_time = 2 * math.sqrt(H0 / values["gravity"])
         stop = run_kwargs["stop"] = AtRest(values["rest_fraction"], min_time)
-    return SceneRun(sim, run_kwargs, _metrics(values, h, stop))
+    return with_method(values, SceneRun(sim, run_kwargs, _metrics(values, h, stop)))
 
 
 SCENE = Scene(

@@ -1,4 +1,9 @@
-"""Helpers shared by the scenes: solver parameters and the result writer."""
+"""Helpers shared by the scenes: solver and size parameters, the result writer.
+
+The up-front size and step-count checks live in :mod:`.limits`
+(:func:`~.limits.check_size`, :func:`~.limits.check_steps`); scenes call
+:func:`check_size` with their particle count before building anything.
+"""
 
 from __future__ import annotations
 
@@ -8,8 +13,11 @@ from typing import Any
 from ..io import ResultWriter, checkpoint_step
 from ..solver import ACCURACY_PRESETS, LINEAR_SOLVERS, SolverOptions
 from .base import Param
+from .limits import check_size, check_steps
 
 __all__ = [
+    "check_size",
+    "check_steps",
     "elastic_params",
     "make_writer",
     "solver_from",
@@ -36,7 +44,7 @@ def elastic_params(E: float) -> list[Param]:
 
 
 def solver_params() -> list[Param]:
-    """Parameters every scene exposes for the cone solver."""
+    """Parameters every scene exposes for the cone solver and the size check."""
     return [
         Param(
             "linear_solver", "auto", "-", "Clarabel direct solver", str, LINEAR_SOLVERS
@@ -76,6 +84,14 @@ def solver_params() -> list[Param]:
             "(default: use tol)",
             str,
             tuple(ACCURACY_PRESETS),
+        ),
+        Param(
+            "size_check",
+            True,
+            "-",
+            "refuse a run estimated to need more memory than this machine has "
+            "or more than 1e6 steps (false: run it anyway)",
+            bool,
         ),
     ]
 

@@ -36,7 +36,14 @@ from ..pfem import FixedMesh
 from ..simulation import Simulation
 from ..smoothing import nodal_integration
 from .base import Param, Scene, SceneRun
-from .common import elastic_params, make_writer, solver_from, solver_params
+from .common import (
+    check_size,
+    elastic_params,
+    make_writer,
+    solver_from,
+    solver_params,
+)
+from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
 from .plateau import PlateauRule
 
 MATERIALS = ("tresca", "mohr-coulomb", "drucker-prager")
@@ -51,7 +58,14 @@ _POSITIVE = {"lo": 0, "lo_open": True}
 PARAMS = [
     Param("material", "tresca", "-", "yield criterion", str, MATERIALS),
     *elastic_params(1.0e8),
-    Param("c", 1.0e4, "Pa", "cohesion", float, lo=0),
+    Param(
+        "c",
+        1.0e4,
+        "Pa",
+        "cohesion (tresca: > 0; c = 0 needs gamma > 0)",
+        float,
+        lo=0,
+    ),
     Param(
         "phi",
         0.0,
@@ -153,6 +167,7 @@ PARAMS = [
         "small-strain limit analysis",
         bool,
     ),
+    *METHOD_PARAMS,
     *solver_params(),
 ]
 
@@ -174,6 +189,7 @@ METRICS = {
     "warnings": "list of one-line warnings (a cap stopped the run before the "
     "plateau); the CLI prints each on stderr",
     "n_particles": "number of particles",
+    **METHOD_METRICS,
 }
 
 
@@ -199,12 +215,25 @@ def n_c(phi_deg: float) -> float:
     return (nq - 1.0) / math.tan(f)
 
 
+def graded_count(b: float, h: float, length: float, ratio: float) -> float:
+    """Number of :func:`graded_coordinates` (estimated without building them)."""
+    n_fine = max(2, round(1.5 * b / h))
+    rest = max(length - n_fine * h, 0.0)
+    if ratio == 1.0:
+        n_graded = rest / h
+    else:
+        n_graded = math.log1p(rest * (ratio - 1) / (h * ratio)) / math.log(ratio)
+    return n_fine + 1 + math.ceil(n_graded)
+
+
 def soil_mesh(values: dict[str, Any]) -> MeshTri:
     """The graded ``domain*b`` square block, surface at ``y = domain*b``."""
     b, h = values["half_width"], values["spacing"]
     if h > b / 2:
         raise ParameterError("spacing", h, f"at most half_width/2 = {b / 2:g} m")
     L = values["domain"] * b
+    n = graded_count(b, h, L, values["grading"])
+    check_size(n * n, 2, values, advice="use a larger spacing, grading or domain")
     xs = graded_coordinates(b, h, L, values["grading"])
     ys = L - graded_coordinates(b, h, L, values["grading"])[::-1]
     return MeshTri.init_tensor(xs, ys)
@@ -220,7 +249,12 @@ def soil_material(values: dict[str, Any]) -> tuple[Material, float]:
     E, nu = values["E"], values["nu"]
     if name == "tresca":
         if c <= 0:
-            raise ParameterError("c", c, "tresca needs c > 0")
+            raise ParameterError(
+                "c",
+                c,
+                "material=tresca needs c > 0 (c = 0 is allowed with "
+                "mohr-coulomb or drucker-prager and gamma > 0)",
+            )
         mat, phi = Tresca(E, nu, rho, c=c), 0.0
     elif name == "mohr-coulomb":
         mat = MohrCoulomb(E, nu, rho, c=c, phi=phi, psi=psi)
@@ -345,7 +379,9 @@ def build(
             "n_particles": int(particles.n),
         }
 
-    return SceneRun(sim, {"steps": rule.step_cap, "stop": finished}, metrics)
+    return with_method(
+        values, SceneRun(sim, {"steps": rule.step_cap, "stop": finished}, metrics)
+    )
 
 
 def load_curve(sim: Simulation) -> list[list[float]]:

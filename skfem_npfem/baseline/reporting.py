@@ -1,0 +1,109 @@
+"""Files of the comparison demos: JSON results, PNG figures, Markdown tables.
+
+Every file goes through :mod:`skfem_npfem.io`'s atomic writer and JSON policy
+(NaN and inf as ``null``), so a demo interrupted mid-write never leaves a
+half-written result in ``docs/validation/comparison``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from ..io import atomic_path, write_json
+
+__all__ = [
+    "best_within",
+    "cheapest_within",
+    "markdown_table",
+    "pareto_front",
+    "save_png",
+    "write_result",
+]
+
+
+def write_result(path: str | Path, result: dict) -> Path:
+    """Write a demo's result dict as JSON (folders created); return the path."""
+    return write_json(path, result)
+
+
+def save_png(fig: Any, path: str | Path, dpi: int = 120) -> Path:
+    """Save a matplotlib figure as PNG atomically and close it."""
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=dpi, format="png")
+    plt.close(fig)
+    return path
+
+
+def markdown_table(headers: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
+    """A Markdown table; floats in 4 significant digits, None as a dash.
+
+    Examples
+    --------
+    >>> print(markdown_table(["a", "b"], [[1, 0.123456], ["x", None]]))
+    | a | b |
+    |---|---|
+    | 1 | 0.1235 |
+    | x | – |
+    """
+
+    def cell(v: Any) -> str:
+        if v is None:
+            return "–"
+        if isinstance(v, float):
+            return f"{v:.4g}"
+        return str(v)
+
+    lines = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
+    lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def pareto_front(points: Sequence[tuple[float, float]]) -> list[int]:
+    """Indices of the points not beaten in both cost and error, cheapest first.
+
+    A point ``(cost, error)`` is on the front when no other point is at most
+    as costly *and* at most as wrong (one of the two strictly).
+
+    Examples
+    --------
+    >>> pareto_front([(1.0, 0.5), (2.0, 0.6), (3.0, 0.1), (0.5, 0.9)])
+    [3, 0, 2]
+    """
+    order = sorted(range(len(points)), key=lambda i: (points[i][0], points[i][1]))
+    front: list[int] = []
+    best = float("inf")
+    for i in order:
+        if points[i][1] < best:
+            front.append(i)
+            best = points[i][1]
+    return front
+
+
+def cheapest_within(points: Sequence[tuple[float, float]], target: float) -> int | None:
+    """Index of the cheapest point with error at most ``target`` (None: none).
+
+    Examples
+    --------
+    >>> cheapest_within([(1.0, 0.5), (2.0, 0.05), (3.0, 0.01)], 0.1)
+    1
+    """
+    ok = [i for i, (_, e) in enumerate(points) if e <= target]
+    return min(ok, key=lambda i: points[i][0]) if ok else None
+
+
+def best_within(points: Sequence[tuple[float, float]], budget: float) -> int | None:
+    """Index of the most accurate point costing at most ``budget`` (None: none).
+
+    Examples
+    --------
+    >>> best_within([(1.0, 0.5), (2.0, 0.05), (3.0, 0.01)], 2.5)
+    1
+    """
+    ok = [i for i, (c, _) in enumerate(points) if c <= budget]
+    return min(ok, key=lambda i: points[i][1]) if ok else None

@@ -1,0 +1,87 @@
+"""The stress-roughness index against a closed form and the reference tool.
+
+References: a checkerboard +-1 on a structured triangle lattice (each interior
+node has four axis neighbours of the other sign and two diagonal ones of its
+own, so ``s - mean = 4/3 s`` and ``R = 4/3`` exactly); a linear field on the
+lattice (``R = 0``); and ``shared/tools/stress_roughness.py`` (the project's
+reference measure) on the VTU files of a run, which must give the values the
+scene stored on its step records (to round-off).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import meshio
+import numpy as np
+import pytest
+from skfem import MeshTri
+
+from skfem_npfem.baseline.roughness import roughness_index, stress_roughness
+from skfem_npfem.io import read_pvd
+from skfem_npfem.scenes import run_scene
+
+ROOT = Path(__file__).resolve().parent.parent
+TOOL = [
+    ROOT.parent / "shared" / "tools" / "stress_roughness.py",
+    Path("/work/shared/tools/stress_roughness.py"),
+]
+
+
+def lattice(n: int = 12) -> MeshTri:
+    return MeshTri.init_tensor(*[np.linspace(0.0, 1.0, n + 1)] * 2)
+
+
+def test_checkerboard_and_linear_field():
+    m = lattice()
+    i = np.rint(m.p * 12).astype(int)
+    board = np.where((i[0] + i[1]) % 2 == 0, 1.0, -1.0)
+    r, n = roughness_index(m.t.T, board)
+    assert n == 9 * 9  # the nodes two or more rows from the boundary
+    assert r == pytest.approx(4.0 / 3.0, rel=1e-12)
+    assert roughness_index(m.t.T, 3.0 - 2.0 * m.p[0] + m.p[1])[0] < 1e-14
+    # Too small a mesh: no interior particle worth a statistic.
+    assert np.isnan(roughness_index(lattice(3).t.T, board[:16])[0])
+    # stress_roughness picks the vertical stress (Voigt component 1 in 2D).
+    stress = np.zeros((m.p.shape[1], 4))
+    stress[:, 1] = board
+    assert stress_roughness(m.t.T, stress) == pytest.approx(4.0 / 3.0, rel=1e-12)
+
+
+def _tool():
+    for path in TOOL:
+        if path.is_file():
+            spec = importlib.util.spec_from_file_location("stress_roughness", path)
+            module = importlib.util.module_from_spec(spec)
+            spec.loader.exec_module(module)
+            return module
+    pytest.skip("shared/tools/stress_roughness.py is not beside the checkout")
+
+
+def test_scene_records_equal_the_reference_tool(tmp_path, capsys):
+    tool = _tool()
+    res = run_scene(
+        "column-collapse",
+        {
+            "spacing": 0.04,
+            "t_end": 0.04,
+            "rest_fraction": 0.0,
+            "output_every": 2,
+            "method": "spfem",
+        },
+        out=tmp_path,
+    )
+    history = {h["step"]: h["stress_roughness"] for h in res["history"]}
+    checked = 0
+    for _, vtu in read_pvd(tmp_path / "result.pvd")[1:]:
+        step = int(vtu.stem.rsplit("_", 1)[1])
+        m = meshio.read(vtu)
+        cells = np.vstack([c.data for c in m.cells if c.type == "triangle"])
+        ref, _ = tool.roughness(m.points[:, :2], cells, m.point_data["stress"][:, 1])
+        assert history[step] == pytest.approx(ref, rel=1e-12, abs=1e-15)
+        checked += 1
+    assert checked == 4
+    assert tool.main([str(tmp_path)]) == 0
+    last = capsys.readouterr().out.strip().splitlines()[-1].split()
+    assert float(last[3]) == pytest.approx(res["metrics"]["stress_roughness"], abs=5e-5)
