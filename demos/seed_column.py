@@ -156,14 +156,14 @@ def load_step(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def vtu_roughness(folder: Path) -> list[float]:
-    """Stress roughness of every written step (skfem_npfem.roughness)."""
+    """Stress roughness of every written step (skfem_npfem.baseline.roughness)."""
+    from skfem_npfem.baseline.roughness import stress_roughness
     from skfem_npfem.io import read_pvd
-    from skfem_npfem.roughness import roughness_of_step
 
     out = []
     for _, path in read_pvd(folder / "result.pvd")[1:]:
-        points, cells, stress = load_step(path)
-        out.append(roughness_of_step(points, cells, stress))
+        _, cells, stress = load_step(path)
+        out.append(stress_roughness(cells, stress))
     return out
 
 

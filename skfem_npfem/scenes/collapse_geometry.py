@@ -20,9 +20,9 @@ then ``aspect``.  A parameter the chosen geometry does not use, given
 explicitly, is refused (``aspect`` with both ``radius`` and ``height``,
 ``symmetric`` or ``length`` with a cylindrical geometry, ...), as is a spacing
 above ``r0/4`` or a run whose estimated memory exceeds the machine's
-(:mod:`.sizing`).  :class:`GeometryScene` is a scene whose
-:meth:`~GeometryScene.resolve` knows which parameters were given;
-:mod:`.collapse_runs` builds the runs.
+(:func:`~.limits.check_size` with the particle count of :mod:`.sizing`).
+:class:`GeometryScene` is a scene whose :meth:`~GeometryScene.resolve` knows
+which parameters were given; :mod:`.collapse_runs` builds the runs.
 """
 
 from __future__ import annotations
@@ -36,14 +36,14 @@ from ..errors import ParameterError
 from .base import Param, Scene
 from .box_column import DEPTH_SPACINGS
 from .cylinder import SEED, SEED_DIVISIONS
-from .sizing import check_memory
+from .limits import check_size
+from .sizing import lattice_particles
 
 __all__ = [
     "CYLINDRICAL",
     "GEOMETRIES",
     "GEOMETRY_METRICS",
     "GEOMETRY_PARAMS",
-    "SIZE_CHECK",
     "GeometryScene",
     "finalize",
     "metrics_doc",
@@ -121,18 +121,6 @@ GEOMETRY_PARAMS = [
     ),
 ]
 
-#: The override of the up-front size check (issue 13 adds the same parameter
-#: to every scene; the scene takes this one only when the plane-strain scene
-#: has none).
-SIZE_CHECK = Param(
-    "size_check",
-    True,
-    "-",
-    "refuse a run whose estimated memory exceeds the machine's available memory "
-    "(false: run anyway; checked for the 3D and axisymmetric geometries)",
-    bool,
-)
-
 #: Summary metrics of the cylindrical geometries and the box (which also has
 #: the plane-strain metrics, measured along x and with heights along z).
 GEOMETRY_METRICS = {
@@ -140,10 +128,6 @@ GEOMETRY_METRICS = {
     "radius within which 99 % of the mass lies, m",
     "reference_runout_lube2004": "cylindrical geometries: Lube et al. 2004, "
     "(r_inf - r0)/r0 = 1.24 a (a <= 1.7), 1.6 a^(1/2) (a > 1.7)",
-    "stress_roughness": "3D and axisymmetric: roughness of the vertical stress "
-    "at the end (skfem_npfem.roughness; = /work/shared/tools/stress_roughness.py "
-    "on the last VTU)",
-    "stress_roughness_max": "3D and axisymmetric: its largest value over all steps",
     "mass_basis": "3D and axisymmetric: what masses, volumes and energies are "
     "of (axisymmetric: the full ring, 2 pi r weight; 3D: the modelled quarter or "
     "slab)",
@@ -219,6 +203,8 @@ def finalize(
     """
     geo = values["geometry"]
     unused = sorted(given - used_parameters(geo, given, plane_names))
+    if values.get("method", "npfem") == "npfem" and "method" in unused:
+        unused.remove("method")  # N-PFEM is every geometry's method
     if unused:
         name = unused[0]
         why = _unused_reason(geo, name)
@@ -236,9 +222,10 @@ def finalize(
             values["depth"] = DEPTH_SPACINGS * h
     _material(values, given)
     _check_values(values)
-    if values["size_check"]:
-        dim = 2 if geo == "axisymmetric" else 3
-        check_memory(geo, values, values["spacing"], dim)
+    n = lattice_particles(geo, values, values["spacing"])
+    blame = "spacing" if "spacing" in given or geo == "box" else "radius"
+    dim = 2 if geo == "axisymmetric" else 3
+    check_size(n, dim, values, blame, "use a larger spacing or a smaller column")
 
 
 def _unused_reason(geometry: str, name: str) -> str:
@@ -246,8 +233,8 @@ def _unused_reason(geometry: str, name: str) -> str:
         return "not with both radius and height (they fix the aspect ratio h0/r0)"
     if name == "max_displacement":
         return "not in axisymmetry (its spacing would come from ring volumes)"
-    if name == "size_check":
-        return "a 3D or axisymmetric geometry (plane strain does not check memory)"
+    if name == "method":
+        return f"npfem: the other methods are not available for geometry={geometry}"
     if geometry == "plane-strain":
         return f"a geometry that uses it; geometry=plane-strain does not use {name}"
     return f"not used by geometry={geometry}; leave it out"

@@ -4,9 +4,10 @@
 (:mod:`.collapse_geometry`) into a :class:`~skfem_npfem.scenes.base.SceneRun`
 with the same time loop as the plane-strain scene: adaptive time step (halved
 on a solver failure), VTU output and checkpoints, and the stop at rest.  A
-callback records per step the run-out, the height of the main body and the
-stress roughness (:mod:`skfem_npfem.roughness`) on the step record; the
-metrics are computed from those records.
+callback records per step the run-out and the height of the main body on the
+step record, :func:`~.methods.with_method` the stress roughness
+(:mod:`skfem_npfem.baseline.roughness`); the metrics are computed from those
+records.
 
 :data:`COLUMN_COLLAPSE` is the scene registered as ``column-collapse``: the
 plane-strain scene of :mod:`.column_collapse` extended by the ``geometry``
@@ -23,7 +24,6 @@ from typing import Any
 import numpy as np
 
 from ..pfem import main_body
-from ..roughness import roughness_of_step
 from ..simulation import AtRest, Simulation
 from ..step import StepResult
 from .base import Scene, SceneRun
@@ -31,7 +31,6 @@ from .box_column import box_column
 from .collapse_geometry import (
     CYLINDRICAL,
     GEOMETRY_PARAMS,
-    SIZE_CHECK,
     GeometryScene,
     metrics_doc,
 )
@@ -39,6 +38,7 @@ from .column_collapse import SCENE as PLANE_STRAIN
 from .column_collapse import collapse_time, lube_runout
 from .common import make_writer, solver_from
 from .cylinder import ColumnSetup, cylinder_column, mass_quantile, radial_front
+from .methods import with_method
 
 __all__ = ["COLUMN_COLLAPSE", "build_geometry", "lube2004_runout", "with_geometries"]
 
@@ -107,14 +107,17 @@ def _front(geo: str, x: np.ndarray, mass: np.ndarray, symmetric: bool) -> float:
 
 
 def _recorder(values: dict[str, Any], h: float):
-    """Callback storing run-out, height and stress roughness on each record."""
+    """Callback storing the run-out and the height of the main body on each record.
+
+    (The stress roughness is recorded by :func:`~.methods.with_method`, as for
+    every method and geometry.)
+    """
     geo, symmetric = values["geometry"], values["symmetric"]
 
     def record(sim_: Simulation, p, step: StepResult) -> bool:
         body = np.zeros(p.n, bool)
         body[step.active[main_body(p.x[step.active], 3.0 * h)]] = True
         extra = step.record.extra
-        extra["stress_roughness"] = roughness_of_step(p.x, step.cells, p.stress)
         extra["max_height"] = float(p.x[body, -1].max()) if body.any() else math.nan
         run = _front(geo, p.x, p.mass, symmetric)
         if geo in CYLINDRICAL:
@@ -148,9 +151,9 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
         runs = np.array([r.extra.get(key, np.nan) for r in recs])
         run = float(runs[-1]) if recs else L0
         top = float(last.get("max_height") or H0)
-        # (NaN is stored as None in checkpoints: a resumed run reads None.)
-        rough = np.array([r.extra.get("stress_roughness") for r in recs], dtype=float)
-        t_c = collapse_time(times, runs, h)
+        at_rest = bool(stop is not None and stop(sim_))
+        # Before rest (stopped by t_end) the front may still move: unknown.
+        t_c = collapse_time(times, runs, h) if at_rest else math.nan
         summ = sim_.summary()
         out: dict[str, Any] = {key: run, "normalised_runout": (run - L0) / L0}
         if cyl:
@@ -159,21 +162,18 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
             out["runout_main_body"] = float(last.get("runout_main_body", L0))
             out["runout_tip"] = float(last.get("runout_tip", L0))
             out["reference_runout_lube"] = lube_runout(values["aspect"])
-        finite = rough[np.isfinite(rough)]
         out |= {
             "final_height": top / L0,
             "height_ratio": top / H0,
             "collapse_time": t_c,
             "collapse_time_normalised": t_c / math.sqrt(H0 / values["gravity"]),
-            "at_rest": bool(stop is not None and stop(sim_)),
+            "at_rest": at_rest,
             "volume_change": summ["volume_change"],
             "mass_change": summ["mass_change"],
             "max_kinetic_energy": summ["max_kinetic_energy"],
             "final_kinetic_energy": float(recs[-1].kinetic_energy) if recs else 0.0,
             "n_inactive_final": int(recs[-1].n_inactive) if recs else 0,
             "n_particles": int(sim_.particles.n),
-            "stress_roughness": float(rough[-1]) if recs else math.nan,
-            "stress_roughness_max": float(finite.max()) if finite.size else math.nan,
             "mass_basis": MASS_BASIS[geo],
         }
         return out
@@ -214,7 +214,9 @@ def build_geometry(
         if min_time is None:
             min_time = 2 * math.sqrt(H0 / values["gravity"])
         stop = run_kwargs["stop"] = AtRest(values["rest_fraction"], min_time)
-    return SceneRun(sim, run_kwargs, _metrics(values, h, stop))
+    # The method option (npfem only here) adds the stress roughness per step
+    # and its metrics, as for plane strain.
+    return with_method(values, SceneRun(sim, run_kwargs, _metrics(values, h, stop)))
 
 
 #: What the plane-strain parameters mean for the other geometries (appended to
@@ -249,14 +251,13 @@ def with_geometries(plane: Scene) -> GeometryScene:
         return build_geometry(values, out, progress, resume)
 
     names = frozenset(p.name for p in plane.params)
-    extra = [] if SIZE_CHECK.name in names else [SIZE_CHECK]
     return GeometryScene(
         name=plane.name,
         description=plane.description.replace(
             "2D (plane-strain) granular column collapse",
             "Granular column collapse: plane strain, axisymmetric or 3D",
         ),
-        params=[*GEOMETRY_PARAMS, *map(_annotated, plane.params), *extra],
+        params=[*GEOMETRY_PARAMS, *map(_annotated, plane.params)],
         build=build,
         metrics_doc=metrics_doc(plane.metrics_doc),
         plane_names=names,
