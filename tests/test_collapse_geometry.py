@@ -20,6 +20,7 @@ from skfem import MeshTet, MeshTri
 
 from skfem_npfem.baseline.roughness import roughness_index
 from skfem_npfem.cli import main
+from skfem_npfem.scenery import scenery
 from skfem_npfem.scenes import get_scene
 from skfem_npfem.scenes.collapse_runs import lube2004_runout
 from skfem_npfem.scenes.sizing import lattice_particles
@@ -84,6 +85,11 @@ def test_geometry_runs_from_the_cli(tmp_path, geometry):
         # Full-ring masses of the lattice rectangle: rho pi r0^2 h0 (1e-12).
         assert abs(mass / (RHO * math.pi * R0**2 * H0) - 1) < 1e-12
         assert m["reference_runout_lube2004"] == pytest.approx(1.6 * math.sqrt(2))
+        # The pictures' scenery: the (r, z) section, the axis, Lube et al. 2004.
+        sc = scenery(out)
+        assert np.allclose(sc.outline.max(axis=0), [R0, H0])
+        assert sc.runout_reference == pytest.approx(R0 * (1 + 1.6 * math.sqrt(2)))
+        assert "2004" in sc.runout_label and sc.walls[0][2].startswith("axis")
     if geometry == "box":
         # The slab: rho L0 H0 W (1e-12), W = 4 spacings.
         assert abs(mass / (RHO * 0.2 * 0.4 * 0.16) - 1) < 1e-12
