@@ -191,6 +191,31 @@ def test_run_tasks_runs_a_demo_function_and_records_failures():
     assert not out["bad"].ok and "ParameterError" in out["bad"].error
 
 
+def test_a_function_workers_cannot_import_by_name_is_shipped_by_value(tmp_path):
+    # A module loaded from a file path (as pytest's importlib mode loads test
+    # modules) cannot be imported by name on a worker; before the fix the
+    # worker's connection died on unpickling and the sweep waited forever.
+    import importlib.util
+
+    from skfem_npfem.sweeps.engine import portable
+    from skfem_npfem.sweeps.task import ByValue
+
+    src = tmp_path / "hidden" / "somewhere.py"
+    src.parent.mkdir()
+    src.write_text("def cube(x):\n    return x ** 3\n")
+    spec = importlib.util.spec_from_file_location("nowhere_pkg.somewhere", src)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    try:
+        spec.loader.exec_module(module)
+        assert isinstance(portable(module.cube), ByValue)
+        assert portable(run_scene) is run_scene  # importable: by reference
+        out = run_tasks(module.cube, {"three": (3,)}, workers=1, progress=False)
+    finally:
+        del sys.modules[spec.name]
+    assert out["three"].ok and out["three"].value == 27
+
+
 def _cube_or_fail(x: int) -> int:
     if x < 0:
         raise ParameterError("x", x, "x >= 0")

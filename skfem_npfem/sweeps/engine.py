@@ -14,10 +14,11 @@ import time
 import uuid
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from .cluster import CONNECT_TIMEOUT, dask_session
-from .task import call
+from .task import ByValue, call
 
 __all__ = ["Outcome", "Progress", "gather_tasks", "run_tasks"]
 
@@ -150,6 +151,7 @@ def gather_tasks(
     """
     from distributed import as_completed
 
+    fn = portable(fn)
     prefix = key_prefix or f"task-{uuid.uuid4().hex[:8]}"
     futures = {
         client.submit(
@@ -181,6 +183,41 @@ def gather_tasks(
         report.finished(outcome, detail or "")
         outcomes[name] = outcome
     return {name: outcomes[name] for name in tasks}
+
+
+def importable(module_name: str, file: str | None) -> bool:
+    """True if ``module_name`` resolves to ``file`` from an entry of ``sys.path``.
+
+    Local workers start with this process's ``sys.path``; a module that was
+    loaded some other way (a test module under pytest's importlib mode, a
+    file loaded by path) cannot be imported by name on a worker.
+    """
+    if file is None:
+        return True  # built-in or namespace: nothing to ship
+    target = Path(file).resolve()
+    rel = Path(*module_name.split("."))
+    for entry in sys.path:
+        base = Path(entry or ".").resolve() / rel
+        if target in (base.with_suffix(".py"), base / "__init__.py"):
+            return True
+    return False
+
+
+def portable(fn: Callable[..., Any]) -> Callable[..., Any]:
+    """``fn``, or a copy of it carried by value if workers could not import it.
+
+    Dask pickles a function by its module's name; a worker that cannot import
+    that module fails to unpickle the task, its connection to the scheduler
+    dies and the sweep would wait forever.  Such a function is pickled with
+    its module's code (cloudpickle, by value) instead.
+    """
+    name = getattr(fn, "__module__", None)
+    module = sys.modules.get(name or "")
+    if module is None or name == "__main__":
+        return fn  # cloudpickle already ships __main__ functions by value
+    if importable(name, getattr(module, "__file__", None)):
+        return fn
+    return ByValue(fn)
 
 
 def run_tasks(

@@ -8,20 +8,52 @@ from __future__ import annotations
 
 import json
 import socket
+import sys
 import time
 import traceback
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from ..errors import CheckpointError, NpfemError
 from ..io import write_bytes
 
-__all__ = ["SUMMARY", "call", "has_checkpoint", "run_one", "same_parameters"]
+__all__ = ["SUMMARY", "ByValue", "call", "has_checkpoint", "run_one", "same_parameters"]
 
 #: File name of a run's JSON summary inside its folder.
 SUMMARY = "summary.json"
 #: File name of a failed run's error report inside its folder.
 ERROR = "error.txt"
+
+
+class ByValue:
+    """A function pickled with its module's code, for workers that lack it.
+
+    Parameters
+    ----------
+    fn : callable
+        The function; its module must be in ``sys.modules``.
+    """
+
+    def __init__(self, fn: Callable[..., Any]) -> None:
+        import cloudpickle
+
+        module = sys.modules[fn.__module__]
+        cloudpickle.register_pickle_by_value(module)
+        try:
+            self.payload = cloudpickle.dumps(fn)
+        finally:
+            cloudpickle.unregister_pickle_by_value(module)
+        self.name = getattr(fn, "__qualname__", repr(fn))
+
+    def __call__(self, *args: Any) -> Any:
+        """Unpickle the function and call it with ``args``."""
+        import cloudpickle
+
+        return cloudpickle.loads(self.payload)(*args)
+
+    def __repr__(self) -> str:
+        return f"ByValue({self.name})"
 
 
 def call(fn: Any, args: tuple) -> dict[str, Any]:
