@@ -98,6 +98,8 @@ def test_geometry_runs_from_the_cli(tmp_path, geometry):
         assert summ["parameters"]["dt"] == 2e-3  # the seed's time step
         # The column has started to fall, the front has not yet moved far.
         assert R0 <= m["runout_radius"] < 1.2 * R0
+        # The history's per-step front (docs/output.md) ends at the metric.
+        assert hist[-1]["runout_radius"] == pytest.approx(m["runout_radius"])
         assert 0.9 < m["height_ratio"] < 1.0
     # No particle below the floor; the last VTU is the last step.
     last = meshio.read(sorted(out.glob("result_*.vtu"))[-1])
