@@ -46,8 +46,17 @@ class RigidWall:
     normal : array_like (d,)
         Normal pointing into the body (normalised here).
     friction_angle : float
-        Wall friction angle, degrees, in [0, 90); 0 is frictionless (a symmetry
-        plane).
+        Wall friction angle, degrees, in [0, 90); 0 (the default) is
+        frictionless (a symmetry plane).
+    name : str
+        Label used in messages and pictures (default ``"wall"``).
+
+    Raises
+    ------
+    ParameterError
+        If ``point`` and ``normal`` are not vectors of the same size 2 or 3,
+        the normal is zero or not finite, or the friction angle is outside
+        [0, 90).
 
     Examples
     --------
@@ -141,6 +150,11 @@ class Contacts:
     mu_lambda : ndarray (nc,)
         Friction bound ``mu * lambda_bar_n`` (N) from the previous step; values
         <= 0 mean frictionless (no tangential variable).
+
+    Raises
+    ------
+    ParameterError
+        If the array sizes disagree or ``gap``/``mu_lambda`` are not finite.
 
     Notes
     -----

@@ -78,8 +78,10 @@ class StepSolution:
         Plastic strain increment (engineering shear).
     reaction : ndarray (N, d)
         Reaction forces on prescribed dofs (zero elsewhere), N.
-    lambda_n, lambda_t : ndarray
-        Contact normal (nc,) and tangential (nc, d-1) forces on the body, N.
+    lambda_n : ndarray (nc,)
+        Contact normal forces on the body, N.
+    lambda_t : ndarray (nc, d-1)
+        Contact tangential forces on the body, N.
     status : str
         Clarabel status.
     iterations : int

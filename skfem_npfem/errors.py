@@ -17,6 +17,15 @@ class ParameterError(NpfemError, ValueError):
 
     The message always names the parameter, the offending value and what is
     allowed.
+
+    Parameters
+    ----------
+    name : str
+        The parameter (or scene parameter, or argument) at fault.
+    value : object
+        The value given.
+    allowed : str
+        What is allowed, in words (``"a number in (0, 1)"``).
     """
 
     def __init__(self, name: str, value: object, allowed: str) -> None:

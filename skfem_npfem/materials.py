@@ -151,7 +151,13 @@ class Material:
     nu : float
         Poisson's ratio, in (-1, 0.5).
     rho : float
-        Density, kg/m^3, >= 0.
+        Density, kg/m^3, >= 0 (default 0).
+
+    Raises
+    ------
+    ParameterError
+        If a constant is not a finite number in its range (booleans are
+        refused too), naming it and the allowed interval.
     """
 
     #: True when the material contributes a yield cone.
@@ -200,6 +206,13 @@ class Material:
 
 class LinearElastic(Material):
     """Linear isotropic elasticity (no yield cone).
+
+    Parameters
+    ----------
+    E, nu, rho : float
+        Young's modulus (Pa, > 0), Poisson's ratio (in (-1, 0.5)) and density
+        (kg/m^3, >= 0, default 0), as :class:`Material`; out-of-range values
+        raise :class:`~skfem_npfem.errors.ParameterError`.
 
     Examples
     --------
@@ -280,7 +293,14 @@ class MohrCoulomb(_Frictional):
     psi : float, optional
         Dilation angle, degrees, in [0, phi]; default ``phi`` (associated).
     tension_cutoff : bool
-        Add ``s_xx + s_yy <= 2c cot(phi)``.
+        Add ``s_xx + s_yy <= 2c cot(phi)`` (default False).
+
+    Raises
+    ------
+    ParameterError
+        If a constant is out of its range, ``psi > phi``, or ``c = 0`` with
+        ``phi = 0`` (no strength at all); in 3D (use :class:`DruckerPrager`)
+        when the model is built.
 
     Examples
     --------
@@ -306,6 +326,18 @@ class Tresca(MohrCoulomb):
     """Plane-strain Tresca with cohesion ``c`` (Pa): ``R <= c``.
 
     Identical to von Mises with ``sigma_y = sqrt(3) c`` in plane strain.
+
+    Parameters
+    ----------
+    E, nu, rho : float
+        Elastic constants (Pa, -, kg/m^3; ``rho`` default 0).
+    c : float
+        Cohesion (undrained shear strength), Pa, > 0; keyword only.
+
+    Raises
+    ------
+    ParameterError
+        If ``c <= 0`` or an elastic constant is out of its range.
     """
 
     def __init__(self, E: float, nu: float, rho: float = 0.0, *, c: float) -> None:
@@ -322,13 +354,20 @@ class DruckerPrager(_Frictional):
 
     Parameters
     ----------
-    E, nu, rho, c, phi, psi, tension_cutoff
-        As :class:`MohrCoulomb`.
+    E, nu, rho, c, phi, psi : float
+        As :class:`MohrCoulomb` (Pa, -, kg/m^3, Pa, degrees, degrees).
+    tension_cutoff : bool
+        Add ``I1 <= k / alpha`` (default False).
     match : {"plane-strain", "compression", "extension"}
         How ``alpha, k`` are fitted to Mohr-Coulomb: the plane-strain match
         (identical collapse loads to MC in plane strain; the default in 2D), the
         triaxial-compression (outer) or triaxial-extension (inner) cone (default
         "compression" in 3D is *not* implied: pass it explicitly).
+
+    Raises
+    ------
+    ParameterError
+        As :class:`MohrCoulomb`, and for an unknown ``match``.
     """
 
     def __init__(

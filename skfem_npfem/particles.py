@@ -25,8 +25,10 @@ class Particles:
     ----------
     x : ndarray (N, d)
         Current positions, m.
-    v, a : ndarray (N, d)
-        Velocity (m/s) and acceleration (m/s^2).
+    v : ndarray (N, d)
+        Velocity, m/s.
+    a : ndarray (N, d)
+        Acceleration, m/s^2.
     u : ndarray (N, d)
         Total displacement since the start, m.
     stress : ndarray (N, n_full)

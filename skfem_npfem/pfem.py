@@ -48,6 +48,15 @@ class FixedMesh:
     ----------
     t : ndarray (d+1, ne)
         Connectivity over all particles (every particle in an element).
+
+    Raises
+    ------
+    ParameterError
+        When called, if ``t`` indexes particles that do not exist or the mesh
+        is tangled (two elements on the same side of a shared side).
+    NpfemError
+        When called, if an element has turned inside out: the deformation is
+        too large for a fixed connectivity (use smaller steps).
     """
 
     t: np.ndarray
@@ -118,14 +127,24 @@ class AlphaShapeMesher:
     wall_distance : float
         Distance from a wall, in units of ``h``, under which a boundary particle
         is "on the wall" rather than on the free surface.
-    min_quality, jitter, seed
-        Passed to :func:`~skfem_npfem.remesh.alpha_shape`; the jitter is
-        deterministic, so equal positions give equal meshes (restarts reproduce).
+    min_quality, jitter : float
+        Passed to :func:`~skfem_npfem.remesh.alpha_shape` (defaults 1e-3 and
+        1e-6); the jitter is deterministic, so equal positions give equal
+        meshes (restarts reproduce).
+    seed : int
+        Seed of the jitter (default 0).
 
     Attributes
     ----------
     last : Triangulation or None
         Triangulation of the last call (the mesh the last step was solved on).
+
+    Raises
+    ------
+    ParameterError
+        If ``h``, ``alpha`` or ``wall_distance`` is not a finite number > 0;
+        when called, if the alpha shape keeps no simplex (increase ``alpha``
+        or ``h``).
 
     Examples
     --------

@@ -122,8 +122,10 @@ class StepData:
         Nodal masses, kg (dynamic only).
     v_n : ndarray (N, d) or None
         Velocity at the start of the step, m/s (dynamic only).
-    theta1, theta2 : float
-        Time-integration parameters (dynamic only).
+    theta1 : float
+        Time-integration parameter of the velocity rule (dynamic only).
+    theta2 : float
+        Time-integration parameter of the displacement rule (dynamic only).
     dynamic : bool
         Include inertia (otherwise quasi-static).
     stress_scale : float or None

@@ -87,6 +87,15 @@ class Simulation:
         :func:`~skfem_npfem.step.advance`.  Another method (FEM with remapping,
         explicit SPFEM: :mod:`skfem_npfem.baseline`) plugs in here and may keep
         more state in a subclass of :class:`Particles`; checkpoints keep it.
+
+    Raises
+    ------
+    ParameterError
+        If ``dt`` is not a finite time > 0, or ``max_displacement`` is given
+        and not > 0.  :meth:`run` raises
+        :class:`~skfem_npfem.errors.SolverError` when a step fails at the
+        smallest allowed ``dt`` (naming the step and what to change) and
+        :class:`~skfem_npfem.errors.RunInterrupted` on SIGINT/SIGTERM.
     """
 
     def __init__(
@@ -459,6 +468,22 @@ class AtRest:
 
     It reads only :attr:`Simulation.records`, so a resumed run stops at the same
     step as an uninterrupted one.
+
+    Parameters
+    ----------
+    fraction : float
+        Kinetic energy at rest as a fraction of the reference, in (0, 1);
+        default 1e-3.
+    min_time : float
+        Earliest time to stop, s, >= 0; default 0.
+    reference : {"max_kinetic", "potential_drop"}
+        The reference energy (above); default ``"max_kinetic"``.
+
+    Raises
+    ------
+    ParameterError
+        If ``fraction``, ``min_time`` or ``reference`` is outside the ranges
+        above.
 
     Examples
     --------

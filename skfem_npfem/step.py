@@ -50,7 +50,35 @@ __all__ = [
 
 @dataclass
 class StepRecord:
-    """Diagnostics of one step: scalars only (also written to the JSON summary)."""
+    """Diagnostics of one step: scalars only (also written to the JSON summary).
+
+    Attributes
+    ----------
+    step : int
+        Index of the step (1 for the first).
+    time : float
+        Time at the end of the step, s.
+    dt : float
+        Time step used, s (after any halving).
+    status : str
+        Clarabel's status (``"Solved"``, ``"AlmostSolved"``; explicit methods
+        report their own).
+    iterations : int
+        Interior-point iterations (0 for an elastic program: one KKT solve).
+    timings : dict of str to float
+        Wall time per phase, s: ``mesh``, ``assembly``, ``setup``, ``solve``,
+        ``update``, ``output``.
+    n_active : int
+        Particles in the step's mesh.
+    n_inactive : int
+        Particles outside it (moved ballistically).
+    mesh_volume : float
+        Area (2D, m^2 per m) or volume (3D, m^3) of the step's mesh.
+    n_contacts : int
+        Contact candidates of the step.
+    retries : int
+        Times the step was halved and repeated after a solver failure.
+    """
 
     step: int
     time: float

@@ -19,7 +19,13 @@ SCENES: dict[str, Scene] = {
 
 
 def get_scene(name: str) -> Scene:
-    """Look up a scene by name."""
+    """Look up a scene by name.
+
+    Raises
+    ------
+    ParameterError
+        If ``name`` is not one of :data:`SCENES` (the message lists them).
+    """
     if name not in SCENES:
         raise ParameterError("scene", name, "one of " + ", ".join(SCENES))
     return SCENES[name]

@@ -1,0 +1,91 @@
+"""Sphinx configuration of the skfem-npfem documentation.
+
+Build (from the repository root, with the ``docs`` extra installed)::
+
+    python -m sphinx -W -b html docs docs/_build/html
+
+The build needs no network (no intersphinx) and runs nothing heavy: the
+tutorials execute (a few seconds each), everything from ``demos/`` and
+``benchmarks/`` is shown from the results those scripts committed.  Pages
+generated at build time (``api/``, ``gallery/``) are written by the local
+extension ``_ext/npfem_docs`` and are not committed.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(HERE / "_ext"))
+
+# The tutorials call the command line (`!skfem-npfem ...`) and read the committed
+# study results: the notebook kernels inherit this environment.
+os.environ["PATH"] = str(Path(sys.executable).parent) + os.pathsep + os.environ["PATH"]
+os.environ["SKFEM_NPFEM_REPO"] = str(ROOT)
+os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+
+import skfem_npfem  # noqa: E402
+
+project = "skfem-npfem"
+author = "skfem-npfem developers"
+copyright = "skfem-npfem developers, BSD-3-Clause"
+release = skfem_npfem.__version__
+version = release
+
+extensions = [
+    "myst_nb",
+    "sphinx.ext.autodoc",
+    "sphinx.ext.napoleon",
+    "sphinx.ext.mathjax",
+    "npfem_docs",
+]
+
+# Pages and files that are not part of the site.
+exclude_patterns = [
+    "_build",
+    "jupyter_execute",
+    ".jupyter_cache",
+    "**.ipynb_checkpoints",
+    "validation/cases",
+]
+source_suffix = {".md": "myst-nb", ".rst": "restructuredtext"}
+root_doc = "index"
+
+# MyST: Markdown prose, `$...$` maths, ::: fences, heading anchors for
+# cross-page links such as theory.md#nodal-integration.
+myst_enable_extensions = ["dollarmath", "colon_fence", "deflist", "amsmath"]
+myst_heading_anchors = 3
+myst_dmath_double_inline = True
+
+# MyST-NB: the tutorials are MyST notebooks, executed on every build (they are
+# part of the test suite through tests/test_docs_build.py); an error fails the
+# build.
+nb_execution_mode = "force"
+nb_execution_timeout = 300
+nb_execution_raise_on_error = True
+nb_execution_show_tb = True
+nb_execution_in_temp = True
+nb_merge_streams = True
+
+# API: NumPy-style docstrings.
+autodoc_member_order = "bysource"
+autodoc_typehints = "description"
+autodoc_typehints_description_target = "documented_params"
+autodoc_default_options = {"members": True, "undoc-members": False}
+autodoc_preserve_defaults = True
+napoleon_google_docstring = False
+napoleon_numpy_docstring = True
+napoleon_use_rtype = False
+napoleon_use_ivar = True
+
+html_theme = "furo"
+html_title = f"skfem-npfem {release}"
+html_static_path: list[str] = []
+html_show_sourcelink = True
+html_last_updated_fmt = None
+
+nitpicky = False
+suppress_warnings: list[str] = []
