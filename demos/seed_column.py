@@ -57,6 +57,8 @@ ROOT = HERE.parent
 R0, H0, G, RHO = 0.039, 0.078, 9.81, 1800.0
 T_SCALE = math.sqrt(H0 / G)
 SNAPSHOTS = (0.0, 1.0, 2.0, 3.0)
+#: First line of tables.md (docs/seed_column.md includes the file after it).
+TABLES_TITLE = "Seed-column study: tables"
 
 #: Cases: scene overrides (the cylindrical geometries default to the seed).
 CASES: dict[str, dict] = {
@@ -334,8 +336,10 @@ def plot_profiles(results: dict, out: Path) -> Path | None:
 
 # --------------------------------------------------------------- tables ----
 def tables(results: dict) -> str:
-    """The Markdown tables of docs/seed_column.md."""
+    """The Markdown tables of docs/seed_column.md (a page of their own, too)."""
     lines = [
+        f"# {TABLES_TITLE}",
+        "",
         "| case | particles | steps | t/sqrt(h0/g) at end | at rest | (r_inf - r0)/r0 "
         "| at t_bar = 3 | h_inf/r0 | h_inf/h0 | volume change |",
         "|---|---|---|---|---|---|---|---|---|---|",
