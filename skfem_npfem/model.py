@@ -44,6 +44,14 @@ class Model:
         Stress scale for non-dimensionalisation (None: automatic).
     solver : SolverOptions
         Clarabel settings.
+    axisymmetric : bool
+        2D only: the mesh is the ``(r, z)`` half-section of a body of revolution
+        about ``x = 0`` (:mod:`skfem_npfem.axisymmetric`).  Stresses are
+        ``(rr, zz, tt, rz)`` with the hoop component in the ``zz`` slot, the
+        cells are weighted by ``2 pi r`` and particle masses must be the full-ring
+        masses ``rho V_i`` of those cells.  Needs cones with ``sigma_tt`` as a
+        variable (Drucker-Prager, von Mises, AxisymmetricMohrCoulomb); particles
+        on the axis should have ``u_r`` fixed.
     """
 
     dim: int
@@ -57,6 +65,7 @@ class Model:
     update_geometry: bool = True
     stress_scale: float | None = None
     solver: SolverOptions = field(default_factory=SolverOptions)
+    axisymmetric: bool = False
 
     def __post_init__(self) -> None:
         if self.dim not in (2, 3):
@@ -90,13 +99,33 @@ class Model:
         for w in self.walls:
             if w.normal.size != self.dim:
                 raise ParameterError("walls", w, f"walls must be {self.dim}D")
+        if not isinstance(self.axisymmetric, bool):
+            raise ParameterError("axisymmetric", self.axisymmetric, "True or False")
+        if self.axisymmetric:
+            self._check_axisymmetric()
+
+    def _check_axisymmetric(self) -> None:
+        """Axisymmetry is 2D, and every plastic cone must see sigma_tt."""
+        if self.dim != 2:
+            raise ParameterError(
+                "axisymmetric", True, "only with dim=2 (the (r, z) half-section)"
+            )
+        for m in self.materials:
+            if m.plastic and not m.needs_zz(2):
+                raise ParameterError(
+                    "materials",
+                    type(m).__name__,
+                    "a cone with the hoop stress as a variable in axisymmetry: "
+                    "DruckerPrager, VonMises or AxisymmetricMohrCoulomb "
+                    "(plane-strain MohrCoulomb/Tresca ignore sigma_tt)",
+                )
 
     @property
     def components(self) -> tuple[int, ...]:
         """Full-Voigt components carried as cone variables."""
         if self.dim == 3:
             return (0, 1, 2, 3, 4, 5)
-        if any(m.needs_zz(2) for m in self.materials):
+        if self.axisymmetric or any(m.needs_zz(2) for m in self.materials):
             return (0, 1, 2, 3)
         return (0, 1, 3)
 
