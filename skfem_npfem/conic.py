@@ -130,7 +130,7 @@ def solve_step(
     options = options or SolverOptions()
     t0 = time.perf_counter()
     check_step_data(data)
-    prog, program = build_program(data)
+    prog, program = build_program(data, options.strength_floor)
     scaled = scale_program(prog, program, options.scaling)
     t1 = time.perf_counter()
     res = solve_clarabel(
@@ -168,9 +168,14 @@ def solve_step(
     return sol
 
 
-def build_program(data: StepData) -> tuple[Program, Assembled]:
-    """Stage 1: the objective terms and row families of the step, stacked."""
-    prog = Program(data)
+def build_program(
+    data: StepData, strength_floor: float = 0.0
+) -> tuple[Program, Assembled]:
+    """Stage 1: the objective terms and row families of the step, stacked.
+
+    ``strength_floor``: see :class:`~skfem_npfem.solver.SolverOptions`.
+    """
+    prog = Program(data, strength_floor)
     terms = [term(prog) for term in OBJECTIVE_TERMS]
     blocks = [family(prog) for family in ROW_FAMILIES]
     return prog, assemble(prog, terms, blocks)

@@ -147,7 +147,7 @@ def _scenery(ax, sc: Scenery, view: View) -> None:
             lw=1.8,
             ls=":",
             zorder=6,
-            label=f"Lube et al. 2005: L\u221e = {sc.runout_reference:.3g} m",
+            label=f"{sc.runout_label} = {sc.runout_reference:.3g} m",
         )
 
 

@@ -60,6 +60,14 @@ class Model:
         longer matches its cell ``V_i``, which roughens the stresses (the
         remeshed column at rest in docs/validation.md).  On a fixed mesh whose
         particle masses are ``rho V_i`` the two agree.
+    axisymmetric : bool
+        2D only: the mesh is the ``(r, z)`` half-section of a body of revolution
+        about ``x = 0`` (:mod:`skfem_npfem.axisymmetric`).  Stresses are
+        ``(rr, zz, tt, rz)`` with the hoop component in the ``zz`` slot, the
+        cells are weighted by ``2 pi r`` and particle masses must be the full-ring
+        masses ``rho V_i`` of those cells.  Needs cones with ``sigma_tt`` as a
+        variable (Drucker-Prager, von Mises, AxisymmetricMohrCoulomb); particles
+        on the axis should have ``u_r`` fixed.
     """
 
     dim: int
@@ -75,6 +83,7 @@ class Model:
     solver: SolverOptions = field(default_factory=SolverOptions)
     stabilisation: float = 0.0
     nodal_mass: str = "mesh"
+    axisymmetric: bool = False
 
     def __post_init__(self) -> None:
         if self.dim not in (2, 3):
@@ -115,6 +124,33 @@ class Model:
             raise ParameterError("stabilisation", b, "a finite number >= 0")
         if self.nodal_mass not in NODAL_MASS:
             raise ParameterError("nodal_mass", self.nodal_mass, f"one of {NODAL_MASS}")
+        if not isinstance(self.axisymmetric, bool):
+            raise ParameterError("axisymmetric", self.axisymmetric, "True or False")
+        if self.axisymmetric:
+            self._check_axisymmetric()
+            if self.stabilisation:
+                raise ParameterError(
+                    "stabilisation",
+                    self.stabilisation,
+                    "0 in axisymmetry (the element residual is written for "
+                    "Cartesian plane strain and 3D: no hoop term)",
+                )
+
+    def _check_axisymmetric(self) -> None:
+        """Axisymmetry is 2D, and every plastic cone must see sigma_tt."""
+        if self.dim != 2:
+            raise ParameterError(
+                "axisymmetric", True, "only with dim=2 (the (r, z) half-section)"
+            )
+        for m in self.materials:
+            if m.plastic and not m.needs_zz(2):
+                raise ParameterError(
+                    "materials",
+                    type(m).__name__,
+                    "a cone with the hoop stress as a variable in axisymmetry: "
+                    "DruckerPrager, VonMises or AxisymmetricMohrCoulomb "
+                    "(plane-strain MohrCoulomb/Tresca ignore sigma_tt)",
+                )
 
     def node_masses(
         self, mass: np.ndarray, material: np.ndarray, volumes: np.ndarray
@@ -140,7 +176,7 @@ class Model:
         """Full-Voigt components carried as cone variables."""
         if self.dim == 3:
             return (0, 1, 2, 3, 4, 5)
-        if any(m.needs_zz(2) for m in self.materials):
+        if self.axisymmetric or any(m.needs_zz(2) for m in self.materials):
             return (0, 1, 2, 3)
         return (0, 1, 3)
 

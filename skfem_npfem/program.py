@@ -45,7 +45,7 @@ either kind (see :mod:`skfem_npfem.families`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Protocol
 
 import clarabel
@@ -237,10 +237,13 @@ class Program:
         ``sigma`` (stress), ``r``, ``lambda_n``, ``lambda_t`` (force).
     compliance : ndarray (n_p, n_s, n_s)
     yield_cones : list of (points, ConeRows)
-        Yield cones of the plastic materials.
+        Yield cones of the plastic materials (one entry per cone: a material
+        may return a list of cones per point).  With ``strength_floor > 0``
+        the strengths of each cone below that fraction of its largest are
+        raised to it (:class:`~skfem_npfem.solver.SolverOptions`).
     """
 
-    def __init__(self, data: StepData) -> None:
+    def __init__(self, data: StepData, strength_floor: float = 0.0) -> None:
         op = data.operator
         self.data = data
         self.dim = d = op.dim
@@ -272,8 +275,14 @@ class Program:
                 continue
             self.compliance[points] = mat.compliance(d, self.comp)
             if mat.plastic:
-                cone = mat.cone(d, self.comp, data.sigma_n[points])
-                self.yield_cones.append((points, cone))
+                # A material may return several cones per point (axisymmetric
+                # Mohr-Coulomb: three SOC(3), skfem_npfem.axisymmetric).
+                rows = mat.cone(d, self.comp, data.sigma_n[points])
+                for cone in rows if isinstance(rows, list | tuple) else [rows]:
+                    if strength_floor > 0.0 and cone.k.size:
+                        k = np.maximum(cone.k, strength_floor * cone.k.max())
+                        cone = replace(cone, k=k)
+                    self.yield_cones.append((points, cone))
 
     def _generalised_force(self) -> np.ndarray:
         """``f~``: the external force plus inertia of the theta scheme (§3)."""

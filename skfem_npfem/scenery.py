@@ -48,7 +48,10 @@ class Scenery:
     symmetry : float or None
         x of a symmetry axis (the footing's half model).
     runout_reference : float or None
-        Lube et al. (2005) final run-out, m from x = 0 (the collapse).
+        Lube et al. (2005) final run-out, m from x = 0 (the collapse; Lube et
+        al. 2004's run-out radius for an axisymmetric collapse).
+    runout_label : str
+        Legend text of the reference run-out (before its value).
     symmetric : bool
         Collapse against the wall at x = 0 (run-out measured from it).
     tau : float or None
@@ -71,6 +74,7 @@ class Scenery:
     footing: tuple[float, float, float] | None = None
     symmetry: float | None = None
     runout_reference: float | None = None
+    runout_label: str = "Lube et al. 2005: L\u221e"
     symmetric: bool = True
     tau: float | None = None
     load_curve: np.ndarray | None = None
@@ -102,6 +106,9 @@ def _collapse(s: Scenery, p: dict) -> None:
     from .scenes.column_collapse import lube_runout
 
     a, L0 = _num(p, "aspect"), _num(p, "length")
+    if p.get("geometry") == "axisymmetric":
+        _axisymmetric_collapse(s, p)
+        return
     if a is None or L0 is None:
         return
     H0, g = a * L0, _num(p, "gravity", _GRAVITY) or _GRAVITY
@@ -114,6 +121,23 @@ def _collapse(s: Scenery, p: dict) -> None:
     s.tau = math.sqrt(H0 / g)
     tau = s.tau
     s.label = lambda t: f"t = {t:.3g} s   (t/\u221a(H0/g) = {t / tau:.2f})"
+
+
+def _axisymmetric_collapse(s: Scenery, p: dict) -> None:
+    """The (r, z) half-section of a cylindrical column: axis, floor, Lube 2004."""
+    from .scenes.collapse_runs import lube2004_runout
+
+    r0, h0 = _num(p, "radius"), _num(p, "height")
+    if r0 is None or h0 is None:
+        return
+    g = _num(p, "gravity", _GRAVITY) or _GRAVITY
+    s.floor, s.floor_label = 0.0, "rough floor"
+    s.outline = _box(0.0, r0, 0.0, h0)
+    s.walls.append((0.0, 1, "axis r = 0 (symmetry)"))
+    s.runout_reference = r0 * (1.0 + lube2004_runout(h0 / r0))
+    s.runout_label = "Lube et al. 2004: r\u221e"
+    tau = s.tau = math.sqrt(h0 / g)
+    s.label = lambda t: f"t = {t:.3g} s   (t/\u221a(h0/g) = {t / tau:.2f})"
 
 
 def _column(s: Scenery, p: dict) -> None:

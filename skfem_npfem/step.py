@@ -3,7 +3,8 @@
 :func:`advance` runs the data flow of one N-PFEM step in three stages:
 
 1. :func:`build_operators` -- the mesh of this step (from the mesh source), the
-   nodal integration on it (:mod:`skfem_npfem.smoothing`), the wall contacts
+   nodal integration on it (:mod:`skfem_npfem.smoothing`; axisymmetric models:
+   :mod:`skfem_npfem.axisymmetric`), the wall contacts
    (:mod:`skfem_npfem.boundary`) and the :class:`~skfem_npfem.program.StepData`;
 2. :func:`~skfem_npfem.conic.solve_step` -- the cone program;
 3. :func:`update_particles` -- *new* particles from the solution (stress
@@ -23,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from .axisymmetric import axisymmetric_integration
 from .boundary import Contacts, project_to_walls, wall_contacts
 from .conic import StepSolution, solve_step
 from .errors import ParameterError
@@ -41,6 +43,7 @@ __all__ = [
     "advance",
     "build_operators",
     "move_particles",
+    "strain_operator",
     "update_particles",
 ]
 
@@ -219,8 +222,7 @@ def build_operators(
     """Stage 1: the mesh, smoothing cells, contacts and cone-step data of a step."""
     active, local_t = mesh_source(p.x)
     mesh = p1_mesh(p.x[active], local_t)
-    op = nodal_integration(mesh, model.components)
-    h = float(np.mean(op.volumes)) ** (1.0 / model.dim)
+    op, h = strain_operator(mesh, model)
     mass = model.node_masses(p.mass[active], p.material[active], op.volumes)
     contacts, wall_ids = wall_contacts(model.walls, p, active, dt, h, model.gravity)
     data = StepData(
@@ -243,6 +245,21 @@ def build_operators(
         a_n=p.a[active],
     )
     return StepOperators(active, local_t, op, wall_ids, data)
+
+
+def strain_operator(mesh, model: Model) -> tuple[NodalIntegration, float]:
+    """The step's strain operator on ``mesh`` and the particle spacing ``h``.
+
+    Plane strain and 3D: :func:`~skfem_npfem.smoothing.nodal_integration`.
+    Axisymmetric models (``model.axisymmetric``) get the ``2 pi r``-weighted
+    cells with the hoop strain (:mod:`skfem_npfem.axisymmetric`); their spacing
+    comes from the planar cell areas, not from the (m^3) ring volumes.
+    """
+    if model.axisymmetric:
+        op = axisymmetric_integration(mesh, model.components)
+        return op, op.length_scale
+    op = nodal_integration(mesh, model.components)
+    return op, float(np.mean(op.volumes)) ** (1.0 / model.dim)
 
 
 def update_particles(

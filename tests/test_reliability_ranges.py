@@ -57,6 +57,10 @@ def _scaled(scene: str, name: str, value: float) -> dict:
     over = {**BASE[scene], name: value}
     if name == "length":
         over["spacing"] = value / 6
+    elif name == "height" and scene == "column-collapse":
+        # the cylindrical geometries' h0: an axisymmetric column of aspect 2,
+        # spacing r0/4 (the coarsest allowed), 5 x 9 particles
+        over.update(geometry="axisymmetric", radius=value / 2, spacing=value / 8)
     elif name == "height":  # a square column, 4 elements high
         over["spacing"], over["width"] = value / 4, value
     elif name == "width":  # 4 times as high (at most 1e4 m), 4 elements high

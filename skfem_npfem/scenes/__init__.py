@@ -7,7 +7,7 @@ from typing import Any
 
 from ..errors import ParameterError
 from .base import Param, Scene
-from .column_collapse import SCENE as COLUMN_COLLAPSE
+from .collapse_runs import COLUMN_COLLAPSE
 from .elastic_column import SCENE as ELASTIC_COLUMN
 from .strip_footing import SCENE as STRIP_FOOTING
 

@@ -228,7 +228,10 @@ PARAMS = [
         lo=1,
     ),
     *METHOD_PARAMS,
-    *fidelity_params(COLLAPSE_STABILISATION),
+    *fidelity_params(
+        COLLAPSE_STABILISATION,
+        " in plane strain, 0 in 3D, refused in axisymmetry",
+    ),
     *solver_params(),
 ]
 

@@ -124,11 +124,12 @@ def make_writer(
     return ResultWriter(out, resume_after_step=resume_after_step)
 
 
-def fidelity_params(stabilisation: float) -> list[Param]:
+def fidelity_params(stabilisation: float, where: str = "") -> list[Param]:
     """The stress stabilisation and the nodal-mass rule of a scene.
 
     ``stabilisation`` is the scene's default ``beta`` for N-PFEM, chosen from
     measurements (docs/validation.md); see :class:`~skfem_npfem.model.Model`.
+    ``where`` qualifies that default in the help (e.g. "in plane strain").
     """
     return [
         Param(
@@ -136,8 +137,8 @@ def fidelity_params(stabilisation: float) -> list[Param]:
             None,
             "-",
             "factor beta of the consistent element-residual stabilisation of the "
-            f"N-PFEM stresses (default {stabilisation:g} for method=npfem, 0 for "
-            "the other methods; 0: off; docs/theory.md)",
+            f"N-PFEM stresses (default {stabilisation:g} for method=npfem{where}, "
+            "0 for the other methods; 0: off; docs/theory.md)",
             float,
             lo=0,
             hi=1e4,

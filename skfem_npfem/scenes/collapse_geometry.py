@@ -1,0 +1,329 @@
+"""The ``geometry`` option of the column-collapse scene.
+
+``column-collapse --set geometry=plane-strain|axisymmetric|quarter-cylinder|box``:
+
+* ``plane-strain`` (default): :mod:`skfem_npfem.scenes.column_collapse`,
+  unchanged (the same particles, steps and metrics);
+* ``axisymmetric``: a cylindrical column as the ``(r, z)`` half-section of
+  :mod:`skfem_npfem.axisymmetric` (masses and volumes of the full ring);
+* ``quarter-cylinder``: the same column in 3D, the quarter ``x, y >= 0`` with
+  the symmetry planes as frictionless walls (:mod:`.cylinder`);
+* ``box``: the plane-strain column in 3D, a slab between frictionless walls
+  (:mod:`.box_column`).
+
+The cylindrical geometries default to the reference paper's seed column
+(:data:`~skfem_npfem.scenes.cylinder.SEED`: ``r0 = 3.9`` cm, ``h0 = 7.8`` cm,
+the soil of the plane-strain defaults, ``dt = 2`` ms, Drucker-Prager matched to
+Mohr-Coulomb in triaxial compression, spacing ``r0/18``).  Two of ``radius``,
+``height`` and ``aspect`` fix the third; the defaults fill ``radius`` first,
+then ``aspect``.  A parameter the chosen geometry does not use, given
+explicitly, is refused (``aspect`` with both ``radius`` and ``height``,
+``symmetric`` or ``length`` with a cylindrical geometry, ...), as is a spacing
+above ``r0/4`` or a run whose estimated memory exceeds the machine's
+(:func:`~.limits.check_size` with the particle count of :mod:`.sizing`).
+:class:`GeometryScene` is a scene whose :meth:`~GeometryScene.resolve` knows
+which parameters were given; :mod:`.collapse_runs` builds the runs.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+from typing import Any
+
+from ..errors import ParameterError
+from .base import Param, Scene
+from .box_column import DEPTH_SPACINGS
+from .cylinder import SEED, SEED_DIVISIONS
+from .limits import check_size
+from .sizing import lattice_particles
+
+__all__ = [
+    "CYLINDRICAL",
+    "GEOMETRIES",
+    "GEOMETRY_METRICS",
+    "GEOMETRY_PARAMS",
+    "GeometryScene",
+    "finalize",
+    "metrics_doc",
+    "used_parameters",
+]
+
+GEOMETRIES = ("plane-strain", "axisymmetric", "quarter-cylinder", "box")
+CYLINDRICAL = ("axisymmetric", "quarter-cylinder")
+DP_MATCHES = ("plane-strain", "compression", "extension")
+#: Time step of the seed case, s.
+SEED_DT = SEED["dt"]
+
+GEOMETRY_PARAMS = [
+    Param(
+        "geometry",
+        "plane-strain",
+        "-",
+        "model of the column: plane-strain (2D), axisymmetric ((r, z) half-section "
+        "of a cylinder), quarter-cylinder (3D quarter, symmetry planes x = 0 and "
+        "y = 0), box (3D slab of the plane-strain column between smooth walls). "
+        "The cylindrical geometries default to the seed column (radius 3.9 cm, "
+        "height 7.8 cm, spacing r0/18, dt = 2 ms, Drucker-Prager compression "
+        "match); box: Drucker-Prager plane-strain match",
+        str,
+        GEOMETRIES,
+    ),
+    Param(
+        "radius",
+        None,
+        "m",
+        "cylindrical geometries: column radius r0 (default 3.9 cm, or height / aspect)",
+        float,
+        lo=0,
+        lo_open=True,
+    ),
+    Param(
+        "height",
+        None,
+        "m",
+        "cylindrical geometries: column height h0 (default aspect * r0: 7.8 cm)",
+        float,
+        lo=0,
+        lo_open=True,
+    ),
+    Param(
+        "depth",
+        None,
+        "m",
+        f"box: slab depth W between the smooth walls y = 0 and y = W (default "
+        f"{DEPTH_SPACINGS} spacings)",
+        float,
+        lo=0,
+        lo_open=True,
+    ),
+    Param(
+        "strength_floor",
+        1e-6,
+        "-",
+        "3D and axisymmetric: raise yield strengths below this fraction of the "
+        "largest to it (stress-free cohesionless particles otherwise stall the "
+        "interior-point method; 0: off; plane strain: off)",
+        float,
+        lo=0,
+        hi=1e-2,
+        hi_open=True,
+    ),
+    Param(
+        "dp_match",
+        None,
+        "-",
+        "3D and axisymmetric Drucker-Prager: fit to Mohr-Coulomb (default "
+        "compression for the cylindrical geometries, plane-strain for box)",
+        str,
+        DP_MATCHES,
+    ),
+]
+
+#: Summary metrics of the cylindrical geometries and the box (which also has
+#: the plane-strain metrics, measured along x and with heights along z).
+GEOMETRY_METRICS = {
+    "runout_radius": "cylindrical geometries: final run-out radius r_inf, the "
+    "radius within which 99 % of the mass lies, m",
+    "reference_runout_lube2004": "cylindrical geometries: Lube et al. 2004, "
+    "(r_inf - r0)/r0 = 1.24 a (a <= 1.7), 1.6 a^(1/2) (a > 1.7)",
+    "mass_basis": "3D and axisymmetric: what masses, volumes and energies are "
+    "of (axisymmetric: the full ring, 2 pi r weight; 3D: the modelled quarter or "
+    "slab)",
+}
+
+#: What the shared metric names mean for the cylindrical geometries.
+CYLINDRICAL_MEANING = {
+    "normalised_runout": "(r_inf - r0) / r0",
+    "final_height": "h_inf / r0",
+    "height_ratio": "h_inf / h0",
+    "collapse_time": "when the 99 % front radius stops",
+    "collapse_time_normalised": "collapse_time / sqrt(h0 / g)",
+    "volume_change": "full-ring volume (axisymmetric), quarter volume (3D)",
+}
+
+
+def metrics_doc(plane: dict[str, str]) -> dict[str, str]:
+    """The plane-strain metric descriptions with the other geometries' meaning."""
+    doc = {
+        k: (
+            f"{v}; cylindrical: {CYLINDRICAL_MEANING[k]}"
+            if k in CYLINDRICAL_MEANING
+            else v
+        )
+        for k, v in plane.items()
+    }
+    return {**doc, **GEOMETRY_METRICS}
+
+
+def used_parameters(
+    geometry: str, given: frozenset[str], plane_names: frozenset[str]
+) -> set[str]:
+    """Parameters a geometry uses (the others may not be given).
+
+    ``plane_names`` are the parameters of the plane-strain scene: plane strain
+    uses exactly those (and ``geometry``); the other geometries use the
+    parameters listed here, so a parameter added to the plane-strain scene
+    later is refused for them until they use it.
+    """
+    if geometry == "plane-strain":
+        return set(plane_names) | {"geometry"}
+    common = {"geometry", "dp_match", "size_check", "strength_floor"}
+    common |= {"stabilisation", "nodal_mass"}
+    common |= {
+        "spacing", "material", "rho", "E", "nu", "phi", "psi", "c",
+        "floor_friction", "K0", "gravity", "dt", "t_end", "rest_fraction",
+        "min_time", "alpha", "theta1", "theta2", "output_every",
+        "checkpoint_every", "linear_solver", "threads", "reproducible", "tol",
+        "accuracy",
+    }  # fmt: skip
+    if geometry == "box":
+        return common | {"aspect", "length", "symmetric", "depth", "max_displacement"}
+    used = common | {"radius", "height"}
+    if not {"radius", "height"} <= given:
+        used.add("aspect")
+    if geometry == "quarter-cylinder":
+        used.add("max_displacement")  # (axisymmetric: h from ring volumes)
+    return used
+
+
+def finalize(
+    values: dict[str, Any], given: frozenset[str], plane_names: frozenset[str]
+) -> None:
+    """Geometry defaults and refusals (in place; see the module notes).
+
+    Parameters
+    ----------
+    values : dict
+        Resolved values (defaults and the given overrides).
+    given : frozenset of str
+        Names set explicitly.
+    plane_names : frozenset of str
+        The parameters of the plane-strain scene.
+    """
+    geo = values["geometry"]
+    unused = sorted(given - used_parameters(geo, given, plane_names))
+    if values.get("method", "npfem") == "npfem" and "method" in unused:
+        unused.remove("method")  # N-PFEM is every geometry's method
+    if unused:
+        name = unused[0]
+        why = _unused_reason(geo, name)
+        raise ParameterError(name, values[name], why)
+    if geo == "plane-strain":
+        return
+    if geo in CYLINDRICAL:
+        _cylinder_sizes(values, given)
+        if "dt" not in given:
+            values["dt"] = SEED_DT
+    else:
+        h = values["spacing"] or values["length"] / 22.0
+        values["spacing"] = h
+        if values["depth"] is None:
+            values["depth"] = DEPTH_SPACINGS * h
+    _material(values, given)
+    _check_values(values)
+    n = lattice_particles(geo, values, values["spacing"])
+    blame = "spacing" if "spacing" in given or geo == "box" else "radius"
+    dim = 2 if geo == "axisymmetric" else 3
+    check_size(n, dim, values, blame, "use a larger spacing or a smaller column")
+
+
+def _unused_reason(geometry: str, name: str) -> str:
+    if name == "aspect":
+        return "not with both radius and height (they fix the aspect ratio h0/r0)"
+    if name == "max_displacement":
+        return "not in axisymmetry (its spacing would come from ring volumes)"
+    if name == "method":
+        return f"npfem: the other methods are not available for geometry={geometry}"
+    if geometry == "plane-strain":
+        return f"a geometry that uses it; geometry=plane-strain does not use {name}"
+    return f"not used by geometry={geometry}; leave it out"
+
+
+def _cylinder_sizes(values: dict[str, Any], given: frozenset[str]) -> None:
+    """radius, height and aspect of a cylindrical column; spacing and its bound."""
+    r, h0, a = values["radius"], values["height"], values["aspect"]
+    if r is None and h0 is None:
+        r = SEED["radius"]
+    if r is None:
+        r = h0 / a
+    elif h0 is None:
+        h0 = a * r
+    values["radius"], values["height"], values["aspect"] = r, h0, h0 / r
+    h = values["spacing"] if values["spacing"] is not None else r / SEED_DIVISIONS
+    if h > r / 4 or h > h0 / 2:
+        raise ParameterError(
+            "spacing", h, f"at most min(r0/4, h0/2) = {min(r / 4, h0 / 2):g} m"
+        )
+    values["spacing"] = h
+
+
+def _material(values: dict[str, Any], given: frozenset[str]) -> None:
+    """Drucker-Prager by default; Mohr-Coulomb only in axisymmetry."""
+    geo = values["geometry"]
+    if "material" not in given:
+        values["material"] = "drucker-prager"
+    if values["material"] == "mohr-coulomb":
+        if geo != "axisymmetric":
+            raise ParameterError(
+                "material",
+                "mohr-coulomb",
+                "drucker-prager in 3D (Mohr-Coulomb is not a second-order cone "
+                "there); axisymmetric Mohr-Coulomb is exact",
+            )
+        if values["dp_match"] is not None:
+            raise ParameterError(
+                "dp_match", values["dp_match"], "only with material=drucker-prager"
+            )
+    elif values["dp_match"] is None:
+        values["dp_match"] = "plane-strain" if geo == "box" else "compression"
+
+
+def _check_values(values: dict[str, Any]) -> None:
+    """Material and time-integration checks (as the plane-strain scene's)."""
+    phi, psi, c, K0 = values["phi"], values["psi"], values["c"], values["K0"]
+    if psi > phi:
+        raise ParameterError("psi", psi, f"at most phi = {phi:g} degrees")
+    if values["material"] == "mohr-coulomb" and c == 0:
+        s = math.sin(math.radians(phi))
+        lo, hi = (1 - s) / (1 + s), (1 + s) / (1 - s)
+        if not lo <= K0 <= hi:
+            raise ParameterError(
+                "K0", K0, f"in [{lo:.4g}, {hi:.4g}] (inside the yield cone)"
+            )
+    if values["geometry"] == "box":
+        L0, H0, h = (
+            values["length"],
+            values["aspect"] * values["length"],
+            values["spacing"],
+        )
+        if h > L0 / 2 or h > H0 / 2:
+            raise ParameterError(
+                "spacing", h, f"at most min(L0, H0)/2 = {min(L0, H0) / 2:g} m"
+            )
+    if values["theta2"] < 1.0:
+        warnings.warn(
+            f"theta2={values['theta2']:g}: impacts on the floor have restitution "
+            f"{1 / values['theta2'] - 1:.2f}; keep theta2 = 1 (formulation.md "
+            "pitfall 3)",
+            stacklevel=3,
+        )
+
+
+@dataclass
+class GeometryScene(Scene):
+    """A scene whose :meth:`resolve` applies :func:`finalize`.
+
+    The geometry rules need to know which parameters were given, not only
+    their values.
+    """
+
+    #: Names of the plane-strain scene's parameters.
+    plane_names: frozenset[str] = frozenset()
+
+    def resolve(self, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
+        """Defaults updated with validated overrides, then the geometry rules."""
+        values = super().resolve(overrides)
+        finalize(values, frozenset(overrides or {}), self.plane_names)
+        return values

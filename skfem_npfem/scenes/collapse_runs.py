@@ -1,0 +1,280 @@
+"""Runs of the column-collapse scene for the axisymmetric and 3D geometries.
+
+:func:`build_geometry` turns resolved scene values
+(:mod:`.collapse_geometry`) into a :class:`~skfem_npfem.scenes.base.SceneRun`
+with the same time loop as the plane-strain scene: adaptive time step (halved
+on a solver failure), VTU output and checkpoints, and the stop at rest.  A
+callback records per step the run-out and the height of the main body on the
+step record, :func:`~.methods.with_method` the stress roughness
+(:mod:`skfem_npfem.baseline.roughness`); the metrics are computed from those
+records.
+
+:data:`COLUMN_COLLAPSE` is the scene registered as ``column-collapse``: the
+plane-strain scene of :mod:`.column_collapse` extended by the ``geometry``
+parameters; plane strain runs the plane-strain build unchanged.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..pfem import main_body
+from ..simulation import AtRest, Simulation
+from ..step import StepResult
+from .base import Scene, SceneRun
+from .box_column import box_column
+from .collapse_geometry import (
+    CYLINDRICAL,
+    GEOMETRY_PARAMS,
+    GeometryScene,
+    metrics_doc,
+)
+from .column_collapse import SCENE as PLANE_STRAIN
+from .column_collapse import collapse_time, lube_runout
+from .common import fidelity_from, make_writer, solver_from
+from .cylinder import ColumnSetup, cylinder_column, mass_quantile, radial_front
+from .methods import with_method
+
+__all__ = ["COLUMN_COLLAPSE", "build_geometry", "lube2004_runout", "with_geometries"]
+
+#: What the masses and volumes of each geometry are of (summary ``mass_basis``).
+MASS_BASIS = {
+    "axisymmetric": "full ring (2 pi r weight): volumes m^3, masses kg, energies J",
+    "quarter-cylinder": "the quarter x, y >= 0 (x 4 for the whole column)",
+    "box": "the slab 0 <= y <= depth (per depth: divide by depth)",
+}
+
+
+def lube2004_runout(aspect: float) -> float:
+    """Normalised run-out ``(r_inf - r0)/r0`` of Lube et al. (2004), axisymmetric.
+
+    ``1.24 a`` for ``a <= 1.7`` and ``1.6 a^(1/2)`` above (the two laws meet
+    within 1 % at ``a = 1.7``).
+
+    Examples
+    --------
+    >>> round(lube2004_runout(2.0), 4)
+    2.2627
+    """
+    return 1.24 * aspect if aspect <= 1.7 else 1.6 * math.sqrt(aspect)
+
+
+def column_setup(values: dict[str, Any]) -> ColumnSetup:
+    """Particles, model and remesher of a resolved axisymmetric or 3D column.
+
+    The node-mass rule and the stabilisation (``nodal_mass``, ``stabilisation``)
+    are those of the plane-strain scene, with the stabilisation off by default
+    (its default of 30 was measured in plane strain only; in axisymmetry it is
+    refused: its residual has no hoop term).
+    """
+    setup = _column_setup(values)
+    fidelity = fidelity_from(values, 0.0)
+    return replace(setup, model=replace(setup.model, **fidelity))
+
+
+def _column_setup(values: dict[str, Any]) -> ColumnSetup:
+    geo = values["geometry"]
+    soil = {
+        k: values[k]
+        for k in (
+            "rho", "E", "nu", "phi", "psi", "c", "dt", "theta1", "theta2", "K0",
+            "gravity", "alpha",
+        )
+    }  # fmt: skip
+    kw = {
+        "floor_friction": values["floor_friction"],
+        "match": values["dp_match"] or "compression",
+        "solver": replace(solver_from(values), strength_floor=values["strength_floor"]),
+    }
+    if geo in CYLINDRICAL:
+        soil.update(radius=values["radius"], height=values["height"])
+        return cylinder_column(
+            geo, values["spacing"], material=values["material"], **kw, **soil
+        )
+    L0 = values["length"]
+    return box_column(
+        soil,
+        length=L0,
+        height=values["aspect"] * L0,
+        depth=values["depth"],
+        spacing=values["spacing"],
+        symmetric=values["symmetric"],
+        **kw,
+    )
+
+
+def _front(geo: str, x: np.ndarray, mass: np.ndarray, symmetric: bool) -> float:
+    """Run-out: radial 99 % mass front, or along x as in plane strain (box)."""
+    if geo in CYLINDRICAL:
+        return radial_front(x, mass)
+    if symmetric:
+        return mass_quantile(x[:, 0], mass, 0.99)
+    lo, hi = (mass_quantile(x[:, 0], mass, q) for q in (0.005, 0.995))
+    return 0.5 * (hi - lo)
+
+
+def _recorder(values: dict[str, Any], h: float):
+    """Callback storing the run-out and the height of the main body on each record.
+
+    (The stress roughness is recorded by :func:`~.methods.with_method`, as for
+    every method and geometry.)
+    """
+    geo, symmetric = values["geometry"], values["symmetric"]
+
+    def record(sim_: Simulation, p, step: StepResult) -> bool:
+        body = np.zeros(p.n, bool)
+        body[step.active[main_body(p.x[step.active], 3.0 * h)]] = True
+        extra = step.record.extra
+        extra["max_height"] = float(p.x[body, -1].max()) if body.any() else math.nan
+        run = _front(geo, p.x, p.mass, symmetric)
+        if geo in CYLINDRICAL:
+            extra["runout_radius"] = run
+            return False
+        xb = p.x[body, 0]
+        extra["runout"] = run
+        extra["runout_main_body"] = float(
+            xb.max() if symmetric else 0.5 * (xb.max() - xb.min())
+        )
+        extra["runout_tip"] = float(
+            p.x[:, 0].max() if symmetric else 0.5 * np.ptp(p.x[:, 0])
+        )
+        return False
+
+    return record
+
+
+def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
+    """The summary metrics of a finished run (GEOMETRY_METRICS and the shared)."""
+    geo = values["geometry"]
+    cyl = geo in CYLINDRICAL
+    L0 = values["radius"] if cyl else values["length"]
+    H0 = values["height"] if cyl else values["aspect"] * values["length"]
+    key = "runout_radius" if cyl else "runout"
+
+    def metrics(sim_: Simulation) -> dict[str, Any]:
+        recs = sim_.records
+        last = recs[-1].extra if recs else {}
+        times = np.array([r.time for r in recs])
+        runs = np.array([r.extra.get(key, np.nan) for r in recs])
+        run = float(runs[-1]) if recs else L0
+        top = float(last.get("max_height") or H0)
+        at_rest = bool(stop is not None and stop(sim_))
+        # Before rest (stopped by t_end) the front may still move: unknown.
+        t_c = collapse_time(times, runs, h) if at_rest else math.nan
+        summ = sim_.summary()
+        out: dict[str, Any] = {key: run, "normalised_runout": (run - L0) / L0}
+        if cyl:
+            out["reference_runout_lube2004"] = lube2004_runout(H0 / L0)
+        else:
+            out["runout_main_body"] = float(last.get("runout_main_body", L0))
+            out["runout_tip"] = float(last.get("runout_tip", L0))
+            out["reference_runout_lube"] = lube_runout(values["aspect"])
+        out |= {
+            "final_height": top / L0,
+            "height_ratio": top / H0,
+            "collapse_time": t_c,
+            "collapse_time_normalised": t_c / math.sqrt(H0 / values["gravity"]),
+            "at_rest": at_rest,
+            "volume_change": summ["volume_change"],
+            "mass_change": summ["mass_change"],
+            "max_kinetic_energy": summ["max_kinetic_energy"],
+            "final_kinetic_energy": float(recs[-1].kinetic_energy) if recs else 0.0,
+            "n_inactive_final": int(recs[-1].n_inactive) if recs else 0,
+            "n_particles": int(sim_.particles.n),
+            "mass_basis": MASS_BASIS[geo],
+        }
+        return out
+
+    return metrics
+
+
+def build_geometry(
+    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
+) -> SceneRun:
+    """Build an axisymmetric or 3D column-collapse run (resolved values)."""
+    setup = column_setup(values)
+    sim = Simulation(
+        setup.particles,
+        setup.model,
+        setup.mesher,
+        values["dt"],
+        adaptive=True,
+        max_displacement=values["max_displacement"],
+        writer=make_writer(out, resume),
+        output_every=values["output_every"],
+        checkpoint_dir=out,
+        checkpoint_every=values["checkpoint_every"] if out is not None else 0,
+        progress=progress,
+        meta={"scene": "column-collapse", "parameters": values},
+    )
+    h = setup.spacing
+    sim.callbacks.append(_recorder(values, h))
+    run_kwargs: dict[str, Any] = {"t_end": values["t_end"]}
+    stop = None
+    if values["rest_fraction"] > 0:
+        H0 = (
+            values["height"]
+            if values["geometry"] in CYLINDRICAL
+            else (values["aspect"] * values["length"])
+        )
+        min_time = values["min_time"]
+        if min_time is None:
+            min_time = 2 * math.sqrt(H0 / values["gravity"])
+        stop = run_kwargs["stop"] = AtRest(values["rest_fraction"], min_time)
+    # The method option (npfem only here) adds the stress roughness per step
+    # and its metrics, as for plane strain.
+    return with_method(values, SceneRun(sim, run_kwargs, _metrics(values, h, stop)))
+
+
+#: What the plane-strain parameters mean for the other geometries (appended to
+#: their help).
+GEOMETRY_NOTES = {
+    "aspect": "cylindrical: h0/r0, unless radius and height are both given",
+    "length": "plane-strain and box only",
+    "symmetric": "plane-strain and box only",
+    "spacing": "cylindrical: default r0/18; box: L0/22",
+    "material": "3D: drucker-prager only; cylindrical and box default drucker-prager",
+    "dt": "cylindrical: default 2 ms",
+    "max_displacement": "not in axisymmetry",
+}
+
+
+def _annotated(param):
+    note = GEOMETRY_NOTES.get(param.name)
+    return param if note is None else replace(param, help=f"{param.help} ({note})")
+
+
+def with_geometries(plane: Scene) -> GeometryScene:
+    """The plane-strain column-collapse scene extended by ``geometry``."""
+
+    def build(
+        values: dict[str, Any],
+        out: Path | None = None,
+        progress=None,
+        resume: bool = False,
+    ) -> SceneRun:
+        if values["geometry"] == "plane-strain":
+            return plane.build(values, out=out, progress=progress, resume=resume)
+        return build_geometry(values, out, progress, resume)
+
+    names = frozenset(p.name for p in plane.params)
+    return GeometryScene(
+        name=plane.name,
+        description=plane.description.replace(
+            "2D (plane-strain) granular column collapse",
+            "Granular column collapse: plane strain, axisymmetric or 3D",
+        ),
+        params=[*GEOMETRY_PARAMS, *map(_annotated, plane.params)],
+        build=build,
+        metrics_doc=metrics_doc(plane.metrics_doc),
+        plane_names=names,
+    )
+
+
+#: The registered ``column-collapse`` scene (all geometries).
+COLUMN_COLLAPSE = with_geometries(PLANE_STRAIN)

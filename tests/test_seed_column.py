@@ -1,0 +1,68 @@
+"""``demos/seed_column.py --quick``: the whole study at a tiny resolution.
+
+References: lattice counts by enumeration, exact mass conservation, the seed
+case's parameters, and a resumed study that repeats the finished one.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def load_demo():
+    spec = importlib.util.spec_from_file_location(
+        "seed_column", ROOT / "demos" / "seed_column.py"
+    )
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module")
+def quick(tmp_path_factory):
+    demo = load_demo()
+    out = tmp_path_factory.mktemp("seed_column")
+    assert demo.main(["--quick", "--out", str(out), "--work", str(out)]) == 0
+    return demo, out, json.loads((out / "seed_column.json").read_text())
+
+
+def test_quick_study_runs_every_case(quick):
+    demo, out, rep = quick
+    cases = rep["cases"]
+    assert rep["quick"] and list(cases) == list(demo.CASES)
+    # Spacing r0/4: the quarter disc has 17 lattice points per level
+    # (i^2 + j^2 <= 16), 9 levels; the sections 5 x 9.
+    per_level = sum(1 for i in range(5) for j in range(5) if i * i + j * j <= 16)
+    expected = {"quarter-cylinder": 9 * per_level, "axisymmetric": 45}
+    expected["plane-strain"] = 45
+    for res in cases.values():
+        assert res["n_particles"] == expected[res["geometry"]]
+        assert res["steps"] == demo.QUICK["steps"]
+        assert res["statuses"] == ["Solved"] and res["retries"] == 0
+        assert res["mass_change"] == 0.0
+        # The seed column: a = 2, Lube et al. 2004 at a = 2: 1.6 sqrt(2).
+        assert res["h0"] / res["r0"] == pytest.approx(2.0)
+        assert res["reference_runout_lube2004"] == pytest.approx(2.2627417, 1e-7)
+        # Four steps of 2 ms: the column has barely started to move.
+        assert 0.0 <= res["normalised_runout"] < 0.05
+        assert res["profile"]["r"] and res["wall_time_s"] > 0
+    assert (out / "tables.md").read_text().count("\n|") >= 2 * len(cases)
+    assert (out / "profiles.png").stat().st_size > 1000
+
+
+def test_quick_study_resumes_from_checkpoints(quick):
+    # A case whose summary is lost continues from its checkpoint (the last
+    # step) and reports the same run.
+    demo, out, _ = quick
+    summary = out / "axi-12" / "summary.json"
+    before = json.loads(summary.read_text())
+    summary.unlink()
+    after = demo.run_case("axi-12", out, quick=True, threads=0)
+    assert after["metrics"] == before["metrics"]
+    assert len(after["history"]) == len(before["history"])
