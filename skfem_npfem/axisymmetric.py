@@ -163,6 +163,7 @@ def axisymmetric_integration(
         averaging=averaging,
         grads=grads,
         t=t,
+        element_volumes=w.sum(axis=0),  # 2 pi r-weighted, like ``volumes``
         areas=areas,
         radii=volumes / (2.0 * math.pi * areas),
     )

@@ -134,7 +134,14 @@ def solve_step(
     scaled = scale_program(prog, program, options.scaling)
     t1 = time.perf_counter()
     res = solve_clarabel(
-        scaled.P, scaled.q, scaled.A, scaled.b, program.cones, options, prog.dim
+        scaled.P,
+        scaled.q,
+        scaled.A,
+        scaled.b,
+        program.cones,
+        options,
+        prog.dim,
+        coupled=bool(data.stabilisation),
     )
     if res.status not in ACCEPTED:
         hint_ = hint(res.status, data.dynamic)

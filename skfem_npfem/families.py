@@ -5,7 +5,9 @@ Objective terms (``formulation.md`` §3, in the stress increments ``ds``):
 * :func:`elastic_energy` ``1/2 sum_p V_p ds_p^T C ds_p``;
 * :func:`inertia` ``1/2 sum_j dt^2/m~_j r_j^2`` (dynamic steps);
 * :func:`prescribed_work` ``-ds^T G_P^T ubar`` (prescribed displacements);
-* :func:`contact_gap` ``sum_c g_c lambda_c``.
+* :func:`contact_gap` ``sum_c g_c lambda_c``;
+* :func:`~skfem_npfem.stabilisation.residual_penalty` the element-residual
+  stabilisation of the stresses (when ``stabilisation > 0``).
 
 Row families, each a finished :class:`~skfem_npfem.program.Block`:
 
@@ -29,6 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .program import Block, Program, Term
+from .stabilisation import residual_penalty
 
 __all__ = [
     "OBJECTIVE_TERMS",
@@ -240,6 +243,12 @@ def tangents(normals: np.ndarray) -> np.ndarray:
 
 
 #: Objective terms, summed.
-OBJECTIVE_TERMS = (elastic_energy, inertia, prescribed_work, contact_gap)
+OBJECTIVE_TERMS = (
+    elastic_energy,
+    inertia,
+    prescribed_work,
+    contact_gap,
+    residual_penalty,
+)
 #: Row families, stacked in this order within each cone kind.
 ROW_FAMILIES = (equilibrium, contact, friction, cutoff, yield_cones)

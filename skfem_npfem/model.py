@@ -12,7 +12,10 @@ from .errors import ParameterError
 from .materials import Material
 from .solver import SolverOptions
 
-__all__ = ["Model"]
+__all__ = ["NODAL_MASS", "Model"]
+
+#: Allowed values of :attr:`Model.nodal_mass`.
+NODAL_MASS = ("mesh", "particle")
 
 
 @dataclass
@@ -44,6 +47,19 @@ class Model:
         Stress scale for non-dimensionalisation (None: automatic).
     solver : SolverOptions
         Clarabel settings.
+    stabilisation : float
+        Factor ``beta >= 0`` of the consistent element-residual stabilisation
+        of the stresses (:mod:`skfem_npfem.stabilisation`); 0 switches it off.
+    nodal_mass : {"mesh", "particle"}
+        Masses of a step's nodes.  ``"mesh"`` (default): each node's cell
+        volume times the mean density of its material over the current mesh
+        (``sum m / sum V`` over that material's active particles), so that the
+        load density is uniform and the total mass exact while the cells change
+        from remesh to remesh.  ``"particle"``: each node carries its particle's
+        own mass; a remeshed body then sees a body force ``m_i g`` that no
+        longer matches its cell ``V_i``, which roughens the stresses (the
+        remeshed column at rest in docs/validation.md).  On a fixed mesh whose
+        particle masses are ``rho V_i`` the two agree.
     axisymmetric : bool
         2D only: the mesh is the ``(r, z)`` half-section of a body of revolution
         about ``x = 0`` (:mod:`skfem_npfem.axisymmetric`).  Stresses are
@@ -65,6 +81,8 @@ class Model:
     update_geometry: bool = True
     stress_scale: float | None = None
     solver: SolverOptions = field(default_factory=SolverOptions)
+    stabilisation: float = 0.0
+    nodal_mass: str = "mesh"
     axisymmetric: bool = False
 
     def __post_init__(self) -> None:
@@ -99,10 +117,24 @@ class Model:
         for w in self.walls:
             if w.normal.size != self.dim:
                 raise ParameterError("walls", w, f"walls must be {self.dim}D")
+        b = self.stabilisation
+        if isinstance(b, bool) or not (
+            isinstance(b, int | float) and math.isfinite(b) and b >= 0
+        ):
+            raise ParameterError("stabilisation", b, "a finite number >= 0")
+        if self.nodal_mass not in NODAL_MASS:
+            raise ParameterError("nodal_mass", self.nodal_mass, f"one of {NODAL_MASS}")
         if not isinstance(self.axisymmetric, bool):
             raise ParameterError("axisymmetric", self.axisymmetric, "True or False")
         if self.axisymmetric:
             self._check_axisymmetric()
+            if self.stabilisation:
+                raise ParameterError(
+                    "stabilisation",
+                    self.stabilisation,
+                    "0 in axisymmetry (the element residual is written for "
+                    "Cartesian plane strain and 3D: no hoop term)",
+                )
 
     def _check_axisymmetric(self) -> None:
         """Axisymmetry is 2D, and every plastic cone must see sigma_tt."""
@@ -119,6 +151,25 @@ class Model:
                     "DruckerPrager, VonMises or AxisymmetricMohrCoulomb "
                     "(plane-strain MohrCoulomb/Tresca ignore sigma_tt)",
                 )
+
+    def node_masses(
+        self, mass: np.ndarray, material: np.ndarray, volumes: np.ndarray
+    ) -> np.ndarray:
+        """Masses of a step's nodes from their particles' (see ``nodal_mass``).
+
+        Examples
+        --------
+        >>> from skfem_npfem.materials import LinearElastic
+        >>> m = Model(dim=2, materials=[LinearElastic(1e6, 0.3)])
+        >>> m.node_masses(np.array([1.0, 3.0]), np.array([0, 0]), np.ones(2))
+        array([2., 2.])
+        """
+        if self.nodal_mass == "particle":
+            return mass
+        total = np.bincount(material, weights=mass)
+        space = np.bincount(material, weights=volumes)
+        density = np.divide(total, space, out=np.zeros_like(total), where=space > 0)
+        return density[material] * volumes
 
     @property
     def components(self) -> tuple[int, ...]:

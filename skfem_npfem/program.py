@@ -130,6 +130,12 @@ class StepData:
         Include inertia (otherwise quasi-static).
     stress_scale : float or None
         Stress scale ``s*`` for non-dimensionalisation (None: automatic).
+    stabilisation : float
+        Factor ``beta`` of the element-residual stabilisation of the stresses
+        (:mod:`skfem_npfem.stabilisation`); 0: none.
+    a_n : ndarray (N, d) or None
+        Nodal accelerations at the start of the step, m/s^2 (the inertia of the
+        stabilisation's residual; None: zero).
     """
 
     operator: StrainOperator
@@ -147,6 +153,8 @@ class StepData:
     theta2: float = 1.0
     dynamic: bool = False
     stress_scale: float | None = None
+    stabilisation: float = 0.0
+    a_n: np.ndarray | None = None
 
 
 @dataclass

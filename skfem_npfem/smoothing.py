@@ -130,6 +130,8 @@ class NodalIntegration:
         Element P1 gradients.
     t : ndarray, shape (d+1, ne)
         Element connectivity (``mesh.t``).
+    element_volumes : ndarray, shape (ne,)
+        Element areas (2D) or volumes (3D).
     """
 
     dim: int
@@ -139,6 +141,7 @@ class NodalIntegration:
     averaging: sp.csr_matrix
     grads: np.ndarray
     t: np.ndarray
+    element_volumes: np.ndarray
 
     @property
     def n_nodes(self) -> int:
@@ -321,4 +324,5 @@ def nodal_integration(
         averaging=averaging,
         grads=grads,
         t=t,
+        element_volumes=vol,
     )

@@ -137,8 +137,13 @@ class SolverOptions:
         ):
             raise ParameterError("strength_floor", f, "a fraction in [0, 1e-2)")
 
-    def resolved_linear_solver(self, n_variables: int, dim: int) -> str:
+    def resolved_linear_solver(
+        self, n_variables: int, dim: int, coupled: bool = False
+    ) -> str:
         """The backend actually used (``auto`` resolved by problem size).
+
+        ``coupled``: the objective couples the stresses of neighbouring
+        particles (the stabilisation), see :func:`choose_linear_solver`.
 
         Raises
         ------
@@ -146,7 +151,7 @@ class SolverOptions:
             If ``mkl`` is requested but MKL Pardiso cannot be loaded.
         """
         if self.linear_solver == "auto":
-            return choose_linear_solver(n_variables, dim)
+            return choose_linear_solver(n_variables, dim, coupled)
         if self.linear_solver == "mkl" and not mkl_available():
             raise ParameterError(
                 "linear_solver",
@@ -221,16 +226,18 @@ def solve_clarabel(
     cones: list,
     options: SolverOptions,
     dim: int,
+    coupled: bool = False,
 ) -> ClarabelResult:
     """Solve ``min 1/2 x^T P x + q^T x`` s.t. ``A x + s = b``, ``s`` in ``cones``.
 
     ``P`` is the upper triangle.  Without iterative refinement the KKT solves
     can be too inaccurate near the optimum (seen in 3D at tol 1e-6): a solve
     ending in ``InsufficientProgress`` or ``NumericalError`` is then repeated
-    once with refinement.
+    once with refinement.  ``coupled`` (stresses coupled in ``P``) steers the
+    automatic backend (:func:`~skfem_npfem.backends.choose_linear_solver`).
     """
     t0 = time.perf_counter()
-    backend = options.resolved_linear_solver(A.shape[1], dim)
+    backend = options.resolved_linear_solver(A.shape[1], dim, coupled)
     with pardiso_threads(options.max_threads if backend == "mkl" else 0):
         settings = options.clarabel_settings(backend)
         solver = clarabel.DefaultSolver(P, q, A, b, cones, settings)

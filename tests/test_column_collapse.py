@@ -62,7 +62,10 @@ def test_coarse_collapse_deposit(coarse_collapse):
     2D law 1.2 a = 2.4 (a frictional continuum with a rate-independent floor
     contact is not less mobile than sand) to 4.5 (above the 4.4 of a mu(I)
     continuum, Lagrée et al. 2011): it catches a column that does not collapse
-    or flows away, not a 10 % drift.
+    or flows away, not a 10 % drift.  The stress stabilisation (default
+    beta = 30, issue 10) compacts the coarse deposit more: mesh volume -15.5 %
+    at 231 particles (-10.5 % at 1 035; docs/validation.md), hence the volume
+    bound of 18 %.
     """
     _, m, _ = coarse_collapse
     # a = 2 is inside Lube's 1.8-2.8 transition: 1.2 a and 1.9 a^(2/3) joined
@@ -72,7 +75,7 @@ def test_coarse_collapse_deposit(coarse_collapse):
     assert m["runout"] <= m["runout_tip"]
     assert 0.40 <= m["height_ratio"] <= 0.65
     assert m["final_height"] == pytest.approx(2 * m["height_ratio"])
-    assert abs(m["volume_change"]) < 0.12
+    assert abs(m["volume_change"]) < 0.18
     assert m["n_inactive_final"] < 0.05 * m["n_particles"]
 
 

@@ -351,9 +351,9 @@ def test_8_static_failure_advice_has_no_time_step(monkeypatch):
     real = conic.solve_clarabel
     calls = []
 
-    def failing(P, q, A, b, cones, options, dim):
+    def failing(P, q, A, b, cones, options, dim, coupled=False):
         calls.append(1)
-        res = real(P, q, A, b, cones, options, dim)
+        res = real(P, q, A, b, cones, options, dim, coupled)
         if len(calls) == 3:
             res.status = "NumericalError"
         return res

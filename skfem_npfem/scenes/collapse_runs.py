@@ -36,7 +36,7 @@ from .collapse_geometry import (
 )
 from .column_collapse import SCENE as PLANE_STRAIN
 from .column_collapse import collapse_time, lube_runout
-from .common import make_writer, solver_from
+from .common import fidelity_from, make_writer, solver_from
 from .cylinder import ColumnSetup, cylinder_column, mass_quantile, radial_front
 from .methods import with_method
 
@@ -65,7 +65,19 @@ def lube2004_runout(aspect: float) -> float:
 
 
 def column_setup(values: dict[str, Any]) -> ColumnSetup:
-    """Particles, model and remesher of a resolved axisymmetric or 3D column."""
+    """Particles, model and remesher of a resolved axisymmetric or 3D column.
+
+    The node-mass rule and the stabilisation (``nodal_mass``, ``stabilisation``)
+    are those of the plane-strain scene, with the stabilisation off by default
+    (its default of 30 was measured in plane strain only; in axisymmetry it is
+    refused: its residual has no hoop term).
+    """
+    setup = _column_setup(values)
+    fidelity = fidelity_from(values, 0.0)
+    return replace(setup, model=replace(setup.model, **fidelity))
+
+
+def _column_setup(values: dict[str, Any]) -> ColumnSetup:
     geo = values["geometry"]
     soil = {
         k: values[k]

@@ -60,6 +60,8 @@ from .base import Param, Scene, SceneRun
 from .common import (
     check_size,
     elastic_params,
+    fidelity_from,
+    fidelity_params,
     make_writer,
     solver_from,
     solver_params,
@@ -73,6 +75,10 @@ MAX_STRENGTH_RATIO = 1e4
 #: Largest Young's modulus in units of rho g H0 (measured over 0.3 s: 1.4e9
 #: and 1.9e9 run, 9.9e9 fails at step 38, 2.5e12 at step 5).
 MAX_STIFFNESS_RATIO = 2e9
+
+#: Default stabilisation factor beta of N-PFEM in this scene (docs/validation.md:
+#: the measured roughness and run-out against it).
+COLLAPSE_STABILISATION = 30.0
 
 PARAMS = [
     Param("aspect", 2.0, "-", "aspect ratio a = H0/L0", float, lo=0, lo_open=True),
@@ -222,6 +228,10 @@ PARAMS = [
         lo=1,
     ),
     *METHOD_PARAMS,
+    *fidelity_params(
+        COLLAPSE_STABILISATION,
+        " in plane strain, 0 in 3D, refused in axisymmetry",
+    ),
     *solver_params(),
 ]
 
@@ -430,6 +440,7 @@ def _model(values: dict[str, Any]) -> Model:
         theta2=values["theta2"],
         walls=walls,
         solver=solver_from(values),
+        **fidelity_from(values, COLLAPSE_STABILISATION),
     )
 
 

@@ -10,7 +10,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from ..errors import ParameterError
 from ..io import ResultWriter, checkpoint_step
+from ..model import NODAL_MASS
 from ..solver import ACCURACY_PRESETS, LINEAR_SOLVERS, SolverOptions
 from .base import Param
 from .limits import check_size, check_steps
@@ -120,3 +122,59 @@ def make_writer(
     if resume and resume_after_step is None:
         resume_after_step = checkpoint_step(out)[1]
     return ResultWriter(out, resume_after_step=resume_after_step)
+
+
+def fidelity_params(stabilisation: float, where: str = "") -> list[Param]:
+    """The stress stabilisation and the nodal-mass rule of a scene.
+
+    ``stabilisation`` is the scene's default ``beta`` for N-PFEM, chosen from
+    measurements (docs/validation.md); see :class:`~skfem_npfem.model.Model`.
+    ``where`` qualifies that default in the help (e.g. "in plane strain").
+    """
+    return [
+        Param(
+            "stabilisation",
+            None,
+            "-",
+            "factor beta of the consistent element-residual stabilisation of the "
+            f"N-PFEM stresses (default {stabilisation:g} for method=npfem{where}, "
+            "0 for the other methods; 0: off; docs/theory.md)",
+            float,
+            lo=0,
+            hi=1e4,
+        ),
+        Param(
+            "nodal_mass",
+            "mesh",
+            "-",
+            "node masses: mesh = cell volume x the material's mean density (exact "
+            "total, uniform load density); particle = each particle's own mass",
+            str,
+            NODAL_MASS,
+        ),
+    ]
+
+
+def fidelity_from(values: dict[str, Any], stabilisation: float) -> dict[str, Any]:
+    """Model keyword arguments of :func:`fidelity_params`.
+
+    ``stabilisation`` is the scene's default for N-PFEM.
+
+    Raises
+    ------
+    ParameterError
+        For a stabilisation > 0 with a method other than N-PFEM (it is defined
+        for nodal stresses).
+    """
+    beta = values["stabilisation"]
+    method = values.get("method", "npfem")
+    if beta is None:
+        beta = stabilisation if method == "npfem" else 0.0
+    elif beta > 0 and method != "npfem":
+        raise ParameterError(
+            "stabilisation",
+            beta,
+            f"0 with method={method} (the element-residual stabilisation is "
+            "defined for the nodal stresses of N-PFEM)",
+        )
+    return {"stabilisation": float(beta), "nodal_mass": values["nodal_mass"]}

@@ -26,6 +26,8 @@ from .base import Param, Scene, SceneRun
 from .common import (
     check_size,
     elastic_params,
+    fidelity_from,
+    fidelity_params,
     make_writer,
     solver_from,
     solver_params,
@@ -52,6 +54,7 @@ PARAMS = [
         "theta2", 1.0, "-", "time-integration parameter theta2", float, lo=0.5, hi=1.0
     ),
     *METHOD_PARAMS,
+    *fidelity_params(0.0),
     *solver_params(),
 ]
 
@@ -135,6 +138,7 @@ def build(
         theta1=values["theta1"],
         theta2=values["theta2"],
         solver=solver_from(values),
+        **fidelity_from(values, 0.0),
     )
     sim = Simulation(
         particles,

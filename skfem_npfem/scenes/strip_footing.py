@@ -39,6 +39,8 @@ from .base import Param, Scene, SceneRun
 from .common import (
     check_size,
     elastic_params,
+    fidelity_from,
+    fidelity_params,
     make_writer,
     solver_from,
     solver_params,
@@ -168,6 +170,7 @@ PARAMS = [
         bool,
     ),
     *METHOD_PARAMS,
+    *fidelity_params(0.0),
     *solver_params(),
 ]
 
@@ -335,6 +338,7 @@ def build(
         objective_rotation=values["large_deformation"],
         update_geometry=values["large_deformation"],
         solver=solver_from(values),
+        **fidelity_from(values, 0.0),
     )
     sim = Simulation(
         particles,
