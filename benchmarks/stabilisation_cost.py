@@ -1,0 +1,83 @@
+#!/usr/bin/env python
+"""Cost of the element-residual stabilisation per step, 2D and 3D, in one run.
+
+For each case the column collapse is built twice, with beta = 0 and beta = 30
+(everything else equal, automatic linear solver), and the two are stepped
+alternately in this process, so that both see the same machine load.  The
+median time of a step (remesh, operators, cone program, update) is reported
+with their ratio.
+
+Cases: plane strain at 48 particles across L0 (~4.7k particles) and the 3D
+quarter cylinder of the seed column at ``--divisions`` spacings across r0
+(12: ~3k particles; 18: the seed resolution, ~10k particles, slow).
+
+Usage (repository root)::
+
+    python benchmarks/stabilisation_cost.py --divisions 12 --steps 4
+
+Writes ``benchmarks/results/stabilisation_cost.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from skfem_npfem.io import write_json
+from skfem_npfem.scenes import get_scene
+
+OUT = Path(__file__).resolve().parent / "results" / "stabilisation_cost.json"
+
+
+def alternate(params: dict[str, Any], steps: int) -> dict[str, Any]:
+    """Median step time with beta = 0 and 30, stepped alternately."""
+    scene = get_scene("column-collapse")
+    sims = {}
+    for beta in (0.0, 30.0):
+        values = scene.resolve({**params, "stabilisation": beta})
+        sims[beta] = scene.build(values, out=None, progress=False).simulation
+    for _ in range(steps):
+        for sim in sims.values():
+            sim.run(steps=1)
+    med = {
+        b: float(np.median([sum(r.timings.values()) for r in s.records]))
+        for b, s in sims.items()
+    }
+    return {
+        "params": params,
+        "particles": int(sims[0.0].particles.n),
+        "steps": steps,
+        "median_step_s": {"beta=0": med[0.0], "beta=30": med[30.0]},
+        "ratio": med[30.0] / med[0.0],
+    }
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    """Run both cases and write the JSON (returned)."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--divisions", type=int, default=12, help="3D: r0 / spacing")
+    ap.add_argument("--steps", type=int, default=4)
+    ap.add_argument("--out", type=Path, default=OUT)
+    args = ap.parse_args(argv)
+    start = time.perf_counter()
+    r0 = 0.039
+    result = {
+        "plane_strain": alternate({"spacing": 0.2 / 48}, args.steps),
+        "quarter_cylinder": alternate(
+            {"geometry": "quarter-cylinder", "spacing": r0 / args.divisions},
+            args.steps,
+        ),
+        "note": "2 cores, shared machine: ratios measured in one run",
+        "wall_s": time.perf_counter() - start,
+    }
+    write_json(args.out, result)
+    print(result)
+    return result
+
+
+if __name__ == "__main__":
+    main()
