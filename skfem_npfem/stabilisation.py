@@ -31,8 +31,8 @@ is the lattice spacing of an element of that size, ``G_e`` the smallest shear
 modulus at its vertices and ``beta`` the dimensionless factor
 :attr:`~skfem_npfem.model.Model.stabilisation`.  The acceleration is the one
 at the start of the step (``a_n``, lagged by one step): the inertial forces
-stay uncoupled in the program, which keeps the factorisation sparse (with the
-implicit ``a_n+1`` the step cost 1.3x more, docs/performance.md), and the lag
+stay uncoupled in the program, which keeps the factorisation sparser (with the
+implicit ``a_n+1`` the step cost about 1.3x more in our trials), and the lag
 is ``O(dt)`` in a transient and nothing at rest.  Quasi-static steps have no
 inertia: their residual is exact.
 
@@ -41,7 +41,10 @@ Properties (tests/test_stabilisation.py):
 * **Consistent.**  ``R`` is the residual of the equation being solved, so the
   penalty is zero for the exact solution; a linear stress field in
   equilibrium with a uniform load (the geostatic state, any patch test) is not
-  changed, and a body at rest in such a state does not creep.  For smooth
+  changed on a given mesh.  (Remeshing a body at rest redraws the elements:
+  their residuals near boundaries and lattice flips are then not exactly
+  zero, and the body creeps slowly, ~1e-3 m/s at beta = 30 in the remeshed
+  column of docs/validation/stabilisation.md.)  For smooth
   fields the penalty is ``O(h^2)`` relative to the elastic energy and vanishes
   as the spacing goes to zero.
 * **One cone program.**  The penalty is a convex quadratic in the stress
