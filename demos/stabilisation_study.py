@@ -40,6 +40,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import runpy
 import time
 from pathlib import Path
 from typing import Any
@@ -109,26 +110,19 @@ def one_run(params: dict[str, Any], steps: int | None = None) -> dict[str, Any]:
 
 
 def cost(spacing_divisor: int, steps: int) -> dict[str, Any]:
-    """Median step time with beta = 30 and beta = 0, stepped alternately."""
-    scene = get_scene("column-collapse")
-    sims = {}
-    for beta in (0.0, 30.0):
-        vals = scene.resolve(
-            {"stabilisation": beta, "spacing": 0.2 / spacing_divisor, "threads": 1}
-        )
-        sims[beta] = scene.build(vals, out=None, progress=False).simulation
-    for _ in range(steps):
-        for sim in sims.values():
-            sim.run(steps=1)
-    med = {
-        b: float(np.median([sum(r.timings.values()) for r in s.records]))
-        for b, s in sims.items()
-    }
+    """Median step time with beta = 30 and beta = 0, stepped alternately.
+
+    The measurement is ``alternate`` of benchmarks/stabilisation_cost.py.
+    """
+    bench = runpy.run_path(str(ROOT / "benchmarks" / "stabilisation_cost.py"))
+    params = {"spacing": 0.2 / spacing_divisor, "threads": 1}
+    r = bench["alternate"](params, steps)
+    med = r["median_step_s"]
     return {
-        "particles": int(sims[0.0].particles.n),
+        "particles": r["particles"],
         "steps": steps,
-        "median_step_s": {str(b): v for b, v in med.items()},
-        "ratio": med[30.0] / med[0.0],
+        "median_step_s": {"0.0": med["beta=0"], "30.0": med["beta=30"]},
+        "ratio": r["ratio"],
     }
 
 

@@ -40,7 +40,7 @@ import scipy.sparse as sp
 from skfem import CellBasis, ElementTriP1, Mesh
 
 from .materials import ConeRows, MohrCoulomb
-from .smoothing import FULL_VOIGT, NodalIntegration
+from .smoothing import FULL_VOIGT, NodalIntegration, connectivity
 
 __all__ = [
     "MASS_BASIS",
@@ -130,13 +130,7 @@ def axisymmetric_integration(
             "axisymmetric stresses need the hoop component (index 2, the 'zz' "
             f"slot) as a variable; got components {components}"
         )
-    t = np.asarray(mesh.t)
-    n = mesh.p.shape[1]
-    if t.max() + 1 != n or np.unique(t).size != n:
-        raise ValueError(
-            "every mesh node must belong to an element; build the mesh on the "
-            "active nodes only"
-        )
+    t, n = connectivity(mesh)
     r_nodes = mesh.p[0]
     extent = float(np.ptp(mesh.p, axis=1).max())
     if r_nodes.min() < -1e-9 * extent:

@@ -217,6 +217,24 @@ def _refuse_degenerate(degenerate: np.ndarray, t: np.ndarray) -> None:
     )
 
 
+def connectivity(mesh: Mesh) -> tuple[np.ndarray, int]:
+    """``(t, n_nodes)`` of a mesh whose every node belongs to an element.
+
+    Raises
+    ------
+    ValueError
+        If a node belongs to no element (smoothing cells need them all).
+    """
+    t = np.asarray(mesh.t)
+    n = mesh.p.shape[1]
+    if t.max() + 1 != n or np.unique(t).size != n:
+        raise ValueError(
+            "every mesh node must belong to an element; build the mesh on the "
+            "active nodes only"
+        )
+    return t, n
+
+
 def signed_volumes(p: np.ndarray, t: np.ndarray) -> np.ndarray:
     """Signed areas (2D) or volumes (3D) of simplices ``t`` (d+1, ne) at ``p`` (d, N).
 
@@ -270,13 +288,7 @@ def nodal_integration(
     if components is None:
         components = tuple(range(nfull))
     components = tuple(int(c) for c in components)
-    t = np.asarray(mesh.t)
-    n = mesh.p.shape[1]
-    if t.max() + 1 != n or np.unique(t).size != n:
-        raise ValueError(
-            "every mesh node must belong to an element; build the mesh on the "
-            "active nodes only"
-        )
+    t, n = connectivity(mesh)
     # Refuse zero-size elements here, before their infinite gradients enter G
     # (an element shared with others would otherwise give NaN in G).
     _refuse_degenerate(signed_volumes(np.asarray(mesh.p, float), t) == 0.0, t)

@@ -27,7 +27,6 @@ which parameters were given; :mod:`.collapse_runs` builds the runs.
 
 from __future__ import annotations
 
-import math
 import warnings
 from dataclasses import dataclass
 from typing import Any
@@ -35,6 +34,7 @@ from typing import Any
 from ..errors import ParameterError
 from .base import Param, Scene
 from .box_column import DEPTH_SPACINGS
+from .common import check_soil
 from .cylinder import SEED, SEED_DIVISIONS
 from .limits import check_size
 from .sizing import lattice_particles
@@ -282,16 +282,7 @@ def _material(values: dict[str, Any], given: frozenset[str]) -> None:
 
 def _check_values(values: dict[str, Any]) -> None:
     """Material and time-integration checks (as the plane-strain scene's)."""
-    phi, psi, c, K0 = values["phi"], values["psi"], values["c"], values["K0"]
-    if psi > phi:
-        raise ParameterError("psi", psi, f"at most phi = {phi:g} degrees")
-    if values["material"] == "mohr-coulomb" and c == 0:
-        s = math.sin(math.radians(phi))
-        lo, hi = (1 - s) / (1 + s), (1 + s) / (1 - s)
-        if not lo <= K0 <= hi:
-            raise ParameterError(
-                "K0", K0, f"in [{lo:.4g}, {hi:.4g}] (inside the yield cone)"
-            )
+    check_soil(values)
     if values["geometry"] == "box":
         L0, H0, h = (
             values["length"],

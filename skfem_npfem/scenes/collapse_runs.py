@@ -35,8 +35,13 @@ from .collapse_geometry import (
     metrics_doc,
 )
 from .column_collapse import SCENE as PLANE_STRAIN
-from .column_collapse import collapse_time, lube_runout
-from .common import fidelity_from, make_writer, solver_from
+from .column_collapse import (
+    collapse_simulation,
+    collapse_time,
+    lube_runout,
+    run_control,
+)
+from .common import fidelity_from, solver_from
 from .cylinder import ColumnSetup, cylinder_column, mass_quantile, radial_front
 from .methods import with_method
 
@@ -198,34 +203,17 @@ def build_geometry(
 ) -> SceneRun:
     """Build an axisymmetric or 3D column-collapse run (resolved values)."""
     setup = column_setup(values)
-    sim = Simulation(
-        setup.particles,
-        setup.model,
-        setup.mesher,
-        values["dt"],
-        adaptive=True,
-        max_displacement=values["max_displacement"],
-        writer=make_writer(out, resume),
-        output_every=values["output_every"],
-        checkpoint_dir=out,
-        checkpoint_every=values["checkpoint_every"] if out is not None else 0,
-        progress=progress,
-        meta={"scene": "column-collapse", "parameters": values},
+    sim = collapse_simulation(
+        setup.particles, setup.model, setup.mesher, values, out, progress, resume
     )
     h = setup.spacing
     sim.callbacks.append(_recorder(values, h))
-    run_kwargs: dict[str, Any] = {"t_end": values["t_end"]}
-    stop = None
-    if values["rest_fraction"] > 0:
-        H0 = (
-            values["height"]
-            if values["geometry"] in CYLINDRICAL
-            else (values["aspect"] * values["length"])
-        )
-        min_time = values["min_time"]
-        if min_time is None:
-            min_time = 2 * math.sqrt(H0 / values["gravity"])
-        stop = run_kwargs["stop"] = AtRest(values["rest_fraction"], min_time)
+    H0 = (
+        values["height"]
+        if values["geometry"] in CYLINDRICAL
+        else (values["aspect"] * values["length"])
+    )
+    run_kwargs, stop = run_control(values, H0)
     # The method option (npfem only here) adds the stress roughness per step
     # and its metrics, as for plane strain.
     return with_method(values, SceneRun(sim, run_kwargs, _metrics(values, h, stop)))

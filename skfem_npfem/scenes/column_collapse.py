@@ -59,6 +59,7 @@ from ..step import StepResult
 from .base import Param, Scene, SceneRun
 from .common import (
     check_size,
+    check_soil,
     elastic_params,
     fidelity_from,
     fidelity_params,
@@ -376,7 +377,7 @@ def _check(values: dict[str, Any]) -> float:
     n = (max(1, round(width / h)) + 1) * (max(1, round(H0 / h)) + 1)
     blame = "spacing" if values["spacing"] is not None else "aspect"
     check_size(n, 2, values, blame, "use a larger spacing or a smaller column")
-    phi, psi, c, K0 = values["phi"], values["psi"], values["c"], values["K0"]
+    c = values["c"]
     weight = values["rho"] * values["gravity"] * H0
     if c > MAX_STRENGTH_RATIO * weight:
         raise ParameterError(
@@ -395,15 +396,7 @@ def _check(values: dict[str, Any]) -> float:
             "below the solver tolerance (the flow is rate-independent long "
             "before: E = 10 GPa and 10 MPa give the same run-out)",
         )
-    if psi > phi:
-        raise ParameterError("psi", psi, f"at most phi = {phi:g} degrees")
-    if values["material"] == "mohr-coulomb" and c == 0:
-        s = math.sin(math.radians(phi))
-        lo, hi = (1 - s) / (1 + s), (1 + s) / (1 - s)
-        if not lo <= K0 <= hi:
-            raise ParameterError(
-                "K0", K0, f"in [{lo:.4g}, {hi:.4g}] (inside the yield cone)"
-            )
+    check_soil(values)
     if values["theta2"] < 1.0:
         warnings.warn(
             f"theta2={values['theta2']:g}: impacts on the floor have restitution "
@@ -521,7 +514,23 @@ def build(
         K0=values["K0"],
         n_walls=len(model.walls),
     )
-    sim = Simulation(
+    sim = collapse_simulation(particles, model, mesher, values, out, progress, resume)
+    sim.callbacks.append(_front_recorder(h, symmetric))
+    run_kwargs, stop = run_control(values, H0)
+    return with_method(values, SceneRun(sim, run_kwargs, _metrics(values, h, stop)))
+
+
+def collapse_simulation(
+    particles: Particles,
+    model: Model,
+    mesher: AlphaShapeMesher,
+    values: dict[str, Any],
+    out: Path | None,
+    progress=None,
+    resume: bool = False,
+) -> Simulation:
+    """The adaptive, checkpointed simulation of a collapse (every geometry)."""
+    return Simulation(
         particles,
         model,
         mesher,
@@ -535,7 +544,12 @@ def build(
         progress=progress,
         meta={"scene": "column-collapse", "parameters": values},
     )
-    sim.callbacks.append(_front_recorder(h, symmetric))
+
+
+def run_control(
+    values: dict[str, Any], H0: float
+) -> tuple[dict[str, Any], AtRest | None]:
+    """``run`` keywords (``t_end``, the at-rest stop) of a column of height H0."""
     run_kwargs: dict[str, Any] = {"t_end": values["t_end"]}
     stop = None
     if values["rest_fraction"] > 0:
@@ -543,7 +557,7 @@ def build(
         if min_time is None:
             min_time = 2 * math.sqrt(H0 / values["gravity"])
         stop = run_kwargs["stop"] = AtRest(values["rest_fraction"], min_time)
-    return with_method(values, SceneRun(sim, run_kwargs, _metrics(values, h, stop)))
+    return run_kwargs, stop
 
 
 SCENE = Scene(

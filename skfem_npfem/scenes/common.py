@@ -7,6 +7,7 @@ The up-front size and step-count checks live in :mod:`.limits`
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -178,3 +179,23 @@ def fidelity_from(values: dict[str, Any], stabilisation: float) -> dict[str, Any
             "defined for the nodal stresses of N-PFEM)",
         )
     return {"stabilisation": float(beta), "nodal_mass": values["nodal_mass"]}
+
+
+def check_soil(values: dict[str, Any]) -> None:
+    """Psi <= phi, and a cohesionless Mohr-Coulomb K0 inside the yield cone.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``psi`` or ``K0`` and the allowed range.
+    """
+    phi, psi, K0 = values["phi"], values["psi"], values["K0"]
+    if psi > phi:
+        raise ParameterError("psi", psi, f"at most phi = {phi:g} degrees")
+    if values["material"] == "mohr-coulomb" and values["c"] == 0:
+        s = math.sin(math.radians(phi))
+        lo, hi = (1 - s) / (1 + s), (1 + s) / (1 - s)
+        if not lo <= K0 <= hi:
+            raise ParameterError(
+                "K0", K0, f"in [{lo:.4g}, {hi:.4g}] (inside the yield cone)"
+            )
