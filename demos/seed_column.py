@@ -12,7 +12,10 @@ cases are ``column-collapse`` scene runs:
 * ``axi-12``, ``axi-18``, ``axi-36``: axisymmetric, at the spacings of the 3D
   runs and one finer;
 * ``plane-18``: plane strain of the same section (half width r0, height h0,
-  spacing r0/18, Mohr-Coulomb), for contrast.
+  spacing r0/18, Mohr-Coulomb), for contrast;
+* not run by default: ``3d-18-fast``, ``3d-12-fast``, the 3D quarters with the
+  solver preset ``accuracy=fast``; ``axi-12-stab``, ``axi-18-stab``, the
+  axisymmetric cases with the stress stabilisation (``stabilisation=30``).
 
 Every case runs in its own process (its peak memory is its own) and writes its
 own folder under ``--work`` (VTU series, checkpoints, ``summary.json``): a
@@ -32,8 +35,10 @@ writes under ``--out`` (default ``docs/seed_column``):
 
 Usage (from the repository root)::
 
-    python demos/seed_column.py                      # all six cases
+    python demos/seed_column.py                      # the six cases above
     python demos/seed_column.py --cases 3d-12,axi-12,axi-18,axi-36,plane-18
+    # one more case added to the committed results, its picture apart
+    python demos/seed_column.py --cases 3d-18-fast --keep --picture sigma_v_3d.png
     python demos/seed_column.py --quick --out /tmp/q --work /tmp/q  # a smoke run
 
 ``--quick`` runs every case at a tiny resolution for a few steps (the test of
@@ -74,7 +79,21 @@ CASES: dict[str, dict] = {
         "spacing": R0 / 18,
         "dt": 2e-3,
     },
-}
+    # The 3D quarters with the solver preset accuracy=fast (tolerances 1e-6
+    # instead of 1e-8): the speed target of issue 12, and its price.
+    "3d-18-fast": {"geometry": "quarter-cylinder", "spacing": R0 / 18,
+                   "accuracy": "fast"},
+    "3d-12-fast": {"geometry": "quarter-cylinder", "spacing": R0 / 12,
+                   "accuracy": "fast"},
+    # Axisymmetric with the stress stabilisation of issue 10 (beta = 30, the
+    # plane-strain default; the cylindrical geometries default to 0).
+    "axi-12-stab": {"geometry": "axisymmetric", "spacing": R0 / 12,
+                    "stabilisation": 30.0},
+    "axi-18-stab": {"geometry": "axisymmetric", "spacing": R0 / 18,
+                    "stabilisation": 30.0},
+}  # fmt: skip
+#: The cases run when ``--cases`` is not given.
+DEFAULT_CASES = ["3d-18", "3d-12", "axi-12", "axi-18", "axi-36", "plane-18"]
 LABELS = {
     "3d-18": "3D quarter, r0/18",
     "3d-12": "3D quarter, r0/12",
@@ -82,6 +101,10 @@ LABELS = {
     "axi-18": "axisymmetric, r0/18",
     "axi-36": "axisymmetric, r0/36",
     "plane-18": "plane strain, r0/18",
+    "3d-18-fast": "3D quarter, r0/18, fast",
+    "3d-12-fast": "3D quarter, r0/12, fast",
+    "axi-12-stab": "axisymmetric, r0/12, beta = 30",
+    "axi-18-stab": "axisymmetric, r0/18, beta = 30",
 }
 #: Quick mode: tiny spacings and a few steps (a smoke test of the whole study).
 QUICK = {"spacing_divisions": 4, "steps": 4}
@@ -252,7 +275,9 @@ def _section_mesh(pv, points: np.ndarray, cells: np.ndarray, sv: np.ndarray):
     return grid.merge(mirror)
 
 
-def render_panels(results: dict, work: Path, out: Path) -> Path | None:
+def render_panels(
+    results: dict, work: Path, out: Path, name: str = "sigma_v.png"
+) -> Path | None:
     """sigma_v at t_bar = 0, 1, 2, 3 for every finished case (one PNG)."""
     try:
         from skfem_npfem.render import check_rendering, import_pyvista
@@ -303,7 +328,7 @@ def render_panels(results: dict, work: Path, out: Path) -> Path | None:
                 ax.set_ylabel(results[name]["label"], fontsize=8)
     sm = plt.cm.ScalarMappable(cmap="viridis", norm=plt.Normalize(lo, 0.0))
     fig.colorbar(sm, ax=axes, shrink=0.6, label="sigma_v (kPa)")
-    path = out / "sigma_v.png"
+    path = out / name
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
@@ -375,7 +400,22 @@ def tables(results: dict) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--cases", default=",".join(CASES))
+    ap.add_argument(
+        "--cases",
+        default=",".join(DEFAULT_CASES),
+        help=f"comma-separated, from {', '.join(CASES)}",
+    )
+    ap.add_argument(
+        "--keep",
+        action="store_true",
+        help="keep the other cases of an existing seed_column.json in --out "
+        "(tables and profiles show them all; the picture only the cases run)",
+    )
+    ap.add_argument(
+        "--picture",
+        default="sigma_v.png",
+        help="file name of the sigma_v picture in --out (default sigma_v.png)",
+    )
     ap.add_argument("--out", default=str(ROOT / "docs" / "seed_column"))
     ap.add_argument("--work", default=str(ROOT / "out" / "seed_column"))
     ap.add_argument("--quick", action="store_true", help="tiny smoke run")
@@ -390,17 +430,25 @@ def main(argv: list[str] | None = None) -> int:
     work, out = Path(args.work), Path(args.out)
     work.mkdir(parents=True, exist_ok=True)
     out.mkdir(parents=True, exist_ok=True)
-    results = {}
+    ran = {}
     for name in names:
         summ = run_case(name, work, args.quick, args.threads)
-        results[name] = analyse(name, summ, work)
+        ran[name] = analyse(name, summ, work)
+    results = dict(ran)
+    previous = out / "seed_column.json"
+    if args.keep and previous.exists():
+        old = json.loads(previous.read_text())
+        if old.get("quick") != args.quick:
+            print("error: --keep mixes a quick study with a full one")
+            return 2
+        results = {k: ran.get(k, v) for k, v in old["cases"].items()} | ran
     from skfem_npfem.io import write_json
 
-    write_json(out / "seed_column.json", {"quick": args.quick, "cases": results})
+    write_json(previous, {"quick": args.quick, "cases": results})
     (out / "tables.md").write_text(tables(results))
     plot_profiles(results, out)
     if not args.no_pictures:
-        render_panels(results, work, out)
+        render_panels(ran, work, out, args.picture)
     print(tables(results))
     return 0
 

@@ -80,10 +80,15 @@ class AxisymmetricIntegration(NodalIntegration):
     radii : ndarray (N,)
         Cell radius ``V_i / (2 pi areas_i)``: the ``phi_i``-weighted mean radius
         (positive on the axis too).
+    element_areas : ndarray (ne,)
+        Planar element areas of the half-section, m^2 (``element_volumes`` are
+        their ``2 pi r``-weighted rings, so the centroid radius is
+        ``element_volumes / (2 pi element_areas)``).
     """
 
     areas: np.ndarray
     radii: np.ndarray
+    element_areas: np.ndarray
 
     @property
     def length_scale(self) -> float:
@@ -160,6 +165,7 @@ def axisymmetric_integration(
         element_volumes=w.sum(axis=0),  # 2 pi r-weighted, like ``volumes``
         areas=areas,
         radii=volumes / (2.0 * math.pi * areas),
+        element_areas=area,
     )
 
 

@@ -128,13 +128,6 @@ class Model:
             raise ParameterError("axisymmetric", self.axisymmetric, "True or False")
         if self.axisymmetric:
             self._check_axisymmetric()
-            if self.stabilisation:
-                raise ParameterError(
-                    "stabilisation",
-                    self.stabilisation,
-                    "0 in axisymmetry (the element residual is written for "
-                    "Cartesian plane strain and 3D: no hoop term)",
-                )
 
     def _check_axisymmetric(self) -> None:
         """Axisymmetry is 2D, and every plastic cone must see sigma_tt."""

@@ -74,7 +74,13 @@ import scipy.sparse as sp
 from .errors import ParameterError
 from .program import Program, Term
 
-__all__ = ["divergence_matrix", "element_mean", "element_residual", "residual_penalty"]
+__all__ = [
+    "divergence_matrix",
+    "element_mean",
+    "element_residual",
+    "hoop_matrix",
+    "residual_penalty",
+]
 
 #: Full-Voigt index of the tensor component (k, j), per dimension.
 _VOIGT = {
@@ -164,6 +170,56 @@ def element_mean(t: np.ndarray, dim: int) -> sp.csr_matrix:
     )
 
 
+def hoop_matrix(
+    t: np.ndarray, radius: np.ndarray, components: tuple[int, ...]
+) -> sp.csr_matrix:
+    """The hoop terms of the axisymmetric element divergence.
+
+    In a body of revolution (mesh coordinates ``(r, z)``, stress slots
+    ``(rr, zz, tt, rz)``) the divergence gains ``(sigma_rr - sigma_tt) / r``
+    in the radial and ``sigma_rz / r`` in the axial row.  Their ``2 pi r``-
+    weighted element means are exact for the P1 interpolant of the nodal
+    stresses: ``int_e (s / r) r dA / int_e r dA = mean_e(s) / r_c`` with
+    ``mean_e(s)`` the vertex mean and ``r_c`` the centroid radius.
+
+    Parameters
+    ----------
+    t : ndarray (3, ne)
+        Connectivity of the half-section.
+    radius : ndarray (ne,)
+        Centroid radii ``r_c``.
+    components : tuple of int
+        Full-Voigt components of the nodal stress vectors (must hold 0, 2, 3).
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix (2*ne, N*n_s)
+        To be added to :func:`divergence_matrix` of the same mesh.
+
+    Examples
+    --------
+    >>> t = np.array([[0], [1], [2]])
+    >>> s = np.array([[4.0, 0, 1, 3]] * 3)  # rr, zz, tt, rz at the 3 nodes
+    >>> (hoop_matrix(t, np.array([2.0]), (0, 1, 2, 3)) @ s.ravel()).round(12).tolist()
+    [1.5, 1.5]
+    """
+    nv, ne = t.shape
+    pos = {c: k for k, c in enumerate(components)}
+    ns = len(components)
+    inv = 1.0 / (nv * np.asarray(radius, float))
+    rows, cols, vals = [], [], []
+    for k, slot, sign in ((0, 0, 1.0), (0, 2, -1.0), (1, 3, 1.0)):
+        for a in range(nv):  # 3 vertices x 3 terms, not a loop over elements
+            rows.append(2 * np.arange(ne) + k)
+            cols.append(ns * t[a] + pos[slot])
+            vals.append(sign * inv)
+    n = int(t.max()) + 1
+    return sp.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+        shape=(2 * ne, n * ns),
+    )
+
+
 def element_residual(prog: Program) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
     """The element residual ``R = B ds + c`` of one step and its weights.
 
@@ -176,11 +232,22 @@ def element_residual(prog: Program) -> tuple[sp.csr_matrix, np.ndarray, np.ndarr
         densities.
     w : ndarray (d*ne,)
         Penalty weight ``beta h_e^2 |e| / G_e`` of every row.
+
+    Notes
+    -----
+    Axisymmetric operators (``element_areas`` present): ``B`` gains the hoop
+    terms of :func:`hoop_matrix`, ``|e|`` is the ``2 pi r``-weighted ring
+    volume of the element (the measure of the weighted least-squares norm) and
+    ``h_e`` comes from its planar area.
     """
     data, op = prog.data, prog.data.operator
     t, grads, vol = _elements(op)
     d = prog.dim
     B = divergence_matrix(t, grads, prog.comp)
+    area = vol  # the element measure that sets h_e
+    if hasattr(op, "element_areas"):  # axisymmetric: vol is the 2 pi r ring
+        area = np.asarray(op.element_areas, float)
+        B = B + hoop_matrix(t, vol / (2.0 * math.pi * area), prog.comp)
     f = np.asarray(data.force, float).reshape(-1)
     if data.dynamic and data.a_n is not None:
         m = np.repeat(np.asarray(data.mass, float), d)
@@ -189,7 +256,7 @@ def element_residual(prog: Program) -> tuple[sp.csr_matrix, np.ndarray, np.ndarr
     c = B @ prog.sig_n.reshape(-1) + element_mean(t, d) @ density
     shear = np.array([m.E / (2.0 * (1.0 + m.nu)) for m in data.materials])
     g_e = shear[np.asarray(data.material)][t].min(axis=0)
-    h2 = (math.factorial(d) * vol) ** (2.0 / d)
+    h2 = (math.factorial(d) * area) ** (2.0 / d)
     w_e = data.stabilisation * h2 * vol / g_e
     w = np.repeat(w_e, d)
     return B, c, w

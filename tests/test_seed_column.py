@@ -35,7 +35,7 @@ def quick(tmp_path_factory):
 def test_quick_study_runs_every_case(quick):
     demo, out, rep = quick
     cases = rep["cases"]
-    assert rep["quick"] and list(cases) == list(demo.CASES)
+    assert rep["quick"] and list(cases) == demo.DEFAULT_CASES
     # Spacing r0/4: the quarter disc has 17 lattice points per level
     # (i^2 + j^2 <= 16), 9 levels; the sections 5 x 9.
     per_level = sum(1 for i in range(5) for j in range(5) if i * i + j * j <= 16)
@@ -66,3 +66,19 @@ def test_quick_study_resumes_from_checkpoints(quick):
     after = demo.run_case("axi-12", out, quick=True, threads=0)
     assert after["metrics"] == before["metrics"]
     assert len(after["history"]) == len(before["history"])
+
+
+def test_keep_adds_a_case_to_the_results_of_an_earlier_study(quick):
+    # --keep: the cases of the existing seed_column.json stay (same order,
+    # same numbers); the case run now replaces its own entry.
+    demo, out, rep = quick
+    argv = ["--quick", "--out", str(out), "--work", str(out), "--no-pictures"]
+    assert demo.main([*argv, "--cases", "axi-18", "--keep"]) == 0
+    kept = json.loads((out / "seed_column.json").read_text())
+    assert list(kept["cases"]) == list(rep["cases"])
+    assert kept["cases"]["3d-12"] == rep["cases"]["3d-12"]
+    assert kept["cases"]["axi-18"]["n_particles"] == 45
+    # Without --keep the file holds only the cases run.
+    assert demo.main([*argv, "--cases", "axi-18"]) == 0
+    alone = json.loads((out / "seed_column.json").read_text())
+    assert list(alone["cases"]) == ["axi-18"]

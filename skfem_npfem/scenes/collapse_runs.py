@@ -73,9 +73,10 @@ def column_setup(values: dict[str, Any]) -> ColumnSetup:
     """Particles, model and remesher of a resolved axisymmetric or 3D column.
 
     The node-mass rule and the stabilisation (``nodal_mass``, ``stabilisation``)
-    are those of the plane-strain scene, with the stabilisation off by default
-    (its default of 30 was measured in plane strain only; in axisymmetry it is
-    refused: its residual has no hoop term).
+    are those of the plane-strain scene, with the stabilisation off by default:
+    the seed case is the reference paper's, which uses none, and in 3D the
+    stabilisation doubles the step time.  In axisymmetry its residual carries
+    the hoop terms (docs/seed_column.md measures beta = 30 there).
     """
     setup = _column_setup(values)
     fidelity = fidelity_from(values, 0.0)

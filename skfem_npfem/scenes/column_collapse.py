@@ -231,7 +231,7 @@ PARAMS = [
     *METHOD_PARAMS,
     *fidelity_params(
         COLLAPSE_STABILISATION,
-        " in plane strain, 0 in 3D, refused in axisymmetry",
+        " in plane strain, 0 in 3D and axisymmetry",
     ),
     *solver_params(),
 ]
