@@ -239,6 +239,10 @@ def analyse(name: str, summ: dict, work: Path) -> dict:
         "mass_change": m["mass_change"],
         "stress_roughness": rough_end,
         "stress_roughness_max": max(rough) if rough else None,
+        "phases_s": {
+            k: float(sum(h["timings"].get(k, 0.0) for h in hist))
+            for k in sorted({k for h in hist for k in h["timings"]})
+        },
         "wall_time_s": float(sum(step_s)),
         "wall_time_t3_s": float(sum(step_s[: i3 + 1])),
         "step_time_median_s": float(np.median(step_s)),
@@ -395,6 +399,24 @@ def tables(results: dict) -> str:
             f"{'-' if srm is None else f'{srm:.3f}'} | "
             f"{', '.join(res['statuses'])} |"
         )
+    phases = sorted({k for res in results.values() for k in res.get("phases_s", {})})
+    if phases:
+        lines += [
+            "",
+            "Where the time goes (share of the summed step time, per phase of "
+            "the step: `mesh` remeshing and smoothing cells, `setup` building "
+            "Clarabel's solver incl. the ordering, `solve` its iterations):",
+            "",
+            "| case | " + " | ".join(phases) + " |",
+            "|---|" + "---|" * len(phases),
+        ]
+        for res in results.values():
+            ph = res.get("phases_s")
+            if not ph:
+                continue
+            total = sum(ph.values()) or 1.0
+            cells = " | ".join(f"{100 * ph.get(k, 0.0) / total:.1f} %" for k in phases)
+            lines.append(f"| {res['label']} | {cells} |")
     return "\n".join(lines) + "\n"
 
 

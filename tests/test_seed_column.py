@@ -52,7 +52,9 @@ def test_quick_study_runs_every_case(quick):
         # Four steps of 2 ms: the column has barely started to move.
         assert 0.0 <= res["normalised_runout"] < 0.05
         assert res["profile"]["r"] and res["wall_time_s"] > 0
-    assert (out / "tables.md").read_text().count("\n|") >= 2 * len(cases)
+        # The phases of the steps add up to the wall time of the steps.
+        assert sum(res["phases_s"].values()) == pytest.approx(res["wall_time_s"])
+    assert (out / "tables.md").read_text().count("\n|") >= 3 * len(cases)
     assert (out / "profiles.png").stat().st_size > 1000
 
 
