@@ -288,7 +288,7 @@ def _section_mesh(pv, points: np.ndarray, cells: np.ndarray, sv: np.ndarray):
 
 
 def render_panels(
-    results: dict, work: Path, out: Path, name: str = "sigma_v.png"
+    results: dict, work: Path, out: Path, filename: str = "sigma_v.png"
 ) -> Path | None:
     """sigma_v at t_bar = 0, 1, 2, 3 for every finished case (one PNG)."""
     try:
@@ -340,7 +340,7 @@ def render_panels(
                 ax.set_ylabel(results[name]["label"], fontsize=8)
     sm = plt.cm.ScalarMappable(cmap="viridis", norm=plt.Normalize(lo, 0.0))
     fig.colorbar(sm, ax=axes, shrink=0.6, label="sigma_v (kPa)")
-    path = out / name
+    path = out / filename
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path

@@ -74,12 +74,16 @@ def test_keep_adds_a_case_to_the_results_of_an_earlier_study(quick):
     # --keep: the cases of the existing seed_column.json stay (same order,
     # same numbers); the case run now replaces its own entry.
     demo, out, rep = quick
-    argv = ["--quick", "--out", str(out), "--work", str(out), "--no-pictures"]
-    assert demo.main([*argv, "--cases", "axi-18", "--keep"]) == 0
+    argv = ["--quick", "--out", str(out), "--work", str(out)]
+    picture = ["--keep", "--picture", "kept.png"]
+    assert demo.main([*argv, "--cases", "axi-18", *picture]) == 0
     kept = json.loads((out / "seed_column.json").read_text())
     assert list(kept["cases"]) == list(rep["cases"])
     assert kept["cases"]["3d-12"] == rep["cases"]["3d-12"]
     assert kept["cases"]["axi-18"]["n_particles"] == 45
+    # The picture of the cases run, under its own name (when pyvista renders).
+    assert (out / "kept.png").exists() == (out / "sigma_v.png").exists()
+    argv.append("--no-pictures")
     # Without --keep the file holds only the cases run.
     assert demo.main([*argv, "--cases", "axi-18"]) == 0
     alone = json.loads((out / "seed_column.json").read_text())
