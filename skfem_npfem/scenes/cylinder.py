@@ -189,7 +189,10 @@ def column_particles(
     in axisymmetry: kg of the full ring).  The floor force of a base particle
     (``z = 0``) is the weight of the particles of its lattice column (same
     ``r``, or same ``(x, y)`` in 3D), so the floor forces add up to the weight of
-    the column exactly.  Axisymmetric particles on the axis get ``u_r`` fixed.
+    the column exactly.  Axisymmetric particles on the axis get ``u_r`` fixed;
+    in the quarter cylinder, particles on a symmetry plane get the normal
+    displacement fixed (``u_x`` on ``x = 0``, ``u_y`` on ``y = 0``), so they
+    need no contact row with that plane.
     """
     active, _ = mesher(x)
     if active.size != x.shape[0]:
@@ -207,6 +210,10 @@ def column_particles(
     fixed = np.zeros(x.shape, bool)
     if axi:
         fixed[:, 0] = x[:, 0] == 0.0  # on the axis: u_r = 0 (symmetry)
+    elif geometry == "quarter-cylinder":
+        # On a symmetry plane the normal displacement is zero by symmetry: a
+        # prescribed dof, not a contact row (the wall stays for the others).
+        fixed[:, :2] = x[:, :2] == 0.0
     p = Particles.create(x, rho * volumes, stress=stress, fixed=fixed, n_walls=n_walls)
     # Lattice columns: particles with the same horizontal position.
     key = np.round(x[:, :-1] / mesher.h, 6)
