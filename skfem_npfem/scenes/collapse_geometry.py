@@ -6,8 +6,9 @@
   unchanged (the same particles, steps and metrics);
 * ``axisymmetric``: a cylindrical column as the ``(r, z)`` half-section of
   :mod:`skfem_npfem.axisymmetric` (masses and volumes of the full ring);
-* ``quarter-cylinder``: the same column in 3D, the quarter ``x, y >= 0`` with
-  the symmetry planes as frictionless walls (:mod:`.cylinder`);
+* ``quarter-cylinder``: the same column in 3D, the quarter ``x, y >= 0``:
+  particles on a symmetry plane have their normal displacement fixed, and the
+  planes are frictionless walls for the others (:mod:`.cylinder`);
 * ``box``: the plane-strain column in 3D, a slab between frictionless walls
   (:mod:`.box_column`).
 
@@ -63,7 +64,9 @@ GEOMETRY_PARAMS = [
         "-",
         "model of the column: plane-strain (2D), axisymmetric ((r, z) half-section "
         "of a cylinder), quarter-cylinder (3D quarter, symmetry planes x = 0 and "
-        "y = 0), box (3D slab of the plane-strain column between smooth walls). "
+        "y = 0: normal displacement fixed on them, frictionless walls for the "
+        "other particles), box (3D slab of the plane-strain column between smooth "
+        "walls). "
         "The cylindrical geometries default to the seed column (radius 3.9 cm, "
         "height 7.8 cm, spacing r0/18, dt = 2 ms, Drucker-Prager compression "
         "match); box: Drucker-Prager plane-strain match",

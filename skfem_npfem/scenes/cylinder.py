@@ -7,8 +7,10 @@ floor (gravity along the last axis):
   :mod:`skfem_npfem.axisymmetric` (volumes and masses of the full ring, kg);
   particles on the axis have ``u_r`` fixed and a frictionless wall at ``r = 0``
   keeps every other particle at ``r >= 0``;
-* ``"quarter-cylinder"``: a 3D quarter ``x, y >= 0`` with frictionless
-  symmetry walls ``x = 0`` and ``y = 0`` (masses of the quarter, kg).
+* ``"quarter-cylinder"``: a 3D quarter ``x, y >= 0`` (masses of the quarter,
+  kg); particles on a symmetry plane have its normal displacement fixed
+  (``u_x`` on ``x = 0``, ``u_y`` on ``y = 0``) and frictionless walls
+  ``x = 0`` and ``y = 0`` keep every other particle in the quarter.
 
 Both start from a regular lattice (the alpha-shape remesher breaks the
 co-circular ties of a lattice with its lifted jitter), a geostatic stress
