@@ -9,8 +9,10 @@ step and conserves mass exactly.
 
 from __future__ import annotations
 
+import importlib.util
 import itertools
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -229,3 +231,30 @@ def test_axisymmetric_seed_collapse_smoke():
     assert sim.particles.x[:, 1].max() < SEED["height"]
     assert np.all(sim.particles.x[:, 0] >= 0.0)
     assert np.all(sim.particles.x[sim.particles.fixed[:, 0], 0] == 0.0)
+
+
+def test_symmetry_planes_benchmark_counts_the_plane_rows(tmp_path):
+    # benchmarks/symmetry_planes.py at r0/4, one step: the walls-only model has
+    # one candidate more per particle on a plane (2 x 45, enumerated in the
+    # lattice test above), both steps are solved and the JSON has the ratio.
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "symmetry_planes.py"
+    spec = importlib.util.spec_from_file_location("symmetry_planes", path)
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    out = tmp_path / "s.json"
+    res = bench.main(
+        [
+            "--divisions",
+            "4",
+            "--steps",
+            "1",
+            "--linear-solver",
+            "auto",
+            "--out",
+            str(out),
+        ]
+    )
+    fix, walls = res["steps"]["fixity"][0], res["steps"]["walls"][0]
+    assert walls["contacts"] - fix["contacts"] == 2 * 45
+    assert fix["status"] == walls["status"] == "Solved"
+    assert out.exists() and res["ratio_fixity_over_walls"] > 0
