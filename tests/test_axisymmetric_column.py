@@ -166,30 +166,6 @@ def test_quarter_cylinder_lattice_and_particles():
     assert np.all(sim.particles.x[on_y, 1] == 0.0)
 
 
-def test_symmetry_fixity_replaces_the_plane_contact_rows():
-    # The symmetry planes as prescribed normal dofs instead of contact walls:
-    # from the same initial state, the first step has exactly one contact row
-    # fewer per particle on a plane (all of them are candidates at rest), and
-    # the plane particles stay on their planes.  With the walls alone they do
-    # not: at r0/4 the step lifts outer-surface particles off y = 0 by up to
-    # 20 % of their radial displacement (measured 8e-7 against 4e-6 m), a
-    # crack along the symmetry plane that the full cylinder cannot have.
-    runs = {}
-    for name in ("fixity", "walls"):
-        col = cylinder_column("quarter-cylinder", SEED["radius"] / 4)
-        p = col.particles
-        if name == "walls":
-            p = p.replace(fixed=np.zeros_like(p.fixed))
-        sim = Simulation(p, col.model, col.mesher, col.dt)
-        sim.run(steps=1)
-        runs[name] = (sim.particles.x, sim.records[-1].n_contacts)
-    (x_f, n_f), (_, n_w) = runs["fixity"], runs["walls"]
-    x0 = col.particles.x
-    on_x, on_y = x0[:, 0] == 0.0, x0[:, 1] == 0.0
-    assert n_w - n_f == on_x.sum() + on_y.sum()
-    assert np.all(x_f[on_x, 0] == 0.0) and np.all(x_f[on_y, 1] == 0.0)
-
-
 def test_builders_refuse_bad_input():
     with pytest.raises(ParameterError, match="spacing"):
         cylinder_column("axisymmetric", SEED["radius"] / 3)
@@ -234,9 +210,15 @@ def test_axisymmetric_seed_collapse_smoke():
 
 
 def test_symmetry_planes_benchmark_counts_the_plane_rows(tmp_path):
-    # benchmarks/symmetry_planes.py at r0/4, one step: the walls-only model has
-    # one candidate more per particle on a plane (2 x 45, enumerated in the
-    # lattice test above), both steps are solved and the JSON has the ratio.
+    # benchmarks/symmetry_planes.py at r0/4, one step from the same state: the
+    # symmetry planes as prescribed normal dofs remove exactly one contact row
+    # per particle on a plane (all are candidates at rest; 2 x 45, enumerated
+    # in the lattice test above, which also checks that the plane particles
+    # stay on their planes).  With the walls alone they do not: at r0/4 the step
+    # lifts outer-surface particles off y = 0 by up to 20 % of their radial
+    # displacement (measured 8e-7 against 4e-6 m), a crack along the symmetry
+    # plane that the full cylinder cannot have.  Both steps are solved and the
+    # JSON has the ratio.
     path = Path(__file__).resolve().parents[1] / "benchmarks" / "symmetry_planes.py"
     spec = importlib.util.spec_from_file_location("symmetry_planes", path)
     bench = importlib.util.module_from_spec(spec)
