@@ -15,8 +15,9 @@ cases are ``column-collapse`` scene runs:
   spacing r0/18, Mohr-Coulomb), for contrast;
 * not run by default: ``3d-18-fast-dt4``, ``3d-12-fast-dt4``,
   ``axi-12-fast-dt4``, ``axi-18-fast-dt4``, the speed levers (solver preset
-  ``accuracy=fast`` and dt = 4 ms); ``axi-12-stab``, ``axi-18-stab``, the
-  axisymmetric cases with the stress stabilisation (``stabilisation=30``).
+  ``accuracy=fast`` and dt = 4 ms); ``axi-12-stab``, ``axi-18-stab``,
+  ``3d-12-stab`` and ``3d-12-stab-fast-dt4``, the cases with the stress
+  stabilisation (``stabilisation=30``).
 
 Every case runs in its own process (its peak memory is its own) and writes its
 own folder under ``--work`` (VTU series, checkpoints, ``summary.json``): a
@@ -97,6 +98,12 @@ CASES: dict[str, dict] = {
                     "stabilisation": 30.0},
     "axi-18-stab": {"geometry": "axisymmetric", "spacing": R0 / 18,
                     "stabilisation": 30.0},
+    # The same in 3D (r0/12), at the paper's dt and with the speed levers.
+    "3d-12-stab": {"geometry": "quarter-cylinder", "spacing": R0 / 12,
+                   "stabilisation": 30.0},
+    "3d-12-stab-fast-dt4": {"geometry": "quarter-cylinder", "spacing": R0 / 12,
+                            "stabilisation": 30.0, "accuracy": "fast",
+                            "dt": 4e-3},
 }  # fmt: skip
 #: The cases run when ``--cases`` is not given.
 DEFAULT_CASES = ["3d-18", "3d-12", "axi-12", "axi-18", "axi-36", "plane-18"]
@@ -113,6 +120,8 @@ LABELS = {
     "axi-18-fast-dt4": "axisymmetric, r0/18, fast, dt 4 ms",
     "axi-12-stab": "axisymmetric, r0/12, beta = 30",
     "axi-18-stab": "axisymmetric, r0/18, beta = 30",
+    "3d-12-stab": "3D quarter, r0/12, beta = 30",
+    "3d-12-stab-fast-dt4": "3D quarter, r0/12, beta = 30, fast, dt 4 ms",
 }
 #: Quick mode: tiny spacings and a few steps (a smoke test of the whole study).
 QUICK = {"spacing_divisions": 4, "steps": 4}
