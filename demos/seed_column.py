@@ -21,9 +21,10 @@ cases are ``column-collapse`` scene runs:
 
 Every case runs in its own process (its peak memory is its own) and writes its
 own folder under ``--work`` (VTU series, checkpoints, ``summary.json``): a
-killed study continues from the checkpoints when started again, and finished
-cases (with ``summary.json``) are not run again.  From the finished cases it
-writes under ``--out`` (default ``docs/seed_column``):
+killed or interrupted study continues from the checkpoints when started again,
+and finished cases (a ``summary.json`` not marked ``interrupted``) are not run
+again.  From the finished cases it writes under ``--out`` (default
+``docs/seed_column``):
 
 * ``seed_column.json``: per case the run-out radius and final height
   (normalised, with Lube et al. 2004), the run-out at t_bar = 3, the deposit
@@ -153,7 +154,11 @@ def run_case(name: str, work: Path, quick: bool, threads: int) -> dict:
     folder = work / name
     summary = folder / "summary.json"
     if summary.exists():
-        return json.loads(summary.read_text())
+        done = json.loads(summary.read_text())
+        # An interrupted run (Ctrl-C, kill -INT) writes its summary too, with
+        # "interrupted": true; it is continued from its checkpoints, not used.
+        if not done.get("interrupted"):
+            return done
     resume = any(folder.glob("checkpoint_*.npz"))
     argv = [sys.executable, "-m", "skfem_npfem", "run", "column-collapse"]
     argv += ["--out", str(folder), "--summary", str(summary), "--quiet"]

@@ -70,6 +70,22 @@ def test_quick_study_resumes_from_checkpoints(quick):
     assert len(after["history"]) == len(before["history"])
 
 
+def test_an_interrupted_case_is_continued_not_reported(quick):
+    # An interrupted run writes its summary with "interrupted": true (the CLI
+    # keeps every finished step).  The study continues such a case from its
+    # checkpoint instead of reporting the partial run: the result is the
+    # finished run's (the quick run has QUICK["steps"] steps).
+    demo, out, _ = quick
+    summary = out / "axi-12" / "summary.json"
+    before = json.loads(summary.read_text())
+    partial = {**before, "interrupted": True, "history": before["history"][:1]}
+    summary.write_text(json.dumps(partial))
+    after = demo.run_case("axi-12", out, quick=True, threads=0)
+    assert not after.get("interrupted")
+    assert len(after["history"]) == demo.QUICK["steps"]
+    assert after["metrics"] == before["metrics"]
+
+
 def test_keep_adds_a_case_to_the_results_of_an_earlier_study(quick):
     # --keep: the cases of the existing seed_column.json stay (same order,
     # same numbers); the case run now replaces its own entry.
