@@ -264,6 +264,8 @@ def recover(
     sigma[:, comp] = sig_sel
     deps_p = np.zeros_like(sigma)
     deps_p[:, comp] = op.strain(du) - np.einsum("nij,nj->ni", prog.compliance, dsig)
+    if data.eigenstrain is not None:  # Bbar du = C ds + deps_p + e
+        deps_p[:, comp] -= data.eigenstrain[:, comp]
     # Elastic points have no plastic strain (avoid round-off noise of B du - C ds).
     deps_p[np.array([not m.plastic for m in data.materials])[data.material]] = 0.0
     if d == 2 and 2 not in comp:
@@ -300,7 +302,8 @@ def check_step_data(data: StepData) -> None:
     ParameterError
         For material ids outside ``materials``, a degenerate mesh element
         (zero area/volume: its P1 gradients are infinite), a non-positive or
-        non-finite ``stress_scale``, or (dynamic steps) a time step, mass or
+        non-finite ``stress_scale``, an eigenstrain not shaped like the
+        stresses or not finite, or (dynamic steps) a time step, mass or
         velocity that is not finite and positive where required.
     """
     op = data.operator
@@ -320,6 +323,13 @@ def check_step_data(data: StepData) -> None:
             f"an index into the {n_mat} material(s), 0..{n_mat - 1} (point {i})",
         )
     op.check()
+    if data.eigenstrain is not None:
+        e = np.asarray(data.eigenstrain, float)
+        shape = np.shape(data.sigma_n)
+        if e.shape != shape or not np.all(np.isfinite(e)):
+            raise ParameterError(
+                "eigenstrain", f"array of shape {e.shape}", f"finite, {shape}"
+            )
     if data.stress_scale is not None:
         s = data.stress_scale
         if isinstance(s, bool) or not (
@@ -353,9 +363,11 @@ def check_step_data(data: StepData) -> None:
 def stress_scale(prog: Program) -> float:
     """Characteristic stress s* for scaling (user value or an automatic one).
 
-    The largest of: the current stress, the plastic strengths, and the total
+    The largest of: the current stress, the plastic strengths, the total
     external load spread over the body's cross-section (``rho g H`` for a column
-    under gravity, up to a factor of order one).
+    under gravity, up to a factor of order one), and the stress ``E |e|`` of a
+    prescribed eigenstrain ``e`` if it were confined (it sets the increments of
+    an unloaded body, e.g. a volume correction).
     """
     data, op = prog.data, prog.data.operator
     if data.stress_scale is not None:
@@ -364,6 +376,9 @@ def stress_scale(prog: Program) -> float:
     section = float(op.volumes.sum()) ** ((op.dim - 1) / op.dim)
     cands.append(float(np.abs(np.asarray(data.force)).sum()) / section)
     cands += [float(np.max(cone.k)) for _, cone in prog.yield_cones]
+    if data.eigenstrain is not None:
+        e = float(np.max(np.abs(data.eigenstrain)))
+        cands.append(max(m.E for m in data.materials) * e)
     s = max(cands)
     if not s > 0.0:
         s = min(m.E for m in data.materials) * 1e-6

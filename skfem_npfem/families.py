@@ -7,7 +7,9 @@ Objective terms (``formulation.md`` §3, in the stress increments ``ds``):
 * :func:`prescribed_work` ``-ds^T G_P^T ubar`` (prescribed displacements);
 * :func:`contact_gap` ``sum_c g_c lambda_c``;
 * :func:`~skfem_npfem.stabilisation.residual_penalty` the element-residual
-  stabilisation of the stresses (when ``stabilisation > 0``).
+  stabilisation of the stresses (when ``stabilisation > 0``);
+* :func:`~skfem_npfem.volume.eigenstrain_work` ``sum_p V_p e_p . ds_p``, a
+  prescribed eigenstrain (the volume correction, when ``volume_correction > 0``).
 
 Row families, each a finished :class:`~skfem_npfem.program.Block`:
 
@@ -32,6 +34,7 @@ import scipy.sparse as sp
 
 from .program import Block, Program, Term
 from .stabilisation import residual_penalty
+from .volume import eigenstrain_work
 
 __all__ = [
     "OBJECTIVE_TERMS",
@@ -249,6 +252,7 @@ OBJECTIVE_TERMS = (
     prescribed_work,
     contact_gap,
     residual_penalty,
+    eigenstrain_work,
 )
 #: Row families, stacked in this order within each cone kind.
 ROW_FAMILIES = (equilibrium, contact, friction, cutoff, yield_cones)

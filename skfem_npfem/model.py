@@ -60,6 +60,12 @@ class Model:
         longer matches its cell ``V_i``, which roughens the stresses (the
         remeshed column at rest in docs/validation.md).  On a fixed mesh whose
         particle masses are ``rho V_i`` the two agree.
+    volume_correction : float
+        Fraction ``kappa`` in [0, 1] of the body's volume deficit returned per
+        step by a uniform volumetric eigenstrain (:mod:`skfem_npfem.volume`):
+        each material's particles should fill ``sum m / rho``; remeshing and
+        linearised increments lose some of it, and this returns it through
+        the solve.  0 (default) switches it off; needs ``rho > 0``.
     axisymmetric : bool
         2D only: the mesh is the ``(r, z)`` half-section of a body of revolution
         about ``x = 0`` (:mod:`skfem_npfem.axisymmetric`).  Stresses are
@@ -84,6 +90,7 @@ class Model:
     stabilisation: float = 0.0
     nodal_mass: str = "mesh"
     axisymmetric: bool = False
+    volume_correction: float = 0.0
 
     def __post_init__(self) -> None:
         if self.dim not in (2, 3):
@@ -122,6 +129,18 @@ class Model:
             isinstance(b, int | float) and math.isfinite(b) and b >= 0
         ):
             raise ParameterError("stabilisation", b, "a finite number >= 0")
+        k = self.volume_correction
+        if isinstance(k, bool) or not (
+            isinstance(k, int | float) and math.isfinite(k) and 0 <= k <= 1
+        ):
+            raise ParameterError("volume_correction", k, "a number in [0, 1]")
+        if k and any(m.rho <= 0 for m in self.materials):
+            raise ParameterError(
+                "volume_correction",
+                k,
+                "0 unless every material has a density rho > 0 (a particle's "
+                "reference volume is its mass / rho)",
+            )
         if self.nodal_mass not in NODAL_MASS:
             raise ParameterError("nodal_mass", self.nodal_mass, f"one of {NODAL_MASS}")
         if not isinstance(self.axisymmetric, bool):

@@ -136,6 +136,9 @@ class StepData:
     a_n : ndarray (N, d) or None
         Nodal accelerations at the start of the step, m/s^2 (the inertia of the
         stabilisation's residual; None: zero).
+    eigenstrain : ndarray (n_p, n_full) or None
+        Stress-free strain prescribed over the step (full Voigt), e.g. the
+        volume correction of :mod:`skfem_npfem.volume`; None: none.
     """
 
     operator: StrainOperator
@@ -155,6 +158,7 @@ class StepData:
     stress_scale: float | None = None
     stabilisation: float = 0.0
     a_n: np.ndarray | None = None
+    eigenstrain: np.ndarray | None = None
 
 
 @dataclass

@@ -35,6 +35,7 @@ from .pfem import MeshSource
 from .program import StepData, StrainOperator
 from .remesh import p1_mesh
 from .smoothing import NodalIntegration, nodal_integration
+from .volume import volume_eigenstrain
 
 __all__ = [
     "StepOperators",
@@ -243,6 +244,15 @@ def build_operators(
         stress_scale=model.stress_scale,
         stabilisation=model.stabilisation,
         a_n=p.a[active],
+        eigenstrain=volume_eigenstrain(
+            model.volume_correction,
+            p.mass[active],
+            p.material[active],
+            op.volumes,
+            np.array([m.rho for m in model.materials], float),
+            p.stress.shape[1],
+            (0, 1, 2) if model.dim == 3 or model.axisymmetric else (0, 1),
+        ),
     )
     return StepOperators(active, local_t, op, wall_ids, data)
 

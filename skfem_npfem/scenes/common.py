@@ -126,7 +126,7 @@ def make_writer(
 
 
 def fidelity_params(stabilisation: float, where: str = "") -> list[Param]:
-    """The stress stabilisation and the nodal-mass rule of a scene.
+    """The stress stabilisation, the nodal-mass rule and the volume correction.
 
     ``stabilisation`` is the scene's default ``beta`` for N-PFEM, chosen from
     measurements (docs/validation.md); see :class:`~skfem_npfem.model.Model`.
@@ -153,6 +153,17 @@ def fidelity_params(stabilisation: float, where: str = "") -> list[Param]:
             str,
             NODAL_MASS,
         ),
+        Param(
+            "volume_correction",
+            0.0,
+            "-",
+            "fraction kappa of the volume deficit (particle masses / rho against "
+            "the mesh) returned per step by a uniform volumetric eigenstrain "
+            "(method=npfem only; 0: off; docs/theory.md)",
+            float,
+            lo=0,
+            hi=1,
+        ),
     ]
 
 
@@ -164,8 +175,8 @@ def fidelity_from(values: dict[str, Any], stabilisation: float) -> dict[str, Any
     Raises
     ------
     ParameterError
-        For a stabilisation > 0 with a method other than N-PFEM (it is defined
-        for nodal stresses).
+        For a stabilisation or a volume correction > 0 with a method other than
+        N-PFEM (both are defined for nodal stresses and cells).
     """
     beta = values["stabilisation"]
     method = values.get("method", "npfem")
@@ -178,7 +189,19 @@ def fidelity_from(values: dict[str, Any], stabilisation: float) -> dict[str, Any
             f"0 with method={method} (the element-residual stabilisation is "
             "defined for the nodal stresses of N-PFEM)",
         )
-    return {"stabilisation": float(beta), "nodal_mass": values["nodal_mass"]}
+    kappa = float(values.get("volume_correction", 0.0))
+    if kappa > 0 and method != "npfem":
+        raise ParameterError(
+            "volume_correction",
+            kappa,
+            f"0 with method={method} (the volume correction acts on the nodal "
+            "cells of N-PFEM)",
+        )
+    return {
+        "stabilisation": float(beta),
+        "nodal_mass": values["nodal_mass"],
+        "volume_correction": kappa,
+    }
 
 
 def check_soil(values: dict[str, Any]) -> None:

@@ -1,0 +1,170 @@
+"""Volume correction: a volumetric eigenstrain that returns remeshing losses.
+
+Why
+---
+The particle masses of a PFEM body are exact, but the volume of its mesh is
+not: every step moves the nodes by a linearised increment (whose second-order
+area change is negative for stretching), and every remesh drops the simplices
+that fail the alpha test, among them the ones that separating grains opened.
+Nothing in the step remembers the volume a particle should fill, so a loss is
+never returned: the cells around the particles simply become smaller, and with
+node masses from the cells the density of the body rises.  In the default
+column collapse the particles of the deposit end up 9 % closer packed
+(docs/validation.md, "Area budget"), whatever alpha measures the final shape.
+
+What
+----
+Each material's particles carry the reference volume ``V_ref = sum m / rho``
+(their masses and the material density).  At the start of a step, with the
+current cell volumes ``V = sum V_i`` of that material's nodes, the step
+prescribes at every node the isotropic eigenstrain ("stress-free strain")
+
+    e = kappa ln(V_ref / V) / n_v
+
+on each of the ``n_v`` normal components that carry volume (``n_v = 2`` in
+plane strain, 3 in 3D and axisymmetry, where the hoop strain counts), with
+``kappa in [0, 1]`` the fraction of the deficit returned per step
+(:attr:`~skfem_npfem.model.Model.volume_correction`).
+
+In the cone program it is a linear term of the complementary energy,
+
+    q_sigma = V_i e_i  on the stress increments of node i,
+
+so that the optimality condition of the step reads
+``Bbar du = C ds + d eps_p + e``: the smoothed strain of every node contains
+the eigenstrain, which the material takes without stress where it is free to
+expand and with (bounded, plastic) stress where it is confined.  Rows and
+cones do not change, the step stays one cone program and all state stays at
+the particles (``V_ref`` is a sum of particle masses).
+
+Properties (tests/test_volume_correction.py):
+
+* **No deficit, no change.**  With ``V = V_ref`` the term is zero, and the
+  step is the uncorrected one bit for bit.
+* **Exact for a free body.**  A weightless elastic block on frictionless
+  supports whose particles are 1 % too heavy for their cells expands by the
+  uniform strain ``e`` with zero stress (an eigenstrain patch test).
+* **Vanishes with the discretisation error.**  The deficit is what the
+  remeshing and the linearised kinematics lose, both of which vanish as the
+  spacing and the time step go to zero; at rest, once the volume is back, the
+  term is zero.
+
+What it is not: it does not rescale volumes or masses, it does not move
+particles outside the solve, and it does not choose *where* the volume comes
+back (the solve does, through the material's response); a local, per-particle
+version (``ln(m_i / (rho V_i))`` per node) was measured and rejected: the cell
+volumes jump from remesh to remesh, and that noise went straight into the
+stresses (docs/validation.md).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import ParameterError
+from .program import Program, Term
+
+__all__ = ["eigenstrain_work", "volume_eigenstrain", "volume_ratio"]
+
+
+def volume_ratio(
+    mass: np.ndarray,
+    material: np.ndarray,
+    volumes: np.ndarray,
+    densities: np.ndarray,
+) -> np.ndarray:
+    """``V_ref / V`` per material: particle masses over density, over the cells.
+
+    Parameters
+    ----------
+    mass : ndarray (N,)
+        Particle masses of the active nodes, kg.
+    material : ndarray (N,) int
+        Material index per node.
+    volumes : ndarray (N,)
+        Current cell volumes of the nodes (ring volumes in axisymmetry).
+    densities : ndarray (n_materials,)
+        Material densities, kg/m^3 (> 0 for every material present).
+
+    Returns
+    -------
+    ndarray (n_materials,)
+        The ratio per material (1 for materials without nodes).
+
+    Examples
+    --------
+    >>> volume_ratio(np.array([1.0, 1.0]), np.array([0, 0]), np.array([0.5, 0.5]),
+    ...              np.array([2.0]))
+    array([1.])
+    """
+    n = densities.size
+    ref = np.bincount(material, weights=mass, minlength=n)
+    space = np.bincount(material, weights=volumes, minlength=n)
+    present = space > 0
+    ratio = np.ones(n)
+    ratio[present] = ref[present] / densities[present] / space[present]
+    return ratio
+
+
+def volume_eigenstrain(
+    kappa: float,
+    mass: np.ndarray,
+    material: np.ndarray,
+    volumes: np.ndarray,
+    densities: np.ndarray,
+    n_full: int,
+    volumetric: tuple[int, ...],
+) -> np.ndarray | None:
+    """Full-Voigt eigenstrain of every node (None when ``kappa`` is 0).
+
+    Parameters
+    ----------
+    kappa : float
+        Fraction of the volume deficit returned per step, in [0, 1].
+    mass, material, volumes, densities
+        As in :func:`volume_ratio`.
+    n_full : int
+        Full-Voigt size of the stresses (4 in 2D, 6 in 3D).
+    volumetric : tuple of int
+        Full-Voigt components that carry volume: (0, 1) in plane strain,
+        (0, 1, 2) in 3D and axisymmetry.
+
+    Raises
+    ------
+    ParameterError
+        For ``kappa > 0`` with a material of zero density (no reference volume).
+    """
+    if not kappa:
+        return None
+    present = np.unique(material)
+    if np.any(densities[present] <= 0):
+        raise ParameterError(
+            "volume_correction",
+            kappa,
+            "0 unless every material has a density rho > 0 (the reference "
+            "volume of a particle is its mass / rho)",
+        )
+    log_ratio = np.log(volume_ratio(mass, material, volumes, densities))
+    # Round-off of the two sums (1e-15 for a body built with m = rho V) is no
+    # deficit: such a step stays the uncorrected one bit for bit.
+    log_ratio[np.abs(log_ratio) < 1e-12] = 0.0
+    eig = np.zeros((material.size, n_full))
+    per_node = kappa * log_ratio[material] / len(volumetric)
+    eig[:, list(volumetric)] = per_node[:, None]
+    return eig
+
+
+def eigenstrain_work(prog: Program) -> Term:
+    """Objective term ``sum_i V_i e_i . ds_i`` (no term without an eigenstrain).
+
+    With it the optimality condition of the step gains ``e`` in the smoothed
+    strain: ``Bbar du = C ds + d eps_p + e`` (see the module notes).
+    """
+    eig = prog.data.eigenstrain
+    if eig is None or not np.any(eig):
+        return Term()
+    op = prog.data.operator
+    q = np.zeros(prog.nx)
+    vals = np.asarray(op.volumes, float)[:, None] * eig[:, list(prog.comp)]
+    q[prog.slice("sigma")] = vals.reshape(-1)
+    return Term(q=q)
