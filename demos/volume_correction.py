@@ -4,8 +4,8 @@
 Runs the ``column-collapse`` scene (plane strain, the scene's defaults
 otherwise: node masses, beta = 30, alpha = 1.3, dt = 5 ms, to rest) for each
 ``kappa`` of ``--kappas`` at the default resolution, and the aspect-ratio sweep
-a = 0.5 / 1 / 2 / 4 / 8 at 12 particles across L0 for ``kappa = 0`` and
-``--sweep-kappa``.  Reported per run: the mesh-volume change at the end, the
+a = 0.5 / 1 / 2 / 4 / 8 at 12 particles across L0 for each ``kappa`` of
+``--sweep-kappas``.  Reported per run: the mesh-volume change at the end, the
 normalised run-out, the final height, the stress roughness R at rest and its
 maximum, the number of steps and the median step time (every run in this
 process pool, so the step times share one machine load).
@@ -13,9 +13,11 @@ process pool, so the step times share one machine load).
 Usage (repository root)::
 
     python demos/volume_correction.py                 # kappa 0, 0.03, 0.1, 0.3
-    python demos/volume_correction.py --kappas 0,0.1 --sweep-kappa 0.1 --workers 2
+    # more sweep runs added to the committed JSON (runs already in it are kept)
+    python demos/volume_correction.py --kappas "" --sweep-kappas 0.03 --append
 
-Writes ``docs/validation/volume_correction.json`` and prints Markdown tables.
+Writes ``docs/validation/volume_correction.json`` and its tables,
+``volume_correction.md`` beside it (included by docs/validation.md).
 """
 
 from __future__ import annotations
@@ -61,6 +63,24 @@ def run(overrides: dict[str, Any]) -> dict[str, Any]:
     }
 
 
+def _floats(text: str) -> list[float]:
+    return [float(k) for k in text.split(",") if k.strip()]
+
+
+def _merge(old: list[dict], new: list[dict]) -> list[dict]:
+    """Runs of ``old`` not rerun in ``new``, then ``new``; sorted by a, kappa."""
+    key = lambda r: json.dumps(r["overrides"], sort_keys=True)  # noqa: E731
+    done = {key(r) for r in new}
+    rows = [r for r in old if key(r) not in done] + new
+    return sorted(
+        rows,
+        key=lambda r: (
+            r["overrides"].get("aspect", 0.0),
+            r["overrides"].get("volume_correction", 0.0),
+        ),
+    )
+
+
 def markdown(rows: list[dict[str, Any]], key: str) -> str:
     """A table of runs, labelled by ``key`` of their overrides."""
     lines = [
@@ -83,24 +103,22 @@ def markdown(rows: list[dict[str, Any]], key: str) -> str:
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--kappas", default="0,0.03,0.1,0.3")
-    ap.add_argument("--sweep-kappa", type=float, default=0.1)
-    ap.add_argument("--no-sweep", action="store_true")
+    ap.add_argument("--sweep-kappas", default="0,0.1")
+    ap.add_argument("--append", action="store_true", help="add to --out's runs")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", type=Path, default=OUT)
     args = ap.parse_args(argv)
-    default = [{"volume_correction": float(k)} for k in args.kappas.split(",")]
-    sweep = []
-    if not args.no_sweep:
-        sweep = [
-            {
-                "aspect": a,
-                "length": LENGTH,
-                "spacing": LENGTH / 12,
-                "volume_correction": k,
-            }
-            for a in ASPECTS
-            for k in (0.0, args.sweep_kappa)
-        ]
+    default = [{"volume_correction": float(k)} for k in _floats(args.kappas)]
+    sweep = [
+        {
+            "aspect": a,
+            "length": LENGTH,
+            "spacing": LENGTH / 12,
+            "volume_correction": k,
+        }
+        for a in ASPECTS
+        for k in _floats(args.sweep_kappas)
+    ]
     start = time.perf_counter()
     # Largest first, so that the pool ends together.
     tasks = sorted(default + sweep, key=lambda o: -o.get("aspect", 3.0))
@@ -110,19 +128,36 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         json.dumps(t, sort_keys=True): r for t, r in zip(tasks, results, strict=True)
     }
     pick = [by_task[json.dumps(t, sort_keys=True)] for t in default + sweep]
+    old = {"default": [], "sweep": []}
+    if args.append and args.out.exists():
+        old = json.loads(args.out.read_text())
     out = {
-        "default": pick[: len(default)],
-        "sweep": pick[len(default) :],
+        "default": _merge(old["default"], pick[: len(default)]),
+        "sweep": _merge(old["sweep"], pick[len(default) :]),
         "workers": args.workers,
         "wall_s": time.perf_counter() - start,
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(out, indent=1))
-    print(markdown(out["default"], "aspect"))
-    if sweep:
-        print()
-        print(markdown(out["sweep"], "aspect"))
+    page = page_tables(out)
+    args.out.with_suffix(".md").write_text(page)
+    print(page)
     return out
+
+
+def page_tables(out: dict[str, Any]) -> str:
+    """The two tables of docs/validation.md, with how they were made."""
+    return (
+        "Generated by `demos/volume_correction.py` from `volume_correction.json` "
+        "(do not edit by hand). Volume: mesh-volume change at the end; run-out "
+        "(L - L0)/L0; R: stress roughness of sigma_v; s/step: median step time "
+        f"({out['workers']} runs at a time on 2 cores).\n\n"
+        "Default collapse (a = 2, 1 035 particles, beta = 30):\n\n"
+        + markdown(out["default"], "aspect")
+        + "\n\nAspect-ratio sweep, 12 particles across L0:\n\n"
+        + markdown(out["sweep"], "aspect")
+        + "\n"
+    )
 
 
 if __name__ == "__main__":
