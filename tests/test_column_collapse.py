@@ -10,7 +10,7 @@ import pytest
 
 from skfem_npfem.cli import main
 from skfem_npfem.errors import CheckpointError, ParameterError
-from skfem_npfem.io import load_checkpoint, read_pvd, read_step
+from skfem_npfem.io import load_checkpoint, read_pvd, read_step, save_checkpoint
 from skfem_npfem.scenes import get_scene, run_scene
 from skfem_npfem.scenes.column_collapse import SCENE, build, lube_runout
 
@@ -154,6 +154,35 @@ def test_resume_checks_the_folder_and_parameters(tmp_path):
         run_scene(
             "column-collapse",
             {"spacing": 0.04, "t_end": 0.02, "phi": 35.0},
+            out=tmp_path / "r",
+            resume=True,
+        )
+
+
+def test_resume_a_checkpoint_older_than_a_parameter(tmp_path):
+    # A checkpoint written before a parameter existed (here: its metadata
+    # without volume_correction, added later with default 0) resumes when the
+    # parameter is left at its default, which is what that version did; set to
+    # anything else it is a change and is refused.
+    run_tiny(tmp_path / "r", t_end=0.01)
+    path = tmp_path / "r" / "checkpoint_000002.npz"
+    arrays, meta = load_checkpoint(path)
+    del meta["parameters"]["volume_correction"]
+    save_checkpoint(path, arrays, meta)
+    base = {"spacing": 0.04, "rest_fraction": 0.0}
+    more = run_scene(
+        "column-collapse", {**base, "t_end": 0.015}, out=tmp_path / "r", resume=True
+    )
+    assert more["solver"]["steps"] == 3
+    # The new checkpoint has it; drop it again and ask for a different value.
+    path = tmp_path / "r" / "checkpoint_000003.npz"
+    arrays, meta = load_checkpoint(path)
+    del meta["parameters"]["volume_correction"]
+    save_checkpoint(path, arrays, meta)
+    with pytest.raises(CheckpointError, match="volume_correction"):
+        run_scene(
+            "column-collapse",
+            {**base, "t_end": 0.02, "volume_correction": 0.1},
             out=tmp_path / "r",
             resume=True,
         )

@@ -318,9 +318,13 @@ class Scene:
         saved = meta.get("parameters")
         if saved is not None:
             now = to_jsonable(values)
+            # A parameter the checkpointed version did not have yet, left at
+            # its default now, is the behaviour that version had: not a change.
+            defaults = to_jsonable({p.name: p.default for p in self.params})
+            added = {k for k in set(now) - set(saved) if now[k] == defaults.get(k)}
             changed = sorted(
                 k
-                for k in set(saved) | set(now)
+                for k in (set(saved) | set(now)) - added
                 if k not in RESUME_MAY_CHANGE and saved.get(k) != now.get(k)
             )
             if changed:
