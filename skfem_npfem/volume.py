@@ -61,7 +61,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import ParameterError
 from .program import Program, Term
 
 __all__ = ["eigenstrain_work", "volume_eigenstrain", "volume_ratio"]
@@ -129,21 +128,13 @@ def volume_eigenstrain(
         Full-Voigt components that carry volume: (0, 1) in plane strain,
         (0, 1, 2) in 3D and axisymmetry.
 
-    Raises
-    ------
-    ParameterError
-        For ``kappa > 0`` with a material of zero density (no reference volume).
+    Notes
+    -----
+    ``densities`` must be > 0 for the materials present; :class:`Model`
+    refuses a ``volume_correction`` with a material of zero density.
     """
     if not kappa:
         return None
-    present = np.unique(material)
-    if np.any(densities[present] <= 0):
-        raise ParameterError(
-            "volume_correction",
-            kappa,
-            "0 unless every material has a density rho > 0 (the reference "
-            "volume of a particle is its mass / rho)",
-        )
     log_ratio = np.log(volume_ratio(mass, material, volumes, densities))
     # Round-off of the two sums (1e-15 for a body built with m = rho V) is no
     # deficit: such a step stays the uncorrected one bit for bit.
