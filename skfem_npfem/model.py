@@ -61,11 +61,13 @@ class Model:
         remeshed column at rest in docs/validation.md).  On a fixed mesh whose
         particle masses are ``rho V_i`` the two agree.
     volume_correction : float
-        Fraction ``kappa`` in [0, 1] of the body's volume deficit returned per
-        step by a uniform volumetric eigenstrain (:mod:`skfem_npfem.volume`):
-        each material's particles should fill ``sum m / rho``; remeshing and
+        Rate ``kappa`` in [0, 1] at which a uniform volumetric eigenstrain
+        returns the body's volume deficit (:mod:`skfem_npfem.volume`): each
+        material's particles should fill ``sum m / rho``; remeshing and
         linearised increments lose some of it, and this returns it through
-        the solve.  0 (default) switches it off; needs ``rho > 0``.
+        the solve, the deficit decaying as ``(1 + kappa n)(1 - kappa)^n`` over
+        ``n`` steps (a critically damped filter; its state travels in the
+        step records).  0 (default) switches it off; needs ``rho > 0``.
     axisymmetric : bool
         2D only: the mesh is the ``(r, z)`` half-section of a body of revolution
         about ``x = 0`` (:mod:`skfem_npfem.axisymmetric`).  Stresses are

@@ -403,10 +403,14 @@ class Simulation:
             self.dt = min(self.dt_max, 2 * dt, 0.9 * dt * limit / du)
 
     def _advance(self, dt: float) -> tuple[Particles, StepResult]:
-        step = self.stepper if self.stepper is not None else advance
-        return step(
-            self.particles, self.model, dt, self.mesh_source, step=self.step + 1
-        )
+        args = (self.particles, self.model, dt, self.mesh_source)
+        if self.stepper is not None:
+            return self.stepper(*args, step=self.step + 1)
+        # The volume correction's filter state lives in the last record (so
+        # checkpoints, which keep the records, carry it).
+        last = self.last_record
+        state = None if last is None else last.extra.get("volume_correction_strain")
+        return advance(*args, step=self.step + 1, volume_state=state)
 
     def summary(self) -> dict[str, Any]:
         """Solver statistics of the run (steps, iterations, time per phase)."""

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field, fields
 from typing import Any
 
@@ -35,7 +36,7 @@ from .pfem import MeshSource
 from .program import StepData, StrainOperator
 from .remesh import p1_mesh
 from .smoothing import NodalIntegration, nodal_integration
-from .volume import volume_eigenstrain
+from .volume import volume_eigenstrain, volume_strains
 
 __all__ = [
     "StepOperators",
@@ -102,7 +103,9 @@ class StepRecord:
     volume_change: float = float("nan")
     #: Clarabel's linear solver of the step (``""`` if unknown).
     linear_solver: str = ""
-    #: Scene diagnostics (numbers) added by callbacks, e.g. ``runout``.
+    #: Scene diagnostics (numbers) added by callbacks, e.g. ``runout``, and
+    #: ``volume_correction_strain`` (a list, one number per material) when the
+    #: volume correction is on.
     extra: dict[str, Any] = field(default_factory=dict)
 
     @classmethod
@@ -171,6 +174,9 @@ class StepOperators:
         Wall of each contact candidate of ``data.contacts``.
     data : StepData
         The cone step's input.
+    volume_strains : ndarray (n_materials,) or None
+        Volumetric eigenstrain of the volume correction per material
+        (:func:`~skfem_npfem.volume.volume_strains`; None when it is off).
     """
 
     active: np.ndarray
@@ -178,6 +184,7 @@ class StepOperators:
     operator: NodalIntegration
     wall_ids: np.ndarray
     data: StepData
+    volume_strains: np.ndarray | None = None
 
     @property
     def contacts(self) -> Contacts:
@@ -218,13 +225,29 @@ class StepResult:
 
 
 def build_operators(
-    p: Particles, model: Model, dt: float, mesh_source: MeshSource
+    p: Particles,
+    model: Model,
+    dt: float,
+    mesh_source: MeshSource,
+    volume_state: Sequence[float] | None = None,
 ) -> StepOperators:
-    """Stage 1: the mesh, smoothing cells, contacts and cone-step data of a step."""
+    """Stage 1: the mesh, smoothing cells, contacts and cone-step data of a step.
+
+    ``volume_state`` is the previous step's ``volume_correction_strain`` (the
+    volume correction's filter state, one number per material).
+    """
     active, local_t = mesh_source(p.x)
     mesh = p1_mesh(p.x[active], local_t)
     op, h = strain_operator(mesh, model)
     mass = model.node_masses(p.mass[active], p.material[active], op.volumes)
+    strains = volume_strains(
+        model.volume_correction,
+        p.mass[active],
+        p.material[active],
+        op.volumes,
+        np.array([m.rho for m in model.materials], float),
+        None if volume_state is None else np.asarray(volume_state, float),
+    )
     contacts, wall_ids = wall_contacts(model.walls, p, active, dt, h, model.gravity)
     data = StepData(
         operator=op,
@@ -245,16 +268,13 @@ def build_operators(
         stabilisation=model.stabilisation,
         a_n=p.a[active],
         eigenstrain=volume_eigenstrain(
-            model.volume_correction,
-            p.mass[active],
+            strains,
             p.material[active],
-            op.volumes,
-            np.array([m.rho for m in model.materials], float),
             p.stress.shape[1],
             (0, 1, 2) if model.dim == 3 or model.axisymmetric else (0, 1),
         ),
     )
-    return StepOperators(active, local_t, op, wall_ids, data)
+    return StepOperators(active, local_t, op, wall_ids, data, strains)
 
 
 def strain_operator(mesh, model: Model) -> tuple[NodalIntegration, float]:
@@ -356,6 +376,7 @@ def advance(
     dt: float,
     mesh_source: MeshSource,
     step: int | None = None,
+    volume_state: Sequence[float] | None = None,
 ) -> tuple[Particles, StepResult]:
     """Advance the particles by one step.
 
@@ -373,12 +394,20 @@ def advance(
         :class:`~skfem_npfem.pfem.AlphaShapeMesher`).
     step : int, optional
         Step index (used in error messages).
+    volume_state : sequence of float, optional
+        The previous step's ``record.extra["volume_correction_strain"]`` (the
+        state of the volume correction's filter, one number per material);
+        None at the start of a run.  Only read when
+        ``model.volume_correction > 0``; :class:`~skfem_npfem.Simulation`
+        passes it.
 
     Returns
     -------
     Particles, StepResult
         New particles, and the step (its :class:`StepRecord` as ``.record``,
-        the solution and the mesh).
+        the solution and the mesh).  With the volume correction on, the
+        record's ``extra["volume_correction_strain"]`` holds this step's
+        volumetric eigenstrain per material.
 
     Raises
     ------
@@ -394,7 +423,7 @@ def advance(
             f"{model.dim}D positions for a {model.dim}D model",
         )
     t0 = time.perf_counter()
-    ops = build_operators(p, model, dt, mesh_source)
+    ops = build_operators(p, model, dt, mesh_source, volume_state)
     t1 = time.perf_counter()
     sol = solve_step(ops.data, model.solver, step=step)
     t2 = time.perf_counter()
@@ -404,4 +433,6 @@ def advance(
         step, dt, new, model.gravity, ops.active, ops.operator, sol, timings
     )
     rec.n_contacts = ops.contacts.size
+    if ops.volume_strains is not None:
+        rec.extra["volume_correction_strain"] = [float(x) for x in ops.volume_strains]
     return new, StepResult(rec, sol, ops.active, ops.local_t, ops.operator)

@@ -2,8 +2,11 @@
 
 References: the stress-free expansion of an unconstrained elastic block under
 a uniform eigenstrain (exact: u = e x, sigma = 0, for any linear field that
-nodal integration reproduces), the geometric decay of the deficit it implies,
-and bit-for-bit equality with the uncorrected step when there is no deficit.
+nodal integration reproduces), the critically damped decay of the deficit it
+implies ((1 + kappa n)(1 - kappa)^n, the closed form of the filter's
+recurrence), bit-for-bit equality with the uncorrected step when there is no
+deficit, and a resumed run equal to the uninterrupted one (the filter state
+travels in the checkpoint).
 """
 
 from __future__ import annotations
@@ -16,10 +19,16 @@ from skfem import MeshTet, MeshTri
 
 from skfem_npfem import FixedMesh, Model, Particles, Simulation
 from skfem_npfem.errors import ParameterError
+from skfem_npfem.io import latest_checkpoint
 from skfem_npfem.materials import LinearElastic
 from skfem_npfem.scenes import get_scene
 from skfem_npfem.smoothing import nodal_integration
-from skfem_npfem.volume import volume_eigenstrain, volume_ratio
+from skfem_npfem.volume import (
+    correction_gains,
+    volume_eigenstrain,
+    volume_ratio,
+    volume_strains,
+)
 
 E, NU, RHO = 1.0e7, 0.3, 2000.0
 
@@ -53,8 +62,9 @@ def test_free_block_expands_by_the_eigenstrain_without_stress(dim):
     sim = free_block(dim, kappa)
     x0 = sim.particles.x.copy()
     sim.run(steps=1)
-    # e = kappa ln(V_ref / V) / n_v on each of the n_v = dim normal components.
-    e = kappa * math.log(1.01) / dim
+    # The first step's volumetric strain is lam g d = kappa^2 ln(V_ref / V),
+    # e = that / n_v on each of the n_v = dim normal components.
+    e = kappa**2 * math.log(1.01) / dim
     assert np.allclose(sim.particles.x - x0, e * x0, rtol=0, atol=1e-9 * e)
     # No stress (to the solver's tolerance, relative to E e ~ 2.5e4 Pa) and no
     # plastic strain: the eigenstrain is taken without stress where free.
@@ -62,19 +72,25 @@ def test_free_block_expands_by_the_eigenstrain_without_stress(dim):
     assert sim.records[-1].status == "Solved"
 
 
-def test_deficit_decays_geometrically():
-    # Each step returns kappa of the remaining deficit: after k steps
-    # ln(V_ref/V) = (1 - kappa)^k ln(1.01), up to the O(e^2) difference between
-    # the linearised area change (1 + e)^2 and exp(2 e) (~1e-5 here).
+def test_deficit_decays_critically_damped():
+    # d_{n+1} = d_n - x_n with x_n = (1 - lam) x_{n-1} + lam g d_n: a double
+    # pole at 1 - kappa, so after k steps ln(V_ref/V) = (1 + kappa k)
+    # (1 - kappa)^k ln(1.01) (never negative: no overshoot), up to the O(e^2)
+    # difference between the linearised area change (1 + e)^2 and exp(2 e).
     kappa = 0.5
     sim = free_block(2, kappa)
-    for k in range(1, 4):
+    for k in range(1, 5):
         sim.run(steps=1)
         tri_vol = nodal_integration(
             MeshTri(sim.particles.x.T, sim.mesh_source.t)
         ).volumes.sum()
         left = math.log(sim.particles.mass.sum() / RHO / tri_vol)
-        assert left == pytest.approx((1 - kappa) ** k * math.log(1.01), abs=2e-5)
+        exact = (1 + kappa * k) * (1 - kappa) ** k * math.log(1.01)
+        assert left == pytest.approx(exact, abs=2e-5)
+    # The filter state the loop carries is the last step's strain.
+    gain, lam = correction_gains(kappa)
+    assert (gain, lam) == pytest.approx((1 / 3, 0.75))
+    assert sim.records[-1].extra["volume_correction_strain"][0] > 0
 
 
 @pytest.mark.parametrize(
@@ -105,11 +121,42 @@ def test_ratio_and_eigenstrain_per_material():
     volumes = np.array([0.5, 0.5, 1.0])
     rho = np.array([1.0, 2.0])
     assert volume_ratio(mass, material, volumes, rho) == pytest.approx([2.0, 1.0])
-    eig = volume_eigenstrain(0.2, mass, material, volumes, rho, 4, (0, 1))
-    e0 = 0.2 * math.log(2.0) / 2
+    # First step: x = lam g d = kappa^2 ln 2 (g = 0.2/1.8, lam = 0.2 x 1.8).
+    x = volume_strains(0.2, mass, material, volumes, rho)
+    assert x == pytest.approx([0.04 * math.log(2.0), 0.0])
+    eig = volume_eigenstrain(x, material, 4, (0, 1))
+    e0 = 0.04 * math.log(2.0) / 2
     assert eig[:, 0] == pytest.approx([e0, e0, 0.0])
     assert np.array_equal(eig[:, 0], eig[:, 1]) and not eig[:, 2:].any()
-    assert volume_eigenstrain(0.0, mass, material, volumes, rho, 4, (0, 1)) is None
+    # A later step: the previous strain decays by 1 - lam = 0.64.
+    x2 = volume_strains(0.2, mass, material, volumes, rho, previous=[0.01, 0.02])
+    assert x2 == pytest.approx([0.64 * 0.01 + 0.04 * math.log(2.0), 0.64 * 0.02])
+    assert volume_strains(0.0, mass, material, volumes, rho) is None
+    assert volume_eigenstrain(None, material, 4, (0, 1)) is None
+
+
+def test_resumed_run_repeats_the_uninterrupted_one(tmp_path):
+    # The filter state is in the step records, which checkpoints keep: a run
+    # resumed at step 3 ends where the uninterrupted 6-step run does, bit for
+    # bit, and its steps carried a non-zero correction.
+    scene = get_scene("column-collapse")
+    values = scene.resolve(
+        {"spacing": 0.2 / 5, "volume_correction": 0.5, "checkpoint_every": 3}
+    )
+    first = scene.build(values, out=tmp_path / "a", progress=False).simulation
+    first.run(steps=3)
+    resumed = scene.build(values, out=tmp_path / "b", progress=False).simulation
+    resumed.restore(latest_checkpoint(tmp_path / "a"))
+    resumed.run(steps=3)
+    clean = scene.build(values, out=None, progress=False).simulation
+    clean.run(steps=6)
+    strains = [r.extra["volume_correction_strain"][0] for r in clean.records]
+    assert strains[0] == 0.0 and any(s != 0.0 for s in strains[1:])
+    assert [r.extra["volume_correction_strain"] for r in resumed.records] == [
+        r.extra["volume_correction_strain"] for r in clean.records
+    ]
+    for name, arr in clean.particles.arrays().items():
+        np.testing.assert_array_equal(resumed.particles.arrays()[name], arr, name)
 
 
 def test_bad_input():

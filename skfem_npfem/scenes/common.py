@@ -157,9 +157,10 @@ def fidelity_params(stabilisation: float, where: str = "") -> list[Param]:
             "volume_correction",
             0.0,
             "-",
-            "fraction kappa of the volume deficit (particle masses / rho against "
-            "the mesh) returned per step by a uniform volumetric eigenstrain "
-            "(method=npfem only; 0: off; docs/theory.md)",
+            "rate kappa at which a uniform volumetric eigenstrain returns the "
+            "volume deficit (particle masses / rho against the mesh): it decays "
+            "as (1 + kappa n)(1 - kappa)^n over n steps (method=npfem only; 0: "
+            "off; docs/theory.md)",
             float,
             lo=0,
             hi=1,
