@@ -17,7 +17,9 @@ cases are ``column-collapse`` scene runs:
   ``axi-12-fast-dt4``, ``axi-18-fast-dt4``, the speed levers (solver preset
   ``accuracy=fast`` and dt = 4 ms); ``axi-12-stab``, ``axi-18-stab``,
   ``3d-12-stab`` and ``3d-12-stab-fast-dt4``, the cases with the stress
-  stabilisation (``stabilisation=30``).
+  stabilisation (``stabilisation=30``); ``3d-12-fast-dt4-vc`` and
+  ``3d-12-stab-fast-dt4-vc``, the same with the opt-in volume correction
+  (``volume_correction=0.1``).
 
 Every case runs in its own process (its peak memory is its own) and writes its
 own folder under ``--work`` (VTU series, checkpoints, ``summary.json``): a
@@ -105,6 +107,15 @@ CASES: dict[str, dict] = {
     "3d-12-stab-fast-dt4": {"geometry": "quarter-cylinder", "spacing": R0 / 12,
                             "stabilisation": 30.0, "accuracy": "fast",
                             "dt": 4e-3},
+    # With the opt-in volume correction of issue 10 (kappa = 0.1), without and
+    # with the stabilisation, at the speed levers.
+    "3d-12-fast-dt4-vc": {"geometry": "quarter-cylinder", "spacing": R0 / 12,
+                          "accuracy": "fast", "dt": 4e-3,
+                          "volume_correction": 0.1},
+    "3d-12-stab-fast-dt4-vc": {"geometry": "quarter-cylinder",
+                               "spacing": R0 / 12, "stabilisation": 30.0,
+                               "accuracy": "fast", "dt": 4e-3,
+                               "volume_correction": 0.1},
 }  # fmt: skip
 #: The cases run when ``--cases`` is not given.
 DEFAULT_CASES = ["3d-18", "3d-12", "axi-12", "axi-18", "axi-36", "plane-18"]
@@ -123,6 +134,9 @@ LABELS = {
     "axi-18-stab": "axisymmetric, r0/18, beta = 30",
     "3d-12-stab": "3D quarter, r0/12, beta = 30",
     "3d-12-stab-fast-dt4": "3D quarter, r0/12, beta = 30, fast, dt 4 ms",
+    "3d-12-fast-dt4-vc": "3D quarter, r0/12, fast, dt 4 ms, kappa = 0.1",
+    "3d-12-stab-fast-dt4-vc": "3D quarter, r0/12, beta = 30, fast, dt 4 ms, "
+    "kappa = 0.1",
 }
 #: Quick mode: tiny spacings and a few steps (a smoke test of the whole study).
 QUICK = {"spacing_divisions": 4, "steps": 4}
