@@ -246,7 +246,7 @@ def build_operators(
         p.material[active],
         op.volumes,
         np.array([m.rho for m in model.materials], float),
-        None if volume_state is None else np.asarray(volume_state, float),
+        volume_state,
     )
     contacts, wall_ids = wall_contacts(model.walls, p, active, dt, h, model.gravity)
     data = StepData(

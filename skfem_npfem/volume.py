@@ -80,6 +80,8 @@ stresses (docs/validation.md).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from .program import Program, Term
@@ -156,7 +158,7 @@ def volume_strains(
     material: np.ndarray,
     volumes: np.ndarray,
     densities: np.ndarray,
-    previous: np.ndarray | None = None,
+    previous: Sequence[float] | None = None,
 ) -> np.ndarray | None:
     """Volumetric eigenstrain ``x = n_v e`` of this step, per material.
 
@@ -167,7 +169,7 @@ def volume_strains(
         ``(1 - kappa)^n`` (times ``1 + kappa n``).
     mass, material, volumes, densities
         As in :func:`volume_ratio`.
-    previous : ndarray (n_materials,) or None
+    previous : sequence of float (n_materials,) or None
         ``x`` of the previous step (None or zeros at the start of a run).
 
     Returns
@@ -189,9 +191,7 @@ def volume_strains(
     gain, lam = correction_gains(kappa)
     x = lam * gain * log_ratio
     if previous is not None:
-        prev = np.zeros_like(x)
-        prev[: min(prev.size, len(previous))] = np.asarray(previous, float)[: prev.size]
-        x = x + (1.0 - lam) * prev
+        x = x + (1.0 - lam) * np.asarray(previous, float)
     return x
 
 
