@@ -57,6 +57,7 @@ import json
 import math
 import subprocess
 import sys
+import textwrap
 import time
 from pathlib import Path
 
@@ -365,7 +366,12 @@ def render_panels(
             if i == 0:
                 ax.set_title(f"t/sqrt(h0/g) = {times[k] / T_SCALE:.2f}")
             if j == 0:
-                ax.set_ylabel(results[name]["label"], fontsize=8)
+                # Horizontal and wrapped: vertical labels of long case names
+                # ran into the next row.
+                label = textwrap.fill(results[name]["label"], 24)
+                ax.set_ylabel(label, fontsize=8, rotation=0, ha="right",
+                              va="center", labelpad=6)  # fmt: skip
+    fig.subplots_adjust(left=0.14)
     sm = plt.cm.ScalarMappable(cmap="viridis", norm=plt.Normalize(lo, 0.0))
     fig.colorbar(sm, ax=axes, shrink=0.6, label="sigma_v (kPa)")
     path = out / filename
