@@ -36,14 +36,16 @@ import argparse
 import json
 import runpy
 import time
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE.parent / "docs" / "validation" / "stabilisation_factor.json"
-ASPECTS = (0.5, 1.0, 2.0, 4.0, 8.0)
-LENGTH = 0.2
+#: The sweep of the volume-correction study (its run() is reused too).
+_VC = runpy.run_path(str(HERE / "volume_correction.py"))
+ASPECTS, LENGTH = _VC["ASPECTS"], _VC["LENGTH"]
 
 
 def deposit(beta: float) -> dict[str, Any]:
@@ -91,12 +93,33 @@ def task(spec: tuple[str, float, float | None]) -> dict[str, Any]:
             "max_speed_end": out["max_speed_end"],
             "steps": out["steps"],
         }
-    run = runpy.run_path(str(HERE / "volume_correction.py"))["run"]
+    run = _VC["run"]
     overrides: dict[str, Any] = {"stabilisation": beta}
     if aspect is not None:
         overrides.update(aspect=aspect, length=LENGTH, spacing=LENGTH / 12)
     out = run(overrides)
     return {"kind": kind, "beta": beta, "aspect": aspect, **out}
+
+
+#: Columns of the deposit table after beta.
+DEPOSIT_KEYS = (
+    "max_displacement",
+    "p99_displacement",
+    "median_displacement",
+    "max_speed_end",
+    "median_speed_end",
+)
+
+
+def _table(
+    rows: list[dict[str, Any]],
+    kind: str,
+    order: Callable[[dict[str, Any]], Any],
+    cells: Callable[[dict[str, Any]], list[str]],
+) -> list[str]:
+    """Markdown rows of the runs of one kind, sorted by ``order``."""
+    chosen = sorted((r for r in rows if r["kind"] == kind), key=order)
+    return ["| " + " | ".join(cells(r)) + " |" for r in chosen]
 
 
 def page(rows: list[dict[str, Any]]) -> str:
@@ -117,15 +140,23 @@ def page(rows: list[dict[str, Any]]) -> str:
         "| at rest | s/step |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
-    coll = [r for r in rows if r["kind"] == "collapse"]
-    for r in sorted(coll, key=lambda r: (r["beta"], r["aspect"] or 0.0)):
-        a = "2 (default)" if r["aspect"] is None else f"{r['aspect']:g}"
-        lines.append(
-            f"| {r['beta']:g} | {a} | {r['particles']} | {r['R_max']:.3f} | "
-            f"{r['R_at_rest']:.3f} | {r['normalised_runout']:.2f} | "
-            f"{100 * r['volume_change']:+.1f} % | {r['steps']} | "
-            f"{'yes' if r['at_rest'] else 'no'} | {r['step_median_s']:.2f} |"
-        )
+    lines += _table(
+        rows,
+        "collapse",
+        lambda r: (r["beta"], r["aspect"] or 0.0),
+        lambda r: [
+            f"{r['beta']:g}",
+            "2 (default)" if r["aspect"] is None else f"{r['aspect']:g}",
+            str(r["particles"]),
+            f"{r['R_max']:.3f}",
+            f"{r['R_at_rest']:.3f}",
+            f"{r['normalised_runout']:.2f}",
+            f"{100 * r['volume_change']:+.1f} %",
+            str(r["steps"]),
+            "yes" if r["at_rest"] else "no",
+            f"{r['step_median_s']:.2f}",
+        ],
+    )
     lines += [
         "",
         "**Elastic column at rest**, remeshed every step (1 s):",
@@ -134,12 +165,15 @@ def page(rows: list[dict[str, Any]]) -> str:
         "| largest speed at the end (m/s) |",
         "|---|---|---|---|---|",
     ]
-    rest = [r for r in rows if r["kind"] == "at rest"]
-    for r in sorted(rest, key=lambda r: r["beta"]):
-        lines.append(
-            f"| {r['beta']:g} | {r['R_end']:.4f} | {r['R_max']:.4f} | "
-            f"{r['max_displacement']:.2e} | {r['max_speed_end']:.2e} |"
-        )
+    lines += _table(
+        rows,
+        "at rest",
+        lambda r: r["beta"],
+        lambda r: (
+            [f"{r['beta']:g}", f"{r['R_end']:.4f}", f"{r['R_max']:.4f}"]
+            + [f"{r[k]:.2e}" for k in ("max_displacement", "max_speed_end")]
+        ),
+    )
     lines += [
         "",
         "**The default collapse's deposit after rest** (t = 1.5 to 2 s):",
@@ -151,13 +185,12 @@ def page(rows: list[dict[str, Any]]) -> str:
         "| largest speed at 2 s (m/s) | median speed (m/s) |",
         "|---|---|---|---|---|---|",
     ]
-    dep = [r for r in rows if r["kind"] == "deposit"]
-    for r in sorted(dep, key=lambda r: r["beta"]):
-        lines.append(
-            f"| {r['beta']:g} | {r['max_displacement']:.2e} | "
-            f"{r['p99_displacement']:.2e} | {r['median_displacement']:.2e} | "
-            f"{r['max_speed_end']:.2e} | {r['median_speed_end']:.2e} |"
-        )
+    lines += _table(
+        rows,
+        "deposit",
+        lambda r: r["beta"],
+        lambda r: [f"{r['beta']:g}"] + [f"{r[k]:.2e}" for k in DEPOSIT_KEYS],
+    )
     return "\n".join(lines) + "\n"
 
 
