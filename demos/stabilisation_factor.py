@@ -56,7 +56,13 @@ def deposit(beta: float) -> dict[str, Any]:
 
     scene = get_scene("column-collapse")
     values = scene.resolve(
-        {"t_end": 2.0, "rest_fraction": 0.0, "threads": 1, "stabilisation": beta}
+        {
+            "t_end": 2.0,
+            "rest_fraction": 0.0,
+            "threads": 1,
+            "stabilisation": beta,
+            "volume_correction": 0.0,  # as measured (before it became the default)
+        }
     )
     sim = scene.build(values, out=None, progress=False).simulation
     sim.run(t_end=1.5)

@@ -68,6 +68,9 @@ class Model:
         the solve, the deficit decaying as ``(1 + kappa n)(1 - kappa)^n`` over
         ``n`` steps (a critically damped filter; its state travels in the
         step records).  0 (default) switches it off; needs ``rho > 0``.
+        The plane-strain ``column-collapse`` scene defaults to 0.05 for a
+        material whose own volume barely changes (psi = 0, rho g H0 / E <=
+        0.01; docs/validation.md, "At the default spacing").
     axisymmetric : bool
         2D only: the mesh is the ``(r, z)`` half-section of a body of revolution
         about ``x = 0`` (:mod:`skfem_npfem.axisymmetric`).  Stresses are

@@ -173,3 +173,28 @@ def test_bad_input():
             out=None,
             progress=False,
         )
+
+
+@pytest.mark.parametrize(
+    ("overrides", "kappa"),
+    [
+        ({}, 0.05),  # N-PFEM in plane strain: the measured default
+        ({"volume_correction": 0.0}, 0.0),  # off when asked
+        ({"method": "fem-remap"}, 0.0),  # defined for N-PFEM cells only
+        ({"geometry": "axisymmetric"}, 0.0),  # cylindrical: the paper's seed case
+        ({"geometry": "quarter-cylinder", "spacing": 0.039 / 4}, 0.0),
+        ({"psi": 10.0}, 0.0),  # dilatancy is a real volume change
+        ({"E": 1e3}, 0.0),  # rho g H0 / E = 7: the soft column swells elastically
+        ({"E": 7.1e5}, 0.05),  # rho g H0 / E = 0.00995 <= 0.01
+        ({"E": 7.0e5}, 0.0),  # 0.0101
+    ],
+)
+def test_scene_default(overrides, kappa):
+    # docs/validation.md, "At the default spacing": kappa = 0.05 keeps every
+    # aspect ratio within 2.1 % of its volume at R max <= 0.071 (N = 22), where
+    # the material's own volume barely changes (rho g H0 / E = 1800 * 9.81 *
+    # 0.4 / E).
+    scene = get_scene("column-collapse")
+    values = scene.resolve(overrides)
+    model = scene.build(values, out=None, progress=False).simulation.model
+    assert model.volume_correction == kappa

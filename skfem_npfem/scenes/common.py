@@ -125,13 +125,28 @@ def make_writer(
     return ResultWriter(out, resume_after_step=resume_after_step)
 
 
-def fidelity_params(stabilisation: float, where: str = "") -> list[Param]:
+def fidelity_params(
+    stabilisation: float,
+    where: str = "",
+    volume_correction: float = 0.0,
+    kappa_where: str = "",
+) -> list[Param]:
     """The stress stabilisation, the nodal-mass rule and the volume correction.
 
-    ``stabilisation`` is the scene's default ``beta`` for N-PFEM, chosen from
-    measurements (docs/validation.md); see :class:`~skfem_npfem.model.Model`.
-    ``where`` qualifies that default in the help (e.g. "in plane strain").
+    ``stabilisation`` and ``volume_correction`` are the scene's defaults of
+    ``beta`` and ``kappa`` for N-PFEM, chosen from measurements
+    (docs/validation.md); see :class:`~skfem_npfem.model.Model`.  ``where``
+    qualifies the stabilisation's default in the help (e.g. "in plane strain"),
+    ``kappa_where`` the volume correction's.
     """
+    if volume_correction:
+        kappa_default = None
+        kappa_help = (
+            f"default {volume_correction:g} for method=npfem{kappa_where}, else 0; "
+            "0: off"
+        )
+    else:
+        kappa_default, kappa_help = 0.0, "method=npfem only; 0: off"
     return [
         Param(
             "stabilisation",
@@ -155,12 +170,12 @@ def fidelity_params(stabilisation: float, where: str = "") -> list[Param]:
         ),
         Param(
             "volume_correction",
-            0.0,
+            kappa_default,
             "-",
             "rate kappa at which a uniform volumetric eigenstrain returns the "
             "volume deficit (particle masses / rho against the mesh): it decays "
-            "as (1 + kappa n)(1 - kappa)^n over n steps (method=npfem only; 0: "
-            "off; docs/theory.md)",
+            f"as (1 + kappa n)(1 - kappa)^n over n steps ({kappa_help}; "
+            "docs/theory.md)",
             float,
             lo=0,
             hi=1,
@@ -168,10 +183,13 @@ def fidelity_params(stabilisation: float, where: str = "") -> list[Param]:
     ]
 
 
-def fidelity_from(values: dict[str, Any], stabilisation: float) -> dict[str, Any]:
+def fidelity_from(
+    values: dict[str, Any], stabilisation: float, volume_correction: float = 0.0
+) -> dict[str, Any]:
     """Model keyword arguments of :func:`fidelity_params`.
 
-    ``stabilisation`` is the scene's default for N-PFEM.
+    ``stabilisation`` and ``volume_correction`` are the scene's defaults for
+    N-PFEM (the other methods default to 0).
 
     Raises
     ------
@@ -190,7 +208,10 @@ def fidelity_from(values: dict[str, Any], stabilisation: float) -> dict[str, Any
             f"0 with method={method} (the element-residual stabilisation is "
             "defined for the nodal stresses of N-PFEM)",
         )
-    kappa = float(values.get("volume_correction", 0.0))
+    kappa = values.get("volume_correction", 0.0)
+    if kappa is None:
+        kappa = volume_correction if method == "npfem" else 0.0
+    kappa = float(kappa)
     if kappa > 0 and method != "npfem":
         raise ParameterError(
             "volume_correction",
