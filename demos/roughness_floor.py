@@ -36,6 +36,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import runpy
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -45,11 +46,11 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE.parent / "docs" / "validation" / "roughness_floor.json"
-ASPECTS = (0.5, 1.0, 2.0, 4.0, 8.0)
+#: The sweep of the volume-correction study: aspects, L0 and the t_end cap
+#: t_end = T_END_FACTOR sqrt(H0 / g); its results writer too.
+_VC = runpy.run_path(str(HERE / "volume_correction.py"))
+ASPECTS, LENGTH, T_END_FACTOR = _VC["ASPECTS"], _VC["LENGTH"], _VC["T_END_FACTOR"]
 ACROSS = (12, 22)
-LENGTH = 0.2
-#: t_end = T_END_FACTOR sqrt(H0 / g): a cap the at-rest rule stops before.
-T_END_FACTOR = 15.0
 
 
 #: Young's modulus of the scene; a repeat multiplies it by 1 + REPEAT_NUDGE k.
@@ -186,6 +187,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     ap.add_argument("--out", type=Path, default=OUT)
     args = ap.parse_args(argv)
     old = json.loads(args.out.read_text()) if args.out.exists() else []
+    text = None
     if args.page:
         rows = old
     else:
@@ -211,14 +213,10 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
                     f"{s['floor_at_R_max']:.3f}), {r['wall_s']:.0f} s",
                     flush=True,
                 )
-        keep = {_key(r) for r in new}
-        rows = [r for r in old if _key(r) not in keep] if args.append else []
-        rows += new
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text("[\n" + ",\n".join(json.dumps(r) for r in rows) + "\n]\n")
-    text = page(rows)
-    args.out.with_suffix(".md").write_text(text)
-    print(text)
+        rows = _VC["replace_rows"](old if args.append else [], new, _key)
+        # One run a line: the per-step histories make an indented file large.
+        text = "[\n" + ",\n".join(json.dumps(r) for r in rows) + "\n]\n"
+    _VC["write_results"](args.out, text, page(rows))
     return rows
 
 

@@ -234,15 +234,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     old: list[dict[str, Any]] = []
     if args.append and args.out.exists():
         old = json.loads(args.out.read_text())["runs"]
-    key = lambda r: (r["kind"], r["beta"], r.get("aspect"))  # noqa: E731
-    done = {key(r) for r in new}
-    rows = [r for r in old if key(r) not in done] + new
+    rows = _VC["replace_rows"](
+        old, new, lambda r: (r["kind"], r["beta"], r.get("aspect"))
+    )
     out = {"runs": rows, "workers": args.workers, "wall_s": time.perf_counter() - start}
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(out, indent=1))
-    text = page(rows)
-    args.out.with_suffix(".md").write_text(text)
-    print(text)
+    _VC["write_results"](args.out, json.dumps(out, indent=1), page(rows))
     return out
 
 

@@ -26,6 +26,7 @@ import argparse
 import json
 import math
 import time
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -80,11 +81,32 @@ def _floats(text: str) -> list[float]:
     return [float(k) for k in text.split(",") if k.strip()]
 
 
+def replace_rows(
+    old: list[dict], new: list[dict], key: Callable[[dict], Any]
+) -> list[dict]:
+    """Runs of ``old`` whose ``key`` no run of ``new`` has, then ``new``.
+
+    How the studies of this folder add runs to their committed JSON (``--append``).
+    """
+    done = {key(r) for r in new}
+    return [r for r in old if key(r) not in done] + list(new)
+
+
+def write_results(path: Path, text: str | None, page: str) -> None:
+    """The JSON ``text`` at ``path`` (None: keep it), ``page`` beside it as .md.
+
+    The page is printed too.
+    """
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if text is not None:
+        path.write_text(text)
+    path.with_suffix(".md").write_text(page)
+    print(page)
+
+
 def _merge(old: list[dict], new: list[dict]) -> list[dict]:
     """Runs of ``old`` not rerun in ``new``, then ``new``; sorted by a, kappa."""
-    key = lambda r: json.dumps(r["overrides"], sort_keys=True)  # noqa: E731
-    done = {key(r) for r in new}
-    rows = [r for r in old if key(r) not in done] + new
+    rows = replace_rows(old, new, lambda r: json.dumps(r["overrides"], sort_keys=True))
     return sorted(
         rows,
         key=lambda r: (
@@ -163,11 +185,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         # With --append: the wall time of all the runs in the file.
         "wall_s": old.get("wall_s", 0.0) + time.perf_counter() - start,
     }
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(out, indent=1))
-    page = page_tables(out)
-    args.out.with_suffix(".md").write_text(page)
-    print(page)
+    write_results(args.out, json.dumps(out, indent=1), page_tables(out))
     return out
 
 
