@@ -20,12 +20,19 @@ Writes (under ``--out``, default ``docs/validation``):
 * ``refinement_a2.png``: run-out and final height against N at a = 2;
 * ``deposits.png``: the final deposits of the primary sweep.
 
-Three run-out measures are stored: the scene's ``normalised_runout`` (front of
-the main body, the primary measure), the 99 % mass front (x below which 99 %
-of the particle mass lies) and the farthest particle.
+Run-out measures stored: the scene's ``normalised_runout``, the primary
+measure (the front of the main body until 2026-11, the 99 % mass front of the
+scene's particles since), the main body (``runout_main_body_normalised``, when
+the scene reports it), the 99 % mass front of all particles (x below which
+99 % of the particle mass lies) and the farthest particle.  Per case the
+stress roughness (at rest and its maximum) and the stabilisation factor and
+volume correction the scene resolved are stored too.
 
-Usage (from the repository root; the defaults reproduce docs/validation.md,
-about 8 minutes of wall time, 15 CPU-minutes, with two cases in parallel)::
+Usage (from the repository root; the command below wrote
+docs/validation/collapse_validation.json, the record before the stabilisation;
+the same command with ``--force --out docs/validation/current`` wrote the
+rerun with the defaults of 2026-12-02: 14 minutes of wall time with two cases
+in parallel, beside a 3D run)::
 
     PYTHONPATH=. python demos/collapse_validation.py \\
         --aspects 0.5,1,2,4,8 --particles-across 12,8,16,22 \\
@@ -218,6 +225,11 @@ def run_case(
         },
     }
     s["case"] = {"aspect": a, "N": n, "params": params, "variant": variant}
+    # The fidelity settings the scene resolved (None in "parameters" = derived).
+    s["model"] = {
+        "stabilisation": float(sim.model.stabilisation),
+        "volume_correction": float(sim.model.volume_correction),
+    }
     lib_end = library_fingerprint()
     s["library"] = {
         **lib_start,
@@ -294,6 +306,9 @@ def row_from_summary(s: dict) -> dict:
     a = float(s["case"]["aspect"])
     n = int(s["case"]["N"])
     m, sol, p = s["metrics"], s["solver"], s["parameters"]
+    # The scene metric: the main body's front when the study began
+    # (docs/validation/collapse_validation.json), the 99 % mass front since
+    # (the main body is then runout_main_body, kept below).
     r = float(m["normalised_runout"])
     lube, laj = lube_law(a), lajeunesse_law(a)
     hist = s.get("history", [])
@@ -311,6 +326,13 @@ def row_from_summary(s: dict) -> dict:
         }
     if "library" in s:
         extra["library"] = s["library"]
+    if "model" in s:  # cases run before the stabilisation and the correction
+        extra.update(s["model"])
+    if m.get("runout_main_body") is not None:
+        extra["runout_main_body_normalised"] = (m["runout_main_body"] - L0) / L0
+    for key in ("stress_roughness", "stress_roughness_max"):
+        if m.get(key) is not None:
+            extra[key] = float(m[key])
     return {
         "aspect": a,
         "N": n,
@@ -500,7 +522,7 @@ def plot_aspect(
     ax1.plot(
         l2, lajeunesse_power(l2), "C1-.", label="Lajeunesse et al. 2005: 2.3a$^{2/3}$"
     )
-    ax1.plot(a, y, "ks", ms=7, label=f"N-PFEM ({n_label}), main body")
+    ax1.plot(a, y, "ks", ms=7, label=f"N-PFEM ({n_label}), scene run-out")
     if all("front_q99_normalised" in r for r in sweep):
         ax1.plot(
             a,
@@ -600,7 +622,7 @@ def plot_refinement(ref: list[dict], path: Path) -> None:
     h = np.array([r["final_height_L0"] for r in ref])
     a = ref[0]["aspect"]
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4.2))
-    ax1.plot(n, y, "ks-", label="N-PFEM, main body (scene metric)")
+    ax1.plot(n, y, "ks-", label="N-PFEM, scene run-out")
     ax1.plot(n, yt, "o:", color="0.5", label="N-PFEM, farthest particle")
     if all("front_q99_normalised" in r for r in ref):
         ax1.plot(

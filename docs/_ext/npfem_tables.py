@@ -14,6 +14,7 @@ table that a demo stored in its JSON (``:key: table``).
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import sys
@@ -216,6 +217,20 @@ def prandtl() -> str:
 # Validation: the column collapse (demos/collapse_validation.py).
 
 COLLAPSE = "docs/validation/collapse_validation.json"
+#: The same study rerun with the defaults of 2026-12-02 (stabilisation beta =
+#: 30, volume correction kappa = 0.05); COLLAPSE is kept as the record before.
+COLLAPSE_NOW = "docs/validation/current/collapse_validation.json"
+
+
+def _measures(path: str) -> tuple[str, str, str]:
+    """Labels of the primary and the second run-out measure, and the second's key.
+
+    The scene's run-out was the main body's front when COLLAPSE was measured
+    and is the 99 % mass front since; the other one is the second measure.
+    """
+    if path == COLLAPSE:
+        return "main body", "99 % mass front", "front_q99_normalised"
+    return "99 % mass front (scene)", "main body", "runout_main_body_normalised"
 
 
 def _lube(r: dict) -> tuple[str, str]:
@@ -228,10 +243,17 @@ def _lube(r: dict) -> tuple[str, str]:
 
 
 @table(COLLAPSE)
-def collapse_sweep() -> str:
+def collapse_sweep(path: str = COLLAPSE) -> str:
     """The primary aspect-ratio sweep against the experimental laws."""
+    first, second, key = _measures(path)
+
+    def rough(r: dict) -> list[str]:  # measured since the stabilisation
+        if path == COLLAPSE:
+            return []
+        return [num(r.get("stress_roughness_max")), num(r.get("stress_roughness"))]
+
     out = []
-    for r in load(COLLAPSE)["sweep"]:
+    for r in load(path)["sweep"]:
         law, ratio = _lube(r)
         out.append(
             [
@@ -240,7 +262,7 @@ def collapse_sweep() -> str:
                 count(r["particles"]),
                 r["steps"],
                 f"**{num(r['normalised_runout'])}**",
-                num(r["front_q99_normalised"]),
+                num(r.get(key)),
                 num(r["normalised_runout_tip"]),
                 law,
                 num(r["lajeunesse"]["value"], 2),
@@ -253,6 +275,7 @@ def collapse_sweep() -> str:
                 pct(r["volume_change"]),
                 f"{r['wall_time']:.0f}",
                 num(r["step_time_median"], 2),
+                *rough(r),
             ]
         )
     return md(
@@ -261,8 +284,8 @@ def collapse_sweep() -> str:
             "N",
             "particles",
             "steps",
-            "(L∞−L0)/L0 main body",
-            "99 % mass front",
+            f"(L∞−L0)/L0 {first}",
+            second,
             "farthest particle",
             "Lube law",
             "Lajeunesse law",
@@ -275,15 +298,17 @@ def collapse_sweep() -> str:
             "mesh-area change",
             "wall (s)",
             "median s/step",
+            *([] if path == COLLAPSE else ["R max", "R at rest"]),
         ],
         out,
     )
 
 
 @table(COLLAPSE)
-def collapse_other_resolutions() -> str:
+def collapse_other_resolutions(path: str = COLLAPSE) -> str:
     """The sweeps at the other resolutions (a = 2 is the refinement table)."""
-    data = load(COLLAPSE)
+    first, second, key = _measures(path)
+    data = load(path)
     rows = [r for s in data["other_sweeps"].values() for r in s["sweep"]]
     rows.sort(key=lambda r: (r["aspect"], r["N"]))
     out, done2 = [], False
@@ -301,7 +326,7 @@ def collapse_other_resolutions() -> str:
                 r["N"],
                 count(r["particles"]),
                 num(r["normalised_runout"]),
-                num(r["front_q99_normalised"]),
+                num(r.get(key)),
                 num(r["normalised_runout_tip"]),
                 num(r["final_height_L0"]),
                 pct(r["volume_change"]),
@@ -312,8 +337,8 @@ def collapse_other_resolutions() -> str:
             "a",
             "N",
             "particles",
-            "main body",
-            "99 % mass front",
+            first,
+            second,
             "farthest particle",
             "H∞/L0",
             "mesh-area change",
@@ -323,10 +348,11 @@ def collapse_other_resolutions() -> str:
 
 
 @table(COLLAPSE)
-def collapse_refinement() -> str:
+def collapse_refinement(path: str = COLLAPSE) -> str:
     """The refinement series at a = 2."""
+    first = _measures(path)[0]
     out = []
-    for r in load(COLLAPSE)["refinement"]:
+    for r in load(path)["refinement"]:
         lo, hi = r["runout_late_range_normalised"]
         out.append(
             [
@@ -352,8 +378,8 @@ def collapse_refinement() -> str:
             "spacing (mm)",
             "particles",
             "steps",
-            "main body",
-            "main body over the last 10 % of the run",
+            first,
+            f"{first} over the last 10 % of the run",
             "99 % mass front",
             "95 % mass front",
             "farthest particle",
@@ -381,9 +407,10 @@ def _variant(label: str) -> str:
 
 
 @table(COLLAPSE)
-def collapse_sensitivity() -> str:
+def collapse_sensitivity(path: str = COLLAPSE) -> str:
     """The N = 12, a = 2 case against its variants."""
-    data = load(COLLAPSE)
+    first, second, key = _measures(path)
+    data = load(path)
     base = next(r for r in data["sweep"] if r["aspect"] == 2)
     s = data["setup"]
     label = (
@@ -398,7 +425,7 @@ def collapse_sensitivity() -> str:
                 name,
                 r["steps"],
                 num(r["normalised_runout"]),
-                num(r["front_q99_normalised"]),
+                num(r.get(key)),
                 num(r["normalised_runout_tip"]),
                 num(r["final_height_L0"]),
                 pct(r["volume_change"]),
@@ -409,8 +436,8 @@ def collapse_sensitivity() -> str:
         [
             "variant",
             "steps",
-            "main body",
-            "99 % mass front",
+            first,
+            second,
             "farthest particle",
             "H∞/L0",
             "mesh-area change",
@@ -455,16 +482,16 @@ def _fit_row(label: str, measure: str, fit: dict | None, primary: bool) -> list[
 
 
 @table(COLLAPSE)
-def collapse_fits() -> str:
+def collapse_fits(path: str = COLLAPSE) -> str:
     """Small-a slope and large-a exponent per resolution and run-out measure."""
-    data = load(COLLAPSE)
+    data = load(path)
     n0 = data["setup"]["particles_across_sweep"]
     sweeps = [(n0, data["fits"], data["fits_alternative_measures"])]
     for n, s in sorted(data["other_sweeps"].items(), key=lambda kv: int(kv[0])):
         sweeps.append((int(n), s["fits"], s.get("fits_alternative", {})))
     out = []
     for n, fits, alt in sweeps:
-        out.append(_fit_row(f"N = {n}", "main body", fits, n == n0))
+        out.append(_fit_row(f"N = {n}", _measures(path)[0], fits, n == n0))
         for key, measure in (
             ("front_q99_normalised", "99 % mass front"),
             ("normalised_runout_tip", "farthest particle"),
@@ -480,6 +507,80 @@ def collapse_fits() -> str:
             "large-a exponent, a = 2–8 (gate 0.55–0.85)",
             "local exponent 2→4 / 4→8",
             "prefactor",
+        ],
+        out,
+    )
+
+
+# The rerun with today's defaults: the same tables from COLLAPSE_NOW (named
+# collapse-now-sweep, ...), and what changed against COLLAPSE.
+for _builder in (
+    collapse_sweep,
+    collapse_other_resolutions,
+    collapse_refinement,
+    collapse_sensitivity,
+    collapse_fits,
+):
+    _name = _builder.__name__.replace("collapse_", "collapse-now-").replace("_", "-")
+    BUILDERS[_name] = (functools.partial(_builder, COLLAPSE_NOW), (COLLAPSE_NOW,))
+
+
+def _all_rows(data: dict) -> dict[tuple[float, int, str | None], dict]:
+    """Every case of a collapse study by (aspect, N, variant)."""
+    rows = list(data["sweep"]) + list(data["refinement"]) + list(data["variants"])
+    rows += [r for s in data["other_sweeps"].values() for r in s["sweep"]]
+    return {(r["aspect"], r["N"], r.get("variant")): r for r in rows}
+
+
+@table(COLLAPSE, COLLAPSE_NOW)
+def collapse_before_after() -> str:
+    """Each case of the primary sweep and the refinement, before -> now."""
+    before, now = _all_rows(load(COLLAPSE)), _all_rows(load(COLLAPSE_NOW))
+    keys = sorted(k for k in now if k in before and k[2] is None)
+
+    def pair(a, b, f) -> str:
+        return f"{f(a)} → {f(b)}"
+
+    def ratio(front: float) -> str:  # to Lube's value (1.2a up to a = 2.3)
+        return num(front / b["lube"]["value"], 2)
+
+    out = []
+    for key in keys:
+        b, n = before[key], now[key]
+        out.append(
+            [
+                f"{key[0]:g}",
+                key[1],
+                count(n["particles"]),
+                pair(b["normalised_runout"], n.get("runout_main_body_normalised"), num),
+                pair(b["front_q99_normalised"], n["front_q99_normalised"], num),
+                pair(b["front_q99_normalised"], n["front_q99_normalised"], ratio),
+                pair(b["final_height_L0"], n["final_height_L0"], num),
+                pair(b["volume_change"], n["volume_change"], pct),
+                num(n.get("stress_roughness_max")),
+                num(n.get("stress_roughness")),
+                pair(b["step_time_median"], n["step_time_median"], lambda x: num(x, 3)),
+                pair(
+                    b["ipm_iterations_mean"],
+                    n["ipm_iterations_mean"],
+                    lambda x: num(x, 1),
+                ),
+            ]
+        )
+    return md(
+        [
+            "a",
+            "N",
+            "particles",
+            "main body",
+            "99 % mass front",
+            "99 % front / Lube",
+            "H∞/L0",
+            "mesh-area change",
+            "R max (now)",
+            "R at rest (now)",
+            "median s/step",
+            "IPM it. (mean)",
         ],
         out,
     )
