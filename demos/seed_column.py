@@ -13,7 +13,8 @@ cases are ``column-collapse`` scene runs:
   runs and one finer;
 * ``plane-18``: plane strain of the same section (half width r0, height h0,
   spacing r0/18, Mohr-Coulomb), for contrast;
-* not run by default: ``3d-18-fast-dt4``, ``3d-12-fast-dt4``,
+* not run by default: ``3d-18-fast`` (the tolerance lever alone, at the
+  paper's dt), ``3d-18-fast-dt4``, ``3d-12-fast-dt4``,
   ``axi-12-fast-dt4``, ``axi-18-fast-dt4``, the speed levers (solver preset
   ``accuracy=fast`` and dt = 4 ms); ``axi-12-stab``, ``axi-18-stab``,
   ``3d-12-stab`` and ``3d-12-stab-fast-dt4``, the cases with the stress
@@ -90,6 +91,9 @@ CASES: dict[str, dict] = {
     # and their price at r0/12 in 3D and in axisymmetry.
     "3d-18-fast-dt4": {"geometry": "quarter-cylinder", "spacing": R0 / 18,
                        "accuracy": "fast", "dt": 4e-3},
+    # The paper's resolution and time step with the tolerance lever only.
+    "3d-18-fast": {"geometry": "quarter-cylinder", "spacing": R0 / 18,
+                   "accuracy": "fast"},
     "3d-12-fast-dt4": {"geometry": "quarter-cylinder", "spacing": R0 / 12,
                        "accuracy": "fast", "dt": 4e-3},
     "axi-12-fast-dt4": {"geometry": "axisymmetric", "spacing": R0 / 12,
@@ -128,6 +132,7 @@ LABELS = {
     "axi-36": "axisymmetric, r0/36",
     "plane-18": "plane strain, r0/18",
     "3d-18-fast-dt4": "3D quarter, r0/18, fast, dt 4 ms",
+    "3d-18-fast": "3D quarter, r0/18, fast",
     "3d-12-fast-dt4": "3D quarter, r0/12, fast, dt 4 ms",
     "axi-12-fast-dt4": "axisymmetric, r0/12, fast, dt 4 ms",
     "axi-18-fast-dt4": "axisymmetric, r0/18, fast, dt 4 ms",
