@@ -52,12 +52,13 @@ G = 9.81
 #: Methods compared: label -> scene parameters.
 METHODS = {
     "N-PFEM": {"method": "npfem"},
-    # N-PFEM as before issue 10 (particle masses, no stabilisation): the
-    # before/after pictures of docs/validation.md.
+    # N-PFEM as before issue 10 (particle masses, no stabilisation, no volume
+    # correction): the before/after pictures of docs/validation.md.
     "N-PFEM unstabilised": {
         "method": "npfem",
         "nodal_mass": "particle",
         "stabilisation": 0.0,
+        "volume_correction": 0.0,
     },
     "FEM-remap P1": {"method": "fem-remap", "element": "p1", "transfer": "recovery"},
     "FEM-remap P2": {"method": "fem-remap", "element": "p2", "transfer": "recovery"},

@@ -20,10 +20,11 @@ that wall time and peak memory are each run's own:
 3. **Cost** of each run: steps (SPFEM: also its explicit substeps), median
    time per step, total wall time, peak memory of the process.
 
-The machine was shared when the cached results were made: timings are
-indicative.  Writes ``results.json`` and ``results.png`` under ``--out``
-(default ``docs/validation/comparison``); run folders under ``--work``
-(default ``out/comparison/results``; a rerun reuses finished runs).
+The committed results (2026-12-03) ran two configurations at a time
+(``--workers 2``) on an otherwise idle 2-core machine.  Writes
+``results.json`` and ``results.png`` under ``--out`` (default
+``docs/validation/comparison``); run folders under ``--work`` (default
+``out/comparison/results``; a rerun reuses finished runs).
 
 Usage (from the repository root)::
 
