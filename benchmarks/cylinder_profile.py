@@ -12,12 +12,18 @@ Builds the ``column-collapse`` quarter cylinder (the seed column, spacing
   the KKT size, the non-zeros of the factor, the GFLOP of one factorisation,
   and the time of the ordering (METIS), of the numerical factorisations and of
   the triangular solves (with MKL's own iterative-refinement steps) -- the
-  rest of Clarabel's solve is its own work (cone updates, KKT assembly).
+  rest of Clarabel's solve is its own work (cone updates, KKT assembly);
+* ``--variants``: the same program solved again with MKL Pardiso options the
+  library does not use (:data:`VARIANTS`), interleaved with the library's
+  settings over ``--rounds`` rounds, each solve in its own child process:
+  solve time, iterations, and whether the solution is bit-identical to the
+  library's (the reproducibility the library promises).
 
 Usage::
 
     python benchmarks/cylinder_profile.py --divisions 12 --skip 5
     python benchmarks/cylinder_profile.py --divisions 18 --skip 1
+    python benchmarks/cylinder_profile.py --divisions 12 --skip 2 --variants all
 
 Writes ``benchmarks/results/cylinder_profile_<divisions>.json`` and ``.md``.
 The machine is shared: the child's times carry the load of the moment
@@ -27,6 +33,7 @@ The machine is shared: the child's times carry the load of the moment
 from __future__ import annotations
 
 import argparse
+import json
 import pickle
 import re
 import subprocess
@@ -42,45 +49,93 @@ from skfem_npfem.scenes.collapse_runs import build_geometry
 from skfem_npfem.scenes.cylinder import SEED
 
 CHILD = r"""
-import pickle, sys, time
+import dataclasses, hashlib, json, pickle, sys, time
 import clarabel
+import numpy as np
 from skfem_npfem.backends import pardiso_threads
 from skfem_npfem.solver import SolverOptions
 P, q, A, b, cones, opts = pickle.load(open(sys.argv[1], "rb"))
+variant = json.loads(sys.argv[2])
+if "reproducible" in variant:
+    opts = dataclasses.replace(opts, reproducible=variant["reproducible"])
 cones = [getattr(clarabel, name)(dim) for name, dim in cones]
 with pardiso_threads(opts.max_threads):
     s = opts.clarabel_settings("mkl")
+    iparm = list(s.pardiso_iparm)
+    for i, v in variant.get("iparm", {}).items():
+        iparm[int(i)] = int(v)
+    s.pardiso_iparm = iparm
     s.pardiso_verbose = True
     t0 = time.perf_counter()
     solver = clarabel.DefaultSolver(P, q, A, b, cones, s)
     t1 = time.perf_counter()
     sol = solver.solve()
     t2 = time.perf_counter()
-print("@@", sol.status, sol.iterations, t1 - t0, t2 - t1, flush=True)
+digest = hashlib.sha256(np.asarray(sol.x).tobytes()).hexdigest()[:16]
+print("@@", sol.status, sol.iterations, t1 - t0, t2 - t1, digest, flush=True)
 """
+
+#: Pardiso options measured against the library's settings (``--variants``):
+#: name -> changes (0-based ``iparm`` indices; ``reproducible`` of
+#: :class:`~skfem_npfem.solver.SolverOptions`).
+VARIANTS: dict[str, dict] = {
+    "two-level": {"iparm": {23: 1}},
+    "diagonal-pivots": {"iparm": {20: 0}},
+    "min-degree": {"iparm": {1: 0}},
+    "no-cnr": {"reproducible": False},
+}
+#: What each variant is, for the table.
+LABELS = {
+    "library": "library (METIS, Bunch-Kaufman pivots, CNR)",
+    "two-level": "two-level factorisation (iparm[23] = 1)",
+    "diagonal-pivots": "1x1 diagonal pivoting (iparm[20] = 0)",
+    "min-degree": "minimum-degree ordering (iparm[1] = 0)",
+    "no-cnr": "no CNR (reproducible = False)",
+}
 
 
 def _floats(pattern: str, text: str) -> list[float]:
     return [float(x) for x in re.findall(pattern, text)]
 
 
-def pardiso_split(P, q, A, b, cones, options) -> dict:
-    """Solve once more with Pardiso's statistics; parse its times and sizes."""
+def _first(pattern: str, text: str) -> float | None:
+    found = _floats(pattern, text)
+    return found[0] if found else None
+
+
+def _count(pattern: str, text: str) -> int | None:
+    found = _first(pattern, text)
+    return None if found is None else int(found)
+
+
+def save_program(P, q, A, b, cones, options) -> str:
+    """Pickle a captured program for the child processes; return its path."""
     desc = [(type(c).__name__, c.dim) for c in cones]
     with tempfile.NamedTemporaryFile(suffix=".pkl", delete=False) as f:
         pickle.dump((P, q, A, b, desc, options), f)
-        path = f.name
+        return f.name
+
+
+def pardiso_split(path: str, variant: dict | None = None) -> dict:
+    """Solve the saved program with Pardiso's statistics; parse times and sizes.
+
+    Pardiso prints no statistics for some options (the two-level
+    factorisation): those entries are then None.
+    """
+    variant = {
+        "iparm": {str(k): v for k, v in (variant or {}).get("iparm", {}).items()},
+        **{k: v for k, v in (variant or {}).items() if k != "iparm"},
+    }
     with harness.Meter() as m:
         proc = subprocess.run(
-            [sys.executable, "-c", CHILD, path],
+            [sys.executable, "-c", CHILD, path, json.dumps(variant)],
             capture_output=True,
             text=True,
             env=harness.child_env(),
         )
-    Path(path).unlink()
     out = proc.stdout + proc.stderr
     line = next(ln for ln in out.splitlines() if ln.startswith("@@"))
-    _, status, its, setup, solve = line.split()
+    _, status, its, setup, solve, digest = line.split()
     numfct = _floats(r"factorization step[^:]*:\s+([\d.]+)", out)
     solves = _floats(r"at solve step \(solve\)\s+:\s+([\d.]+)", out)
     refine = _floats(r"iterative refinement steps performed\s+(\d+)", out)
@@ -89,12 +144,13 @@ def pardiso_split(P, q, A, b, cones, options) -> dict:
         "iterations": int(its),
         "setup_s": float(setup),
         "solve_s": float(solve),
-        "kkt_equations": int(_floats(r"number of equations:\s+(\d+)", out)[0]),
-        "kkt_nnz": int(_floats(r"number of non-zeros in A:\s+(\d+)", out)[0]),
-        "factor_nnz": int(_floats(r"number of non-zeros in L:\s+(\d+)", out)[0]),
-        "gflop_per_factorisation": _floats(
+        "x_digest": digest,
+        "kkt_equations": _count(r"number of equations:\s+(\d+)", out),
+        "kkt_nnz": _count(r"number of non-zeros in A:\s+(\d+)", out),
+        "factor_nnz": _count(r"number of non-zeros in L:\s+(\d+)", out),
+        "gflop_per_factorisation": _first(
             r"gflop\s+for the numerical factorization:\s+([\d.]+)", out
-        )[0],
+        ),
         "reorder_s": sum(_floats(r"\(reorder\)\s+:\s+([\d.]+)", out)),
         "factorisations": len(numfct),
         "factorisation_s": sum(numfct),
@@ -118,9 +174,9 @@ def run(args) -> dict:
     captured = {}
     original = conic.solve_clarabel
 
-    def spy(P, q, A, b, cones, options, dim):
+    def spy(P, q, A, b, cones, options, dim, *rest, **kw):
         captured.update(P=P, q=q, A=A, b=b, cones=cones, options=options)
-        return original(P, q, A, b, cones, options, dim)
+        return original(P, q, A, b, cones, options, dim, *rest, **kw)
 
     conic.solve_clarabel = spy
     try:
@@ -129,7 +185,12 @@ def run(args) -> dict:
     finally:
         conic.solve_clarabel = original
     rec = sim.records[-1]
-    split = pardiso_split(**captured)
+    path = save_program(**captured)
+    try:
+        split = pardiso_split(path)
+        variants = compare_variants(path, args.variants, args.rounds)
+    finally:
+        Path(path).unlink()
     return {
         "divisions": args.divisions,
         "n_particles": int(sim.particles.n),
@@ -141,14 +202,77 @@ def run(args) -> dict:
         "phases_s": rec.timings,
         "n_contacts": rec.n_contacts,
         "pardiso": split,
+        "variants": variants,
         "machine": harness.machine_info(),
     }
+
+
+def compare_variants(path: str, names: str, rounds: int) -> dict:
+    """Solve the saved program with the library's settings and each variant.
+
+    The solves alternate (library, variant 1, variant 2, ..., then again for
+    each round), so that every setting sees the same machine load.  Returns
+    ``{name: [solve record per round]}`` with the library's settings under
+    ``"library"``.
+    """
+    if not names:
+        return {}
+    chosen = list(VARIANTS) if names == "all" else names.split(",")
+    unknown = [n for n in chosen if n not in VARIANTS]
+    if unknown:
+        raise SystemExit(f"error: unknown variants {unknown}; known: {list(VARIANTS)}")
+    out: dict[str, list] = {"library": [], **{n: [] for n in chosen}}
+    for _ in range(rounds):
+        out["library"].append(pardiso_split(path))
+        for name in chosen:
+            out[name].append(pardiso_split(path, VARIANTS[name]))
+    return out
+
+
+def _median(xs: list[float]) -> float:
+    xs = sorted(xs)
+    return 0.5 * (xs[(len(xs) - 1) // 2] + xs[len(xs) // 2])
+
+
+def _yes(flag: bool) -> str:
+    return "yes" if flag else "no"
+
+
+def variants_markdown(variants: dict) -> list[str]:
+    """Rows of the variants table: median solve time and its ratio."""
+    if not variants:
+        return []
+    base = _median([r["solve_s"] for r in variants["library"]])
+    digest = variants["library"][0]["x_digest"]
+    lines = [
+        "",
+        "Pardiso options against the library's settings, the same program solved "
+        f"{len(variants['library'])} times each, interleaved (median solve time; "
+        "`repeatable`: its own solves bit-identical to each other; `= library`: "
+        "bit-identical to the library's):",
+        "",
+        "| settings | solve s (median) | ratio | IPM it. | GFLOP per factorisation "
+        "| repeatable | = library |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for name, recs in variants.items():
+        t = _median([r["solve_s"] for r in recs])
+        gflop = recs[0]["gflop_per_factorisation"]
+        lines.append(
+            f"| {LABELS.get(name, name)} | {t:.2f} | {t / base:.2f} | "
+            f"{'/'.join(str(r['iterations']) for r in recs)} | "
+            f"{'—' if gflop is None else f'{gflop:.1f}'} | "
+            f"{_yes(len({r['x_digest'] for r in recs}) == 1)} | "
+            f"{_yes(recs[0]['x_digest'] == digest)} |"
+        )
+    return lines
 
 
 def markdown(rep: dict) -> str:
     ph, pa = rep["phases_s"], rep["pardiso"]
     total = sum(ph.values())
     rest = pa["solve_s"] - pa["factorisation_s"] - pa["triangular_solve_s"]
+    rate = pa["gflop_per_factorisation"] * pa["factorisations"] / pa["factorisation_s"]
     lines = [
         f"# One 3D seed-column step: spacing r0/{rep['divisions']:g}, "
         f"{rep['n_particles']} particles, step {rep['step']}",
@@ -170,7 +294,7 @@ def markdown(rep: dict) -> str:
         f"statistics; {pa['iterations']} iterations, {pa['status']}): KKT "
         f"{pa['kkt_equations']} equations, {pa['kkt_nnz']} non-zeros; factor "
         f"{pa['factor_nnz']} non-zeros, {pa['gflop_per_factorisation']:.1f} GFLOP "
-        "per factorisation.",
+        f"per factorisation, factorised at {rate:.1f} GFLOP/s.",
         "",
         "| part | s | share of setup + solve |",
         "|---|---|---|",
@@ -189,6 +313,7 @@ def markdown(rep: dict) -> str:
     ]
     for label, v in rows:
         lines.append(f"| {label} | {v:.2f} | {100 * v / whole:.1f} % |")
+    lines += variants_markdown(rep.get("variants", {}))
     return "\n".join(lines) + "\n"
 
 
@@ -196,12 +321,20 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--divisions", type=float, default=12.0)
     ap.add_argument("--skip", type=int, default=5, help="steps before the profile")
+    ap.add_argument(
+        "--variants",
+        default="",
+        help=f"'all' or comma-separated names of {list(VARIANTS)} (default: none)",
+    )
+    ap.add_argument("--rounds", type=int, default=2, help="solves of each variant")
+    ap.add_argument("--name", default=None, help="result file stem")
     ap.add_argument("--render", default=None, help="rewrite FILE.md from FILE.json")
     args = ap.parse_args(argv)
     if args.render:
         return harness.render(args.render, markdown)
     rep = run(args)
-    path = harness.HERE / "results" / f"cylinder_profile_{args.divisions:g}.json"
+    stem = args.name or f"cylinder_profile_{args.divisions:g}"
+    path = harness.HERE / "results" / f"{stem}.json"
     harness.write_report(path, rep, markdown(rep))
     print(markdown(rep))
     return 0
