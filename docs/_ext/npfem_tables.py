@@ -541,12 +541,14 @@ def collapse_before_after() -> str:
     def pair(a, b, f) -> str:
         return f"{f(a)} → {f(b)}"
 
-    def ratio(front: float) -> str:  # to Lube's value (1.2a up to a = 2.3)
-        return num(front / b["lube"]["value"], 2)
-
     out = []
     for key in keys:
         b, n = before[key], now[key]
+        lube = b["lube"]["value"]  # Lube's value at this aspect (1.2a to a = 2.3)
+
+        def ratio(front: float, lube: float = lube) -> str:
+            return num(front / lube, 2)
+
         out.append(
             [
                 f"{key[0]:g}",
