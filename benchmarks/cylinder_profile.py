@@ -40,6 +40,7 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+from statistics import median
 
 import _harness as harness
 
@@ -78,20 +79,17 @@ print("@@", sol.status, sol.iterations, t1 - t0, t2 - t1, digest, flush=True)
 #: Pardiso options measured against the library's settings (``--variants``):
 #: name -> changes (0-based ``iparm`` indices; ``reproducible`` of
 #: :class:`~skfem_npfem.solver.SolverOptions`).
+#: ``label`` names it in the table (the child ignores it).
 VARIANTS: dict[str, dict] = {
-    "two-level": {"iparm": {23: 1}},
-    "diagonal-pivots": {"iparm": {20: 0}},
-    "min-degree": {"iparm": {1: 0}},
-    "no-cnr": {"reproducible": False},
+    "two-level": {"iparm": {23: 1}, "label": "two-level factorisation (iparm[23] = 1)"},
+    "diagonal-pivots": {
+        "iparm": {20: 0},
+        "label": "1x1 diagonal pivoting (iparm[20] = 0)",
+    },
+    "min-degree": {"iparm": {1: 0}, "label": "minimum-degree ordering (iparm[1] = 0)"},
+    "no-cnr": {"reproducible": False, "label": "no CNR (reproducible = False)"},
 }
-#: What each variant is, for the table.
-LABELS = {
-    "library": "library (METIS, Bunch-Kaufman pivots, CNR)",
-    "two-level": "two-level factorisation (iparm[23] = 1)",
-    "diagonal-pivots": "1x1 diagonal pivoting (iparm[20] = 0)",
-    "min-degree": "minimum-degree ordering (iparm[1] = 0)",
-    "no-cnr": "no CNR (reproducible = False)",
-}
+LIBRARY = "library (METIS, Bunch-Kaufman pivots, CNR)"
 
 
 def _floats(pattern: str, text: str) -> list[float]:
@@ -122,13 +120,9 @@ def pardiso_split(path: str, variant: dict | None = None) -> dict:
     Pardiso prints no statistics for some options (the two-level
     factorisation): those entries are then None.
     """
-    variant = {
-        "iparm": {str(k): v for k, v in (variant or {}).get("iparm", {}).items()},
-        **{k: v for k, v in (variant or {}).items() if k != "iparm"},
-    }
     with harness.Meter() as m:
         proc = subprocess.run(
-            [sys.executable, "-c", CHILD, path, json.dumps(variant)],
+            [sys.executable, "-c", CHILD, path, json.dumps(variant or {})],
             capture_output=True,
             text=True,
             env=harness.child_env(),
@@ -229,11 +223,6 @@ def compare_variants(path: str, names: str, rounds: int) -> dict:
     return out
 
 
-def _median(xs: list[float]) -> float:
-    xs = sorted(xs)
-    return 0.5 * (xs[(len(xs) - 1) // 2] + xs[len(xs) // 2])
-
-
 def _yes(flag: bool) -> str:
     return "yes" if flag else "no"
 
@@ -242,7 +231,7 @@ def variants_markdown(variants: dict) -> list[str]:
     """Rows of the variants table: median solve time and its ratio."""
     if not variants:
         return []
-    base = _median([r["solve_s"] for r in variants["library"]])
+    base = median(r["solve_s"] for r in variants["library"])
     digest = variants["library"][0]["x_digest"]
     lines = [
         "",
@@ -256,10 +245,11 @@ def variants_markdown(variants: dict) -> list[str]:
         "|---|---|---|---|---|---|---|",
     ]
     for name, recs in variants.items():
-        t = _median([r["solve_s"] for r in recs])
+        t = median(r["solve_s"] for r in recs)
         gflop = recs[0]["gflop_per_factorisation"]
         lines.append(
-            f"| {LABELS.get(name, name)} | {t:.2f} | {t / base:.2f} | "
+            f"| {VARIANTS[name]['label'] if name in VARIANTS else LIBRARY} | "
+            f"{t:.2f} | {t / base:.2f} | "
             f"{'/'.join(str(r['iterations']) for r in recs)} | "
             f"{'—' if gflop is None else f'{gflop:.1f}'} | "
             f"{_yes(len({r['x_digest'] for r in recs}) == 1)} | "

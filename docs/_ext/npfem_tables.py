@@ -545,10 +545,6 @@ def collapse_before_after() -> str:
     for key in keys:
         b, n = before[key], now[key]
         lube = b["lube"]["value"]  # Lube's value at this aspect (1.2a to a = 2.3)
-
-        def ratio(front: float, lube: float = lube) -> str:
-            return num(front / lube, 2)
-
         out.append(
             [
                 f"{key[0]:g}",
@@ -556,7 +552,11 @@ def collapse_before_after() -> str:
                 count(n["particles"]),
                 pair(b["normalised_runout"], n.get("runout_main_body_normalised"), num),
                 pair(b["front_q99_normalised"], n["front_q99_normalised"], num),
-                pair(b["front_q99_normalised"], n["front_q99_normalised"], ratio),
+                pair(
+                    b["front_q99_normalised"] / lube,
+                    n["front_q99_normalised"] / lube,
+                    lambda x: num(x, 2),
+                ),
                 pair(b["final_height_L0"], n["final_height_L0"], num),
                 pair(b["volume_change"], n["volume_change"], pct),
                 num(n.get("stress_roughness_max")),
