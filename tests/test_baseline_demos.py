@@ -146,6 +146,7 @@ def test_speed_accuracy_quick(tmp_path):
             assert walls == sorted(walls) and errors == sorted(errors, reverse=True)
     text = page.read_text()
     assert "## Where N-PFEM does not pay off" in text
+    assert "predate" not in text and "Measured before" not in text  # today's defaults
     assert f"{npfem['value']:.4g}" in text  # the tables come from the JSON
     saved = json.loads((tmp_path / "quick" / "speed_accuracy.json").read_text())
     assert saved["rows"].keys() == rows.keys()
@@ -175,3 +176,27 @@ def test_comparison_demos_full(tmp_path):
         ]
     )
     assert sum(r["ok"] for r in sa["rows"].values()) >= 0.9 * len(sa["rows"])
+
+
+def test_speed_accuracy_page_says_which_defaults_it_predates():
+    """A study recorded before the volume-correction default says so on its page.
+
+    The record of 2026-12-01 has node masses from the cells and beta = 30 but
+    no volume correction; its page warns about that (not about the
+    stabilisation), and the study line stays above the summary sections.
+    """
+    demo = load("speed_accuracy")
+    record = json.loads(
+        (ROOT / "docs/validation/comparison/speed_accuracy.json").read_text()
+    )
+    assert "volume_correction" not in record["npfem_defaults"]
+    text = demo.write_page(record, None)
+    assert "predate the volume correction" in text
+    assert "Measured before" not in text
+    assert text.index("Study: mode") < text.index("## Which method to pick")
+    record["npfem_defaults"] = dict(demo.NPFEM_DEFAULTS)
+    text = demo.write_page(record, None)
+    assert "predate" not in text
+    assert text.index("Study: mode") < text.index("## Which method to pick")
+    record["npfem_defaults"] = {"nodal_mass": "particle", "stabilisation": 0.0}
+    assert "Measured before" in demo.write_page(record, None)
