@@ -17,7 +17,7 @@ Usage (repository root)::
     python benchmarks/stabilisation_cost.py --cases plane_strain --steps 40 \\
         --out benchmarks/results/stabilisation_cost_2d_40.json
 
-Writes ``benchmarks/results/stabilisation_cost.json``.
+Writes ``benchmarks/results/stabilisation_cost.json`` (or ``--out``).
 """
 
 from __future__ import annotations
