@@ -243,3 +243,64 @@ def test_the_study_demo_writes_its_json_and_page(tmp_path):
     assert result["cost"]["ratio"] > 0
     text = out.with_suffix(".md").read_text()
     assert text.startswith(demo["PAGE_TITLE"]) and "mesh mass, beta=30" in text
+
+
+def _bench(name: str):
+    """Import a script of benchmarks/ (which import their siblings)."""
+    import importlib
+    import sys
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        return importlib.import_module(name)
+    finally:
+        sys.path.remove(str(ROOT / "benchmarks"))
+
+
+def test_fill_benchmark_couples_one_scalar_per_particle():
+    # benchmarks/stabilisation_fill.py's "one-scalar" program is the beta = 0
+    # program plus p_i = trace(sigma_i)/d and a unit graph Laplacian on p over
+    # the particle pairs the stabilised P couples.  Checked on a small program
+    # (identity compliance, no other rows) against the closed-form minimiser
+    # x = -(I + s T^T L T)^-1 q, and the pairs against the coupled blocks.
+    import clarabel
+    import scipy.sparse as sp
+
+    fill = _bench("stabilisation_fill")
+    n, ns, d = 4, 3, 2
+    rng = np.random.default_rng(1)
+    pairs = np.array([[0, 1], [1, 2], [0, 2], [2, 3]])
+    coupled = sp.lil_matrix((n * ns, n * ns))
+    for i, j in pairs:
+        coupled[i * ns : (i + 1) * ns, j * ns : (j + 1) * ns] = 1.0
+    for i in range(n):
+        coupled[i * ns : (i + 1) * ns, i * ns : (i + 1) * ns] = 2.0
+    edges = fill.node_edges(sp.triu(coupled.tocsc()), n, ns)
+    assert edges.tolist() == sorted(pairs.tolist())
+    q = rng.normal(size=n * ns)
+    prog0 = {
+        "P": sp.identity(n * ns, format="csc"),
+        "q": q,
+        "A": sp.csc_matrix((0, n * ns)),
+        "b": np.zeros(0),
+        "cones": [],
+        "options": None,
+    }
+    prog = fill.one_scalar(prog0, edges, n, ns, d)
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    sol = clarabel.DefaultSolver(
+        prog["P"], prog["q"], prog["A"], prog["b"], prog["cones"], settings
+    ).solve()
+    x = np.asarray(sol.x)
+    T = np.zeros((n, n * ns))
+    for i in range(n):
+        T[i, i * ns : i * ns + d] = 1.0 / d
+    L = np.zeros((n, n))
+    for i, j in pairs:
+        L[[i, j], [i, j]] += 1.0
+        L[i, j] -= 1.0
+        L[j, i] -= 1.0
+    exact = -np.linalg.solve(np.eye(n * ns) + T.T @ L @ T, q)  # scale = 1
+    np.testing.assert_allclose(x[: n * ns], exact, atol=1e-7)
+    np.testing.assert_allclose(x[n * ns :], T @ exact, atol=1e-7)
