@@ -37,7 +37,7 @@ package every configuration runs afresh).
 
 Usage (from the repository root)::
 
-    # the full study (109 runs; several CPU-hours: run it on a quiet machine)
+    # the full study (109 runs; 46 min on 2 idle vCPUs: run it on a quiet machine)
     python demos/speed_accuracy.py --workers 2
     # a moderate subset (37 runs) and the quick check of the tests
     python demos/speed_accuracy.py --subset --workers 2

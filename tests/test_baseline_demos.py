@@ -181,15 +181,19 @@ def test_comparison_demos_full(tmp_path):
 def test_speed_accuracy_page_says_which_defaults_it_predates():
     """A study recorded before the volume-correction default says so on its page.
 
-    The record of 2026-12-01 has node masses from the cells and beta = 30 but
-    no volume correction; its page warns about that (not about the
+    The committed record (rerun on 2026-12-03) has today's defaults: its page
+    has no warning.  The same record without ``volume_correction`` among its
+    defaults (as the record of 2026-12-01 was: node masses from the cells and
+    beta = 30 but no volume correction) warns about that (not about the
     stabilisation), and the study line stays above the summary sections.
     """
     demo = load("speed_accuracy")
     record = json.loads(
         (ROOT / "docs/validation/comparison/speed_accuracy.json").read_text()
     )
-    assert "volume_correction" not in record["npfem_defaults"]
+    assert record["npfem_defaults"] == dict(demo.NPFEM_DEFAULTS)
+    assert "predate" not in demo.write_page(record, None)
+    del record["npfem_defaults"]["volume_correction"]
     text = demo.write_page(record, None)
     assert "predate the volume correction" in text
     assert "Measured before" not in text
