@@ -106,11 +106,40 @@ def _count(pattern: str, text: str) -> int | None:
     return None if found is None else int(found)
 
 
-def save_program(P, q, A, b, cones, options) -> str:
+def capture_step(sim) -> dict:
+    """Step ``sim`` once; return the scaled program Clarabel was given.
+
+    Keys ``P, q, A, b, cones, options`` (Clarabel's arguments), and ``ns``
+    (stress variables per particle) and ``sigma`` (their slice in the layout)
+    from the step's :class:`~skfem_npfem.program.Program`.
+    """
+    captured: dict = {}
+    solve, build = conic.solve_clarabel, conic.build_program
+
+    def spy(P, q, A, b, cones, options, dim, *rest, **kw):
+        captured.update(P=P, q=q, A=A, b=b, cones=cones, options=options)
+        return solve(P, q, A, b, cones, options, dim, *rest, **kw)
+
+    def spy_build(*args, **kw):
+        prog, program = build(*args, **kw)
+        captured.update(ns=int(prog.ns), sigma=prog.slice("sigma"))
+        return prog, program
+
+    conic.solve_clarabel, conic.build_program = spy, spy_build
+    try:
+        sim.run(steps=1)
+    finally:
+        conic.solve_clarabel, conic.build_program = solve, build
+    return captured
+
+
+def save_program(program: dict) -> str:
     """Pickle a captured program for the child processes; return its path."""
-    desc = [(type(c).__name__, c.dim) for c in cones]
+    desc = [(type(c).__name__, c.dim) for c in program["cones"]]
+    keys = ("P", "q", "A", "b")
+    data = (*(program[k] for k in keys), desc, program["options"])
     with tempfile.NamedTemporaryFile(suffix=".pkl", delete=False) as f:
-        pickle.dump((P, q, A, b, desc, options), f)
+        pickle.dump(data, f)
         return f.name
 
 
@@ -165,21 +194,10 @@ def run(args) -> dict:
     values = get_scene("column-collapse").resolve(over)
     sim = build_geometry(values).simulation
     sim.run(steps=args.skip)
-    captured = {}
-    original = conic.solve_clarabel
-
-    def spy(P, q, A, b, cones, options, dim, *rest, **kw):
-        captured.update(P=P, q=q, A=A, b=b, cones=cones, options=options)
-        return original(P, q, A, b, cones, options, dim, *rest, **kw)
-
-    conic.solve_clarabel = spy
-    try:
-        with harness.Meter() as m:
-            sim.run(steps=1)
-    finally:
-        conic.solve_clarabel = original
+    with harness.Meter() as m:
+        captured = capture_step(sim)
     rec = sim.records[-1]
-    path = save_program(**captured)
+    path = save_program(captured)
     try:
         split = pardiso_split(path)
         variants = compare_variants(path, args.variants, args.rounds)

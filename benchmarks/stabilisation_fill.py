@@ -45,9 +45,8 @@ import _harness as harness
 import clarabel
 import numpy as np
 import scipy.sparse as sp
-from cylinder_profile import pardiso_split, save_program
+from cylinder_profile import capture_step, pardiso_split, save_program
 
-import skfem_npfem.conic as conic
 from skfem_npfem.io import write_json
 from skfem_npfem.scenes import get_scene
 
@@ -60,32 +59,6 @@ def case_params(case: str, divisions: float) -> dict[str, Any]:
     if case == "plane_strain":
         return {"spacing": 0.2 / 48}
     return {"geometry": "quarter-cylinder", "spacing": R0 / divisions}
-
-
-def capture_step(sim) -> dict[str, Any]:
-    """Step ``sim`` once; return the scaled program Clarabel was given.
-
-    ``ns`` (stress variables per particle) and ``sigma`` (their slice, first in
-    the layout) come from the step's :class:`~skfem_npfem.program.Program`.
-    """
-    captured: dict[str, Any] = {}
-    solve, build = conic.solve_clarabel, conic.build_program
-
-    def spy(P, q, A, b, cones, options, dim, *rest, **kw):
-        captured.update(P=P, q=q, A=A, b=b, cones=cones, options=options)
-        return solve(P, q, A, b, cones, options, dim, *rest, **kw)
-
-    def spy_build(*args, **kw):
-        prog, program = build(*args, **kw)
-        captured.update(ns=int(prog.ns), sigma=prog.slice("sigma"))
-        return prog, program
-
-    conic.solve_clarabel, conic.build_program = spy, spy_build
-    try:
-        sim.run(steps=1)
-    finally:
-        conic.solve_clarabel, conic.build_program = solve, build
-    return captured
 
 
 def node_edges(P30: sp.spmatrix, n: int, ns: int) -> np.ndarray:
@@ -102,17 +75,12 @@ def one_scalar(prog: dict[str, Any], edges: np.ndarray, n: int, ns: int, d: int)
     nx = P0.shape[0]
     diag = P0.diagonal()[: n * ns]
     scale = float(np.median(diag[diag > 0]))
-    w = np.ones(len(edges))
-    L = sp.coo_matrix(
-        (
-            np.concatenate([w, w, -w, -w]),
-            (
-                np.concatenate([edges[:, 0], edges[:, 1], edges[:, 0], edges[:, 1]]),
-                np.concatenate([edges[:, 0], edges[:, 1], edges[:, 1], edges[:, 0]]),
-            ),
-        ),
-        shape=(n, n),
-    ).tocsc()
+    m = len(edges)
+    incidence = sp.csc_matrix(
+        (np.tile([1.0, -1.0], m), (np.repeat(np.arange(m), 2), edges.ravel())),
+        shape=(m, n),
+    )
+    L = incidence.T @ incidence  # graph Laplacian: sum over edges of (p_i - p_j)^2
     P = sp.triu(sp.block_diag([P0, scale * L]), format="csc")
     rows = np.repeat(np.arange(n), d)
     cols = (np.arange(n)[:, None] * ns + np.arange(d)[None, :]).ravel()
@@ -132,8 +100,7 @@ def one_scalar(prog: dict[str, Any], edges: np.ndarray, n: int, ns: int, d: int)
 
 def measure(prog: dict[str, Any]) -> dict[str, Any]:
     """Pardiso's statistics of one captured program (in a child process)."""
-    keys = ("P", "q", "A", "b", "cones", "options")
-    path = save_program(**{k: prog[k] for k in keys})
+    path = save_program(prog)
     try:
         rec = pardiso_split(path)
     finally:
