@@ -3,7 +3,7 @@
 ``step_time.py``, ``suite.py``, ``presets.py`` and ``dt_sweep.py`` measure in
 the same way: they wait for a quiet machine, time a block of work (wall,
 process CPU, cores used by other processes), fingerprint the library sources
-(:mod:`skfem_npfem.cases.provenance`), run every case in a fresh interpreter
+(:mod:`skfem_npfem.io.provenance`), run every case in a fresh interpreter
 that prints its record as one tagged JSON line, and write a JSON report with a
 Markdown table next to it.  This module holds the one copy of that code, so
 that the scripts cannot drift apart.  The scripts import it as a sibling
@@ -26,7 +26,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import NamedTuple
 
-from skfem_npfem.cases.provenance import git, source_sha1
+from skfem_npfem.io.provenance import git, source_sha1
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -220,7 +220,7 @@ def machine_info() -> dict:
     except Exception:
         info["mkl"] = None
     try:
-        from skfem_npfem.backends import mkl_available
+        from skfem_npfem.step.backends import mkl_available
 
         info["mkl_available"] = bool(mkl_available())
     except Exception:

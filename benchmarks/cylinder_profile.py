@@ -44,7 +44,7 @@ from statistics import median
 
 import _harness as harness
 
-import skfem_npfem.conic as conic
+import skfem_npfem.step.conic as conic
 from skfem_npfem.scenes import get_scene
 from skfem_npfem.scenes.collapse_runs import build_geometry
 from skfem_npfem.scenes.cylinder import SEED
@@ -53,8 +53,8 @@ CHILD = r"""
 import dataclasses, hashlib, json, pickle, sys, time
 import clarabel
 import numpy as np
-from skfem_npfem.backends import pardiso_threads
-from skfem_npfem.solver import SolverOptions
+from skfem_npfem.step.backends import pardiso_threads
+from skfem_npfem.step.solver import SolverOptions
 P, q, A, b, cones, opts = pickle.load(open(sys.argv[1], "rb"))
 variant = json.loads(sys.argv[2])
 if "reproducible" in variant:
@@ -78,7 +78,7 @@ print("@@", sol.status, sol.iterations, t1 - t0, t2 - t1, digest, flush=True)
 
 #: Pardiso options measured against the library's settings (``--variants``):
 #: name -> changes (0-based ``iparm`` indices; ``reproducible`` of
-#: :class:`~skfem_npfem.solver.SolverOptions`).
+#: :class:`~skfem_npfem.step.solver.SolverOptions`).
 #: ``label`` names it in the table (the child ignores it).
 VARIANTS: dict[str, dict] = {
     "two-level": {"iparm": {23: 1}, "label": "two-level factorisation (iparm[23] = 1)"},
@@ -111,7 +111,7 @@ def capture_step(sim) -> dict:
 
     Keys ``P, q, A, b, cones, options`` (Clarabel's arguments), and ``ns``
     (stress variables per particle) and ``sigma`` (their slice in the layout)
-    from the step's :class:`~skfem_npfem.program.Program`.
+    from the step's :class:`~skfem_npfem.step.program.Program`.
     """
     captured: dict = {}
     solve, build = conic.solve_clarabel, conic.build_program

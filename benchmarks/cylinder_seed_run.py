@@ -26,8 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
+from skfem_npfem.run.simulation import Simulation, voigt_to_tensor
 from skfem_npfem.scenes.cylinder import SEED, cylinder_column, radial_front
-from skfem_npfem.simulation import Simulation, voigt_to_tensor
 
 HERE = Path(__file__).resolve().parent
 

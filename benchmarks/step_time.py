@@ -101,8 +101,8 @@ def build_case(name: str, linear_solver: str, threads: int, time_limit: float):
 
     from skfem_npfem import FixedMesh, Model, SolverOptions
     from skfem_npfem.materials import DruckerPrager
+    from skfem_npfem.mesh.smoothing import nodal_integration
     from skfem_npfem.particles import Particles
-    from skfem_npfem.smoothing import nodal_integration
 
     c = CASES[name]
     dim, n = c["dim"], c["n"]

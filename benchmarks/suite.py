@@ -163,8 +163,8 @@ def build_block3d(n: tuple[int, int, int], backend: str, preset: str, threads: i
 
     from skfem_npfem import FixedMesh, Model, Simulation
     from skfem_npfem.materials import DruckerPrager
+    from skfem_npfem.mesh.smoothing import nodal_integration
     from skfem_npfem.particles import Particles
-    from skfem_npfem.smoothing import nodal_integration
 
     nx, ny, nz = n
     W, D, H = st.WIDTH, st.DEPTH, st.HEIGHT
@@ -220,9 +220,9 @@ def build_cylinder3d(nr: int, backend: str, preset: str, threads: int):
     from skfem_npfem import Model, Simulation
     from skfem_npfem.boundary import RigidWall, floor
     from skfem_npfem.materials import DruckerPrager
+    from skfem_npfem.mesh.smoothing import nodal_integration
+    from skfem_npfem.mesh.sources import AlphaShapeMesher
     from skfem_npfem.particles import Particles
-    from skfem_npfem.pfem import AlphaShapeMesher
-    from skfem_npfem.smoothing import nodal_integration
 
     x, h = cylinder_lattice(nr)
     height = CYL_ASPECT * CYL_RADIUS

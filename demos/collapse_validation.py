@@ -160,7 +160,7 @@ def library_fingerprint() -> dict:
     Other people edit the library while long sweeps run; every case stores the
     hash at its start and end so that a sweep run across a code change shows up.
     """
-    from skfem_npfem.cases.provenance import git, source_sha1
+    from skfem_npfem.io.provenance import git, source_sha1
 
     # File names relative to the package folder (not to the repository as in
     # the benchmarks), so that the hashes stored with earlier cases match.

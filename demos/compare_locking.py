@@ -54,7 +54,7 @@ from skfem_npfem import Contacts, StepData, solve_step
 from skfem_npfem.baseline import gauss_mesh
 from skfem_npfem.baseline.reporting import save_png, write_result
 from skfem_npfem.materials import LinearElastic
-from skfem_npfem.smoothing import nodal_integration
+from skfem_npfem.mesh.smoothing import nodal_integration
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "docs" / "validation" / "comparison"

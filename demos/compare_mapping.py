@@ -51,12 +51,12 @@ from skfem_npfem.baseline import FemRemap
 from skfem_npfem.baseline.fem_nodes import gauss_points
 from skfem_npfem.baseline.reporting import save_png, write_result
 from skfem_npfem.baseline.transfer import recover_nodal
-from skfem_npfem.kinematics import tensor_to_voigt, voigt_to_tensor
 from skfem_npfem.materials import LinearElastic
-from skfem_npfem.model import Model
-from skfem_npfem.pfem import AlphaShapeMesher
+from skfem_npfem.mesh.sources import AlphaShapeMesher
 from skfem_npfem.scenes import get_scene
-from skfem_npfem.step import advance
+from skfem_npfem.step.kinematics import tensor_to_voigt, voigt_to_tensor
+from skfem_npfem.step.model import Model
+from skfem_npfem.step.stages import advance
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "docs" / "validation" / "comparison"

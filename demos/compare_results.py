@@ -41,7 +41,7 @@ from pathlib import Path
 
 from skfem_npfem.baseline.reporting import markdown_table, save_png, write_result
 from skfem_npfem.baseline.study import run_cases, study_arguments, study_folders
-from skfem_npfem.scenes.strip_footing import n_c
+from skfem_npfem.laws import prandtl_nc as n_c
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "docs" / "validation" / "comparison"

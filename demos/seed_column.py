@@ -326,7 +326,7 @@ def render_panels(
 ) -> Path | None:
     """sigma_v at t_bar = 0, 1, 2, 3 for every finished case (one PNG)."""
     try:
-        from skfem_npfem.render import check_rendering, import_pyvista
+        from skfem_npfem.viz.render import check_rendering, import_pyvista
 
         check_rendering()
         pv = import_pyvista()

@@ -6,26 +6,29 @@ Quick start::
     summary = npfem.run_scene("elastic-column", {"spacing": 0.25})
     print(summary["metrics"]["sigma_v_rel_l2"])
 
-One step's data flow, one module per stage: particles (:mod:`.particles`) ->
-mesh source (:mod:`.pfem`, :mod:`.remesh`) -> smoothing cells
-(:mod:`.smoothing`) -> cone program (:mod:`.program`, :mod:`.families`,
-:mod:`.conic`, :mod:`.solver`) -> particle update (:mod:`.step`,
-:mod:`.kinematics`, :mod:`.boundary`); the time loop is :mod:`.simulation`,
-files are :mod:`.io`'s.  Every public name is available flat from the package.
+The subpackages follow one step's data flow: particles (:mod:`.particles`, with
+:mod:`.materials` and the walls of :mod:`.boundary`) -> their mesh and smoothing
+cells (:mod:`.mesh`) -> the cone program, solved and read back (:mod:`.step`) ->
+the time loop with output and checkpoints (:mod:`.run`, files in :mod:`.io`).
+Ready problems are :mod:`.scenes`; :mod:`.baseline` holds the methods N-PFEM is
+compared with, :mod:`.sweeps` runs parameter studies on Dask, :mod:`.viz` draws,
+:mod:`.cli` is the command line.  Every public name is available flat from the
+package.
 """
 
 from __future__ import annotations
 
+from . import _compat
+
 __version__ = "0.1.0"
 
 # High level: ready scenes and the time loop.
+from .run.simulation import AtRest, Simulation
 from .scenes import SCENES, get_scene, run_scene
-from .simulation import AtRest, Simulation
 
 # isort: split
 # Building blocks: particles, meshes, materials, smoothing, boundaries, the step.
 from .boundary import Contacts, RigidWall, floor, wall_x
-from .conic import StepSolution, solve_step
 from .materials import (
     DruckerPrager,
     LinearElastic,
@@ -35,14 +38,15 @@ from .materials import (
     VonMises,
     compliance_matrix,
 )
-from .model import Model
+from .mesh.delaunay import Triangulation, alpha_shape
+from .mesh.smoothing import NodalIntegration, nodal_integration, p1_gradients
+from .mesh.sources import AlphaShapeMesher, FixedMesh, main_body
 from .particles import Particles
-from .pfem import AlphaShapeMesher, FixedMesh, main_body
-from .program import StepData
-from .remesh import Triangulation, alpha_shape
-from .smoothing import NodalIntegration, nodal_integration, p1_gradients
-from .solver import SolverOptions
-from .step import StepRecord, StepResult, advance
+from .step.conic import StepSolution, solve_step
+from .step.model import Model
+from .step.program import StepData
+from .step.solver import SolverOptions
+from .step.stages import StepRecord, StepResult, advance
 from .sweeps import sweep
 
 # isort: split
@@ -99,3 +103,31 @@ __all__ += [
     "RunInterrupted",
     "SolverError",
 ]
+
+
+# The flat modules of earlier releases, now in subpackages: ``import
+# skfem_npfem.conic`` and the like keep working (with a DeprecationWarning)
+# for one release.
+_MOVED = {
+    "pfem": "mesh.sources",
+    "remesh": "mesh.delaunay",
+    "surface": "mesh.surface",
+    "smoothing": "mesh.smoothing",
+    "axisymmetric": "mesh.axisymmetric",
+    "model": "step.model",
+    "program": "step.program",
+    "families": "step.families",
+    "stabilisation": "step.stabilisation",
+    "volume": "step.volume",
+    "conic": "step.conic",
+    "solver": "step.solver",
+    "backends": "step.backends",
+    "kinematics": "step.kinematics",
+    "simulation": "run.simulation",
+    "runcontrol": "run.control",
+    "plot": "viz.plot",
+    "figures": "viz.figures",
+    "render": "viz.render",
+    "scenery": "viz.scenery",
+}
+_compat.install_aliases(__name__, _MOVED)

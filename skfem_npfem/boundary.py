@@ -162,7 +162,8 @@ class Contacts:
     the equilibrium rows read ``G s + r - N lambda_n - T lambda_t = f~`` with
     ``lambda_n >= 0``; the normal dual gives ``gap + n . du >= 0`` and is zero
     where ``lambda_n > 0``.  Tangential forces ``lambda_t`` act along
-    :func:`~skfem_npfem.families.tangents` of the normal and oppose the slip ``t . du``.
+    :func:`~skfem_npfem.step.families.tangents` of the normal and oppose the
+    slip ``t . du``.
     """
 
     node: np.ndarray

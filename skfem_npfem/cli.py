@@ -28,7 +28,7 @@ from collections.abc import Sequence
 from . import __version__
 from .errors import NpfemError, ParameterError, RunInterrupted
 from .io import dumps
-from .runcontrol import end_line
+from .run.control import end_line
 from .sweeps.cli import add_sweep_commands
 
 __all__ = ["main"]
@@ -221,7 +221,7 @@ def interrupted_message(err: KeyboardInterrupt) -> str:
 def cmd_plot(args: argparse.Namespace) -> int:
     """Render snapshots of a result folder."""
     try:
-        from .plot import plot_results
+        from .viz.plot import plot_results
     except ImportError as err:  # pragma: no cover - depends on the extra
         raise NpfemError(
             f"plotting needs the viz extra (pip install 'skfem-npfem[viz]'): {err}"

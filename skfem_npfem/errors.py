@@ -70,7 +70,7 @@ class CheckpointError(NpfemError, ValueError):
 class RunInterrupted(KeyboardInterrupt):
     """A run was stopped by SIGINT (Ctrl-C) or SIGTERM between two steps.
 
-    Raised by :meth:`~skfem_npfem.simulation.Simulation.run` after the step in
+    Raised by :meth:`~skfem_npfem.run.simulation.Simulation.run` after the step in
     progress finished (or was abandoned at a second signal) and a checkpoint
     was written.  It is a :class:`KeyboardInterrupt`, so code that stops on
     Ctrl-C keeps doing so.

@@ -4,7 +4,7 @@ Every yield criterion is written as one second-order cone per node,
 
     k_i - a_i^T sigma_i >= || M sigma_i ||,
 
-in the full Voigt order of :mod:`skfem_npfem.smoothing` (2D: ``xx, yy, zz, xy``;
+in the full Voigt order of :mod:`skfem_npfem.mesh.smoothing` (2D: ``xx, yy, zz, xy``;
 3D: ``xx, yy, zz, xy, yz, zx``), tension positive, Pa.  Angles are in degrees.
 
 Available materials

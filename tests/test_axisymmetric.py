@@ -33,11 +33,6 @@ from skfem_npfem import (
     advance,
     solve_step,
 )
-from skfem_npfem.axisymmetric import (
-    AxisymmetricMohrCoulomb,
-    axisymmetric_integration,
-    mohr_coulomb_cones,
-)
 from skfem_npfem.errors import ParameterError, SolverError
 from skfem_npfem.materials import (
     DruckerPrager,
@@ -45,6 +40,11 @@ from skfem_npfem.materials import (
     MohrCoulomb,
     VonMises,
     compliance_matrix,
+)
+from skfem_npfem.mesh.axisymmetric import (
+    AxisymmetricMohrCoulomb,
+    axisymmetric_integration,
+    mohr_coulomb_cones,
 )
 from skfem_npfem.particles import Particles
 

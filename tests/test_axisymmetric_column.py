@@ -20,9 +20,10 @@ from scipy.interpolate import LinearNDInterpolator
 from skfem import MeshTet, MeshTri
 
 from skfem_npfem import FixedMesh, Model, Simulation, advance
-from skfem_npfem.axisymmetric import axisymmetric_integration
 from skfem_npfem.errors import ParameterError
 from skfem_npfem.materials import LinearElastic
+from skfem_npfem.mesh.axisymmetric import axisymmetric_integration
+from skfem_npfem.mesh.smoothing import nodal_integration
 from skfem_npfem.particles import Particles
 from skfem_npfem.scenes.cylinder import (
     SEED,
@@ -31,7 +32,6 @@ from skfem_npfem.scenes.cylinder import (
     quarter_cylinder_lattice,
     radial_front,
 )
-from skfem_npfem.smoothing import nodal_integration
 
 R, H, RHO, G, E, NU = 1.0, 2.0, 2000.0, 9.81, 1e7, 0.3
 

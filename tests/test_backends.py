@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import skfem_npfem as npfem
-from skfem_npfem import backends
+from skfem_npfem.step import backends, solver
 
 
 def _has_mkl_wheel() -> bool:
@@ -55,7 +55,7 @@ def test_mkl_agrees_with_qdldl():
 
 
 def test_mkl_requested_but_missing_is_a_clear_error(monkeypatch):
-    monkeypatch.setattr(npfem.solver, "mkl_available", lambda: False)
+    monkeypatch.setattr(solver, "mkl_available", lambda: False)
     with pytest.raises(npfem.ParameterError, match=r"linear_solver.*mkl"):
         npfem.SolverOptions(linear_solver="mkl").resolved_linear_solver(10, 2)
 
@@ -78,7 +78,7 @@ def test_private_cache_folder_works(tmp_path):
     runtime = sorted(folder.glob("libmkl_rt.so.*"))[-1]
     env = dict(os.environ, XDG_CACHE_HOME=str(tmp_path))
     code = (
-        "from pathlib import Path; from skfem_npfem import backends as b;"
+        "from pathlib import Path; from skfem_npfem.step import backends as b;"
         f"print(b._private_copy(Path({str(folder)!r}), Path({str(runtime)!r})))"
     )
     out = subprocess.run(
@@ -120,9 +120,9 @@ import sys
 import numpy as np
 from skfem import MeshTet
 import skfem_npfem as npfem
-from skfem_npfem import backends
+from skfem_npfem.step import backends
 from skfem_npfem import FixedMesh, Model, Simulation
-from skfem_npfem.smoothing import nodal_integration
+from skfem_npfem.mesh.smoothing import nodal_integration
 
 W, D, H, rho, g = 2.0, 1.0, 1.0, 1800.0, 9.81
 mesh = MeshTet.init_tensor(
@@ -170,7 +170,8 @@ def test_mkl_thread_count_is_honoured_in_3d():
         [
             sys.executable,
             "-c",
-            "from skfem_npfem import backends; print(backends.pardiso_thread_count(0))",
+            "from skfem_npfem.step import backends; "
+            "print(backends.pardiso_thread_count(0))",
         ],
         capture_output=True,
         text=True,

@@ -5,12 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skfem_npfem.baseline import SPFEM, FemRemap, make_method, transfer_values
+from skfem_npfem.baseline import SPFEM, FemRemap, transfer_values
 from skfem_npfem.errors import ParameterError
 from skfem_npfem.materials import LinearElastic
-from skfem_npfem.model import Model
+from skfem_npfem.mesh.sources import AlphaShapeMesher
 from skfem_npfem.particles import Particles
-from skfem_npfem.pfem import AlphaShapeMesher
+from skfem_npfem.scenes.methods import make_method
+from skfem_npfem.step.model import Model
 
 
 @pytest.mark.parametrize(

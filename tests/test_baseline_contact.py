@@ -19,10 +19,10 @@ from skfem import MeshTri
 from skfem_npfem.baseline import SPFEM, FemRemap
 from skfem_npfem.boundary import floor
 from skfem_npfem.materials import LinearElastic
-from skfem_npfem.model import Model
+from skfem_npfem.mesh.smoothing import nodal_integration
+from skfem_npfem.mesh.sources import AlphaShapeMesher
 from skfem_npfem.particles import Particles
-from skfem_npfem.pfem import AlphaShapeMesher
-from skfem_npfem.smoothing import nodal_integration
+from skfem_npfem.step.model import Model
 
 E, NU, RHO, G = 1.0e7, 0.3, 2000.0, 9.81
 MU = math.tan(math.radians(30.0))

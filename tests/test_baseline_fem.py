@@ -26,11 +26,11 @@ import pytest
 from skfem_npfem.baseline import FemRemap
 from skfem_npfem.boundary import floor
 from skfem_npfem.materials import LinearElastic, MohrCoulomb
-from skfem_npfem.model import Model
+from skfem_npfem.mesh.smoothing import nodal_integration
+from skfem_npfem.mesh.sources import AlphaShapeMesher
 from skfem_npfem.particles import Particles
-from skfem_npfem.pfem import AlphaShapeMesher
 from skfem_npfem.scenes import get_scene
-from skfem_npfem.smoothing import nodal_integration
+from skfem_npfem.step.model import Model
 
 H, RHO, G, E, NU = 10.0, 2000.0, 9.81, 1.0e7, 0.3
 

@@ -20,7 +20,7 @@ from skfem import MeshTet, MeshTri
 from skfem_npfem import Contacts, SolverOptions, StepData, solve_step
 from skfem_npfem.baseline.returnmap import elastic_trial, project_invariants, return_map
 from skfem_npfem.materials import DruckerPrager, MohrCoulomb, Tresca, VonMises
-from skfem_npfem.smoothing import nodal_integration
+from skfem_npfem.mesh.smoothing import nodal_integration
 
 E, NU, C = 1.0e7, 0.3, 1.0e4
 TOL = 5e-5 * C

@@ -27,14 +27,14 @@ from skfem import MeshTet, MeshTri
 from skfem_npfem.baseline import SPFEM, stable_time_step
 from skfem_npfem.errors import ParameterError
 from skfem_npfem.materials import LinearElastic, Tresca, compliance_matrix
-from skfem_npfem.model import Model
+from skfem_npfem.mesh.delaunay import alpha_shape
+from skfem_npfem.mesh.smoothing import nodal_integration
+from skfem_npfem.mesh.sources import FixedMesh
 from skfem_npfem.particles import Particles
-from skfem_npfem.pfem import FixedMesh
-from skfem_npfem.remesh import alpha_shape
+from skfem_npfem.run.simulation import Simulation
 from skfem_npfem.scenes import get_scene
-from skfem_npfem.simulation import Simulation
-from skfem_npfem.smoothing import nodal_integration
-from skfem_npfem.step import advance
+from skfem_npfem.step.model import Model
+from skfem_npfem.step.stages import advance
 
 E, NU, RHO, G = 1.0e7, 0.3, 2000.0, 9.81
 

@@ -29,7 +29,7 @@ from skfem_npfem import (
     solve_step,
 )
 from skfem_npfem.materials import compliance_matrix
-from skfem_npfem.smoothing import nodal_integration
+from skfem_npfem.mesh.smoothing import nodal_integration
 
 E, NU, RHO, GRAV = 1.0e7, 0.3, 2000.0, 9.81
 C_COH = 1.0e4

@@ -42,7 +42,7 @@ from skfem_npfem import (
     nodal_integration,
     solve_step,
 )
-from skfem_npfem.families import tangents
+from skfem_npfem.step.families import tangents
 
 G = 9.81
 RHO = 2000.0

@@ -1,7 +1,7 @@
 """Numerical stability at the extremes (issue 4): benchmarks.md T1, T5-T9.
 
 The cases (parameters, expected physical answer or documented error, the
-check) live in :mod:`skfem_npfem.cases.extremes`, shared with
+check) live in :mod:`cases.extremes`, shared with
 ``demos/extremes_matrix.py`` (which writes docs/extremes.md); this module
 asserts each of them and that the interior-point iterations stay roughly
 constant across the matrix.  The column-collapse part of the matrix is in
@@ -11,8 +11,7 @@ tests/test_extremes_collapse.py.
 from __future__ import annotations
 
 import pytest
-
-from skfem_npfem.cases.extremes import DEFAULT, SLOW, result
+from cases.extremes import DEFAULT, SLOW, result
 
 
 @pytest.mark.parametrize("case_", DEFAULT, ids=[c.name for c in DEFAULT])

@@ -5,7 +5,7 @@ import pytest
 
 import skfem_npfem as npfem
 import skfem_npfem.io as npio
-import skfem_npfem.step as step_module
+import skfem_npfem.step.stages as step_module
 from skfem_npfem.cli import main
 from skfem_npfem.errors import SolverError
 

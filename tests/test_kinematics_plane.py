@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from skfem_npfem.kinematics import rotate_stress
+from skfem_npfem.step.kinematics import rotate_stress
 
 
 def test_plane_rotation_equals_the_3d_cayley_rotation():

@@ -7,12 +7,12 @@ import pytest
 
 from skfem_npfem.boundary import floor, project_to_walls
 from skfem_npfem.materials import LinearElastic
-from skfem_npfem.model import Model
+from skfem_npfem.mesh.sources import AlphaShapeMesher, main_body
 from skfem_npfem.particles import Particles
-from skfem_npfem.pfem import AlphaShapeMesher, main_body
+from skfem_npfem.run.simulation import AtRest, Simulation
 from skfem_npfem.scenes.column_collapse import initial_particles, lattice
-from skfem_npfem.simulation import AtRest, Simulation
-from skfem_npfem.step import StepRecord, advance
+from skfem_npfem.step.model import Model
+from skfem_npfem.step.stages import StepRecord, advance
 
 H = 0.05  # lattice spacing of the small blocks, m
 
@@ -256,7 +256,7 @@ def test_a_run_keeps_scalars_only_per_step():
     import tracemalloc
 
     from skfem_npfem.scenes import get_scene
-    from skfem_npfem.step import StepResult
+    from skfem_npfem.step.stages import StepResult
 
     scene = get_scene("column-collapse")
     values = scene.resolve({"spacing": 0.2 / 14, "linear_solver": "qdldl"})

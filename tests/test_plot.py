@@ -1,4 +1,4 @@
-"""Tests for skfem_npfem.plot (off-screen PNG snapshots and animations)."""
+"""Tests for skfem_npfem.viz.plot (off-screen PNG snapshots and animations)."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ ImageSequence = pytest.importorskip("PIL.ImageSequence")
 
 from skfem_npfem.errors import CheckpointError, NpfemError, ParameterError  # noqa: E402
 from skfem_npfem.io import ResultWriter  # noqa: E402
-from skfem_npfem.plot import (  # noqa: E402
+from skfem_npfem.viz.plot import (  # noqa: E402
     FIELDS,
     _frame_indices,
     _style,
@@ -331,7 +331,7 @@ def test_no_opengl_gives_clear_error(tmp_path):
         f"""
         import sys
         from skfem_npfem.errors import NpfemError
-        from skfem_npfem.plot import plot_results
+        from skfem_npfem.viz.plot import plot_results
         try:
             plot_results({str(result3d)!r}, out_dir={str(tmp_path)!r},
                          animation="none", times=[0])

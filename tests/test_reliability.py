@@ -33,7 +33,7 @@ from skfem_npfem import (
     run_scene,
 )
 from skfem_npfem.cli import main
-from skfem_npfem.solver import hint
+from skfem_npfem.step.solver import hint
 
 COARSE = [
     "spacing=0.03333333333333333",
@@ -346,7 +346,7 @@ def test_8_static_failure_advice_has_no_time_step(monkeypatch):
         assert "smaller load steps" in hint(status, dynamic=False)
         assert "reduce dt" in hint(status, dynamic=True)
     # The footing (static) whose solver fails at step 3: the whole message.
-    import skfem_npfem.conic as conic
+    import skfem_npfem.step.conic as conic
 
     real = conic.solve_clarabel
     calls = []
@@ -441,7 +441,7 @@ def test_9_tangled_fixed_mesh_is_refused_before_solving(monkeypatch):
     mat = LinearElastic(1e7, 0.3, 2000.0)
     parts = Particles.create(x, np.ones(x.shape[0]), fixed=np.zeros_like(x, bool))
     model = Model(dim=2, materials=[mat], mode="static")
-    import skfem_npfem.step as step_module
+    import skfem_npfem.step.stages as step_module
 
     def never(*args, **kwargs):  # pragma: no cover - must not be reached
         raise AssertionError("solved a tangled mesh")

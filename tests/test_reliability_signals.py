@@ -27,7 +27,7 @@ import pytest
 import skfem_npfem as npfem
 import skfem_npfem.io as npio
 from skfem_npfem import RunInterrupted
-from skfem_npfem.runcontrol import Progress
+from skfem_npfem.run.control import Progress
 
 pytestmark = pytest.mark.skipif(
     sys.platform == "win32", reason="POSIX signals and pseudo-terminals"

@@ -19,8 +19,8 @@ from scipy.spatial import ConvexHull, Delaunay
 from skfem import MeshTet, MeshTri
 
 from skfem_npfem.errors import NpfemError, ParameterError
-from skfem_npfem.remesh import Triangulation, _simplex_geometry, alpha_shape
-from skfem_npfem.surface import boundary_normals, free_surface
+from skfem_npfem.mesh.delaunay import Triangulation, _simplex_geometry, alpha_shape
+from skfem_npfem.mesh.surface import boundary_normals, free_surface
 
 # --------------------------------------------------------------------------- #
 # helpers (independent of the implementation)

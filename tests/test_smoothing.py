@@ -21,7 +21,7 @@ from skfem import (
 )
 
 from skfem_npfem.materials import compliance_matrix
-from skfem_npfem.smoothing import nodal_integration, p1_gradients
+from skfem_npfem.mesh.smoothing import nodal_integration, p1_gradients
 
 # Voigt rows of the full vector: (row, displacement component k, direction j),
 # engineering shear, written out independently of the library's table.

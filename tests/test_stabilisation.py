@@ -25,9 +25,9 @@ from skfem_npfem import (
     run_scene,
     solve_step,
 )
-from skfem_npfem.conic import build_program
-from skfem_npfem.smoothing import nodal_integration, p1_gradients
-from skfem_npfem.stabilisation import divergence_matrix, element_residual
+from skfem_npfem.mesh.smoothing import nodal_integration, p1_gradients
+from skfem_npfem.step.conic import build_program
+from skfem_npfem.step.stabilisation import divergence_matrix, element_residual
 
 ROOT = Path(__file__).resolve().parents[1]
 E, NU, RHO, GRAV = 1.0e7, 0.3, 2000.0, 9.81

@@ -20,9 +20,9 @@ from test_axisymmetric import jittered_section
 from test_stabilisation import RHO, assert_exact_geostatic_step
 
 from skfem_npfem import Contacts, LinearElastic, StepData, solve_step
-from skfem_npfem.axisymmetric import axisymmetric_integration
-from skfem_npfem.conic import build_program
-from skfem_npfem.stabilisation import element_residual, hoop_matrix
+from skfem_npfem.mesh.axisymmetric import axisymmetric_integration
+from skfem_npfem.step.conic import build_program
+from skfem_npfem.step.stabilisation import element_residual, hoop_matrix
 
 E, NU, GRAV = 1.0e7, 0.3, 9.81
 

@@ -23,7 +23,7 @@ from skfem_npfem import (
     nodal_integration,
     solve_step,
 )
-from skfem_npfem.program import Program
+from skfem_npfem.step.program import Program
 
 
 def uniform_step(mesh, mat, sigma_n, du):

@@ -22,11 +22,11 @@ import scipy.sparse as sp
 from skfem import MeshTri
 
 from skfem_npfem.boundary import Contacts
-from skfem_npfem.conic import build_program, cell_size, solve_step
 from skfem_npfem.materials import MohrCoulomb
-from skfem_npfem.program import StepData
-from skfem_npfem.smoothing import NodalIntegration, nodal_integration
-from skfem_npfem.solver import SolverOptions
+from skfem_npfem.mesh.smoothing import NodalIntegration, nodal_integration
+from skfem_npfem.step.conic import build_program, cell_size, solve_step
+from skfem_npfem.step.program import StepData
+from skfem_npfem.step.solver import SolverOptions
 
 
 @dataclass

@@ -37,9 +37,9 @@ distributed = pytest.importorskip(
 pd = pytest.importorskip("pandas", reason="needs the sweep extra")
 
 from skfem_npfem import run_scene, sweep  # noqa: E402
-from skfem_npfem.backends import available_cores  # noqa: E402
 from skfem_npfem.cli import main  # noqa: E402
 from skfem_npfem.errors import NpfemError, ParameterError  # noqa: E402
+from skfem_npfem.step.backends import available_cores  # noqa: E402
 from skfem_npfem.sweeps import read_table, run_name, run_tasks  # noqa: E402
 
 SCENE = "elastic-column"

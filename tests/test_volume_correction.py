@@ -21,9 +21,9 @@ from skfem_npfem import FixedMesh, Model, Particles, Simulation
 from skfem_npfem.errors import ParameterError
 from skfem_npfem.io import latest_checkpoint
 from skfem_npfem.materials import LinearElastic
+from skfem_npfem.mesh.smoothing import nodal_integration
 from skfem_npfem.scenes import get_scene
-from skfem_npfem.smoothing import nodal_integration
-from skfem_npfem.volume import (
+from skfem_npfem.step.volume import (
     correction_gains,
     volume_eigenstrain,
     volume_ratio,

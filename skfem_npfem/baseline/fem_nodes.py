@@ -28,8 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model import Model
 from ..particles import Particles
+from ..step.model import Model
 from .operators import GaussMesh, body_force, lumped_masses, quadrature
 
 __all__ = [

@@ -14,12 +14,12 @@ scikit-fem (:mod:`skfem_npfem.baseline.operators`).  Each step:
    (:func:`~skfem_npfem.baseline.returnmap.return_map`); the number returned
    by more than :data:`VIOLATION_TOL` of the stress level is reported as
    ``yield_violations`` on the step record;
-3. the library's cone step :func:`skfem_npfem.conic.solve_step` is solved with
+3. the library's cone step :func:`skfem_npfem.step.conic.solve_step` is solved with
    the Gauss points as stress points (:class:`~.operators.StressPoints`) and
    the nodal data of :mod:`skfem_npfem.baseline.fem_nodes`;
 4. Gauss-point stresses are rotated with the Gauss-point spin (the library's
    Hughes-Winget rotation), the particles move with the vertex increments
-   (:func:`skfem_npfem.step.move_particles`), and nodal stresses for output are
+   (:func:`skfem_npfem.step.stages.move_particles`), and nodal stresses for output are
    recovered from the Gauss points by patch recovery.
 
 So a comparison with N-PFEM isolates integration and mapping: the program,
@@ -35,14 +35,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..boundary import node_contacts
-from ..conic import StepSolution, solve_step
 from ..errors import ParameterError
-from ..kinematics import equivalent_strain, rotate_stress
-from ..model import Model
+from ..mesh.sources import MeshSource
 from ..particles import Particles
-from ..pfem import MeshSource
-from ..program import StepData
-from ..step import StepRecord, StepResult, move_particles
+from ..step.conic import StepSolution, solve_step
+from ..step.kinematics import equivalent_strain, rotate_stress
+from ..step.model import Model
+from ..step.program import StepData
+from ..step.stages import StepRecord, StepResult, move_particles
 from .fem_nodes import element_material, gauss_points, node_data, to_particles
 from .operators import ELEMENTS, GaussMesh, gauss_mesh, quadrature
 from .returnmap import return_map
@@ -73,7 +73,7 @@ class GaussState(Particles):
     :attr:`stress` and :attr:`eps_p` of the particles are recovered from the
     Gauss points (for output); the Gauss-point arrays are the state.  All
     three arrays are fields, so checkpoints keep them and
-    :meth:`~skfem_npfem.simulation.Simulation.restore` reads them back.
+    :meth:`~skfem_npfem.run.simulation.Simulation.restore` reads them back.
     """
 
     cells: np.ndarray
@@ -228,7 +228,7 @@ class FemRemap:
         mesh_source: MeshSource,
         step: int | None = None,
     ) -> tuple[GaussState, StepResult]:
-        """Advance one step (the counterpart of :func:`skfem_npfem.step.advance`).
+        """Advance one step (the counterpart of :func:`skfem_npfem.advance`).
 
         Returns
         -------

@@ -3,11 +3,11 @@
 The cone step of N-PFEM needs, for a set of *stress points* ``g``, the weights
 ``w_g`` and the internal-force operator ``G = [w_1 B_1^T, ..., w_n B_n^T]`` so
 that ``f_int = G @ sigma``.  With nodal integration the stress points are the
-mesh nodes (``w_i = V_i``, :mod:`skfem_npfem.smoothing`); for the classical FEM
+mesh nodes (``w_i = V_i``, :mod:`skfem_npfem.mesh.smoothing`); for the classical FEM
 baseline they are the Gauss points of the elements (``w_g = W_q |det J_e|``).
 :class:`StressPoints` is that Gauss-point operator; it implements the
-:class:`~skfem_npfem.program.StrainOperator` protocol, so the library's one
-cone program (:func:`skfem_npfem.conic.solve_step`) serves both.
+:class:`~skfem_npfem.step.program.StrainOperator` protocol, so the library's one
+cone program (:func:`skfem_npfem.step.conic.solve_step`) serves both.
 
 The Gauss-point operator is built from a scikit-fem ``Basis`` of
 ``ElementVector(ElementTriP1|ElementTriP2|ElementTetP1|ElementTetP2)`` with an
@@ -49,7 +49,7 @@ from skfem import (
 )
 
 from ..errors import ParameterError
-from ..remesh import p1_mesh
+from ..mesh.delaunay import p1_mesh
 
 __all__ = [
     "ELEMENTS",
@@ -116,9 +116,9 @@ def quadrature(dim: int, element: str) -> tuple[np.ndarray, np.ndarray]:
 class StressPoints:
     """Gauss points of one mesh as a strain operator of the cone program.
 
-    Implements :class:`~skfem_npfem.program.StrainOperator` with its own number
+    Implements :class:`~skfem_npfem.step.program.StrainOperator` with its own number
     of stress points (``n_points = nq * n_elements``), separate from the
-    displacement nodes, so :func:`skfem_npfem.conic.solve_step` solves the
+    displacement nodes, so :func:`skfem_npfem.step.conic.solve_step` solves the
     FEM step unchanged.
 
     Attributes

@@ -1,7 +1,7 @@
 """SPFEM: the smoothed PFEM with explicit time stepping.
 
 Same particles, meshes and nodal (smoothing-cell) integration as N-PFEM
-(:func:`skfem_npfem.smoothing.nodal_integration` gives ``G`` and ``V_i``), but
+(:func:`skfem_npfem.mesh.smoothing.nodal_integration` gives ``G`` and ``V_i``), but
 the step is the classical explicit one instead of a cone program.  One call of
 :meth:`SPFEM.advance` covers the same time step ``dt`` as one N-PFEM step, on
 the same mesh (built once, from the positions at the start of the step, as
@@ -53,15 +53,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..boundary import project_to_walls
-from ..conic import StepSolution
 from ..errors import ParameterError
-from ..kinematics import equivalent_strain, rotate_stress
-from ..model import Model
+from ..mesh.delaunay import p1_mesh
+from ..mesh.smoothing import NodalIntegration, nodal_integration
+from ..mesh.sources import MeshSource
 from ..particles import Particles
-from ..pfem import MeshSource
-from ..remesh import p1_mesh
-from ..smoothing import NodalIntegration, nodal_integration
-from ..step import StepRecord, StepResult
+from ..step.conic import StepSolution
+from ..step.kinematics import equivalent_strain, rotate_stress
+from ..step.model import Model
+from ..step.stages import StepRecord, StepResult
 from .returnmap import elastic_trial, return_map
 
 __all__ = ["MID_RUN_MARGIN", "SAFETY", "SPFEM", "stable_time_step"]
@@ -180,7 +180,7 @@ class SPFEM:
     ) -> tuple[Particles, StepResult]:
         """Advance by ``dt`` in explicit substeps on one mesh.
 
-        Same signature and result as :func:`skfem_npfem.step.advance`;
+        Same signature and result as :func:`skfem_npfem.advance`;
         ``result.record.extra`` holds ``substeps``, ``stable_dt``,
         ``explicit_dt`` and ``cfl``.
 

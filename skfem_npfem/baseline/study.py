@@ -10,7 +10,7 @@ whose tasks each start one such process.
 
 Every configuration has its own folder (``ROOT/NAME``) with the run's
 checkpoints, result files, ``summary.json``, ``log.txt`` and ``source.txt``
-(the :func:`~skfem_npfem.cases.provenance.source_sha1` of the library that ran
+(the :func:`~skfem_npfem.io.provenance.source_sha1` of the library that ran
 it), so a study is resumable: a configuration whose folder holds a summary with
 the same parameters from the same library source is not run again, one with a
 checkpoint but no summary continues from it (``--resume``), and a failed one
@@ -29,9 +29,9 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from ..cases.provenance import source_sha1
 from ..errors import NpfemError
 from ..io import dumps, latest_checkpoint, to_jsonable, write_bytes
+from ..io.provenance import source_sha1
 
 __all__ = [
     "Case",

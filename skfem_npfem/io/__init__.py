@@ -10,7 +10,7 @@
   ``skfem-npfem-checkpoint/1``) and the simulation state they hold.
 
 Scene summaries and ``scene.json`` (:mod:`skfem_npfem.scenes`) and the
-pictures of :mod:`skfem_npfem.plot` are written through the same atomic writer.
+pictures of :mod:`skfem_npfem.viz.plot` are written through the same atomic writer.
 """
 
 from __future__ import annotations

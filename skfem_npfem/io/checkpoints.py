@@ -23,7 +23,7 @@ Arrays must be numeric or bool (no object arrays) and finite.
 
 :func:`write_checkpoint` and :func:`read_checkpoint` store and restore a
 simulation's particles with its metadata (the loop's state and its step
-records, written by :meth:`~skfem_npfem.simulation.Simulation.save_checkpoint`);
+records, written by :meth:`~skfem_npfem.run.simulation.Simulation.save_checkpoint`);
 :func:`checkpoint_step` finds the checkpoint a run resumes from.
 """
 

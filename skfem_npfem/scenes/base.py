@@ -3,7 +3,7 @@
 A scene is one source of truth for a ready problem: the library API, the CLI,
 the demos and the tests all build it through :func:`run_scene`.  Each scene
 declares its parameters (name, default, unit, allowed values) and turns a
-parameter dict into a :class:`~skfem_npfem.simulation.Simulation` plus a metrics
+parameter dict into a :class:`~skfem_npfem.Simulation` plus a metrics
 function for the JSON summary.
 """
 
@@ -192,6 +192,10 @@ class Scene:
         ``build(values: dict, out: Path | None, progress: bool | None) -> SceneRun``.
     metrics_doc : dict
         Summary metric name -> description (with unit).
+    scenery : callable or None
+        ``scenery(parameters: dict, folder: Path | None) -> Scenery``: what a
+        picture of a result shows besides the particles (floor, walls, outline,
+        reference values, step labels); see :mod:`skfem_npfem.scenes.scenery`.
     """
 
     name: str
@@ -199,6 +203,7 @@ class Scene:
     params: list[Param]
     build: Callable[..., SceneRun]
     metrics_doc: dict[str, str]
+    scenery: Callable[..., Any] | None = None
 
     def resolve(self, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
         """Defaults updated with validated overrides."""

@@ -24,8 +24,8 @@ import numpy as np
 
 from ..boundary import RigidWall, floor, wall_x
 from ..errors import ParameterError
-from ..pfem import AlphaShapeMesher
-from ..solver import SolverOptions
+from ..mesh.sources import AlphaShapeMesher
+from ..step.solver import SolverOptions
 from .cylinder import ColumnSetup, column_model, column_particles
 
 __all__ = ["DEPTH_SPACINGS", "box_column", "box_lattice", "box_walls"]

@@ -5,7 +5,7 @@
 * ``plane-strain`` (default): :mod:`skfem_npfem.scenes.column_collapse`,
   unchanged (the same particles, steps and metrics);
 * ``axisymmetric``: a cylindrical column as the ``(r, z)`` half-section of
-  :mod:`skfem_npfem.axisymmetric` (masses and volumes of the full ring);
+  :mod:`skfem_npfem.mesh.axisymmetric` (masses and volumes of the full ring);
 * ``quarter-cylinder``: the same column in 3D, the quarter ``x, y >= 0``:
   particles on a symmetry plane have their normal displacement fixed, and the
   planes are frictionless walls for the others (:mod:`.cylinder`);

@@ -23,9 +23,12 @@ from typing import Any
 
 import numpy as np
 
-from ..pfem import main_body
-from ..simulation import AtRest, Simulation
-from ..step import StepResult
+from ..constants import GRAVITY
+from ..laws import lube2004_runout
+from ..laws import lube2005_runout as lube_runout
+from ..mesh.sources import main_body
+from ..run.simulation import AtRest, Simulation
+from ..step.stages import StepResult
 from .base import Scene, SceneRun
 from .box_column import box_column
 from .collapse_geometry import (
@@ -36,14 +39,15 @@ from .collapse_geometry import (
 )
 from .column_collapse import SCENE as PLANE_STRAIN
 from .column_collapse import (
+    collapse_scenery,
     collapse_simulation,
     collapse_time,
-    lube_runout,
     run_control,
 )
 from .common import fidelity_from, solver_from
 from .cylinder import ColumnSetup, cylinder_column, mass_quantile, radial_front
 from .methods import with_method
+from .scenery import Scenery, box, number, time_label
 
 __all__ = ["COLUMN_COLLAPSE", "build_geometry", "lube2004_runout", "with_geometries"]
 
@@ -53,20 +57,6 @@ MASS_BASIS = {
     "quarter-cylinder": "the quarter x, y >= 0 (x 4 for the whole column)",
     "box": "the slab 0 <= y <= depth (per depth: divide by depth)",
 }
-
-
-def lube2004_runout(aspect: float) -> float:
-    """Normalised run-out ``(r_inf - r0)/r0`` of Lube et al. (2004), axisymmetric.
-
-    ``1.24 a`` for ``a <= 1.7`` and ``1.6 a^(1/2)`` above (the two laws meet
-    within 1 % at ``a = 1.7``).
-
-    Examples
-    --------
-    >>> round(lube2004_runout(2.0), 4)
-    2.2627
-    """
-    return 1.24 * aspect if aspect <= 1.7 else 1.6 * math.sqrt(aspect)
 
 
 def column_setup(values: dict[str, Any]) -> ColumnSetup:
@@ -262,7 +252,27 @@ def with_geometries(plane: Scene) -> GeometryScene:
         build=build,
         metrics_doc=metrics_doc(plane.metrics_doc),
         plane_names=names,
+        scenery=geometry_scenery,
     )
+
+
+def geometry_scenery(p: dict, folder: Path | None = None) -> Scenery:
+    """The collapse's scenery for its geometry (3D geometries: plane-strain's)."""
+    if p.get("geometry") != "axisymmetric":
+        return collapse_scenery(p, folder)
+    s = Scenery(scene="column-collapse")
+    r0, h0 = number(p, "radius"), number(p, "height")
+    if r0 is None or h0 is None:
+        return s
+    g = number(p, "gravity", GRAVITY) or GRAVITY
+    s.floor, s.floor_label = 0.0, "rough floor"
+    s.outline = box(0.0, r0, 0.0, h0)
+    s.walls.append((0.0, 1, "axis r = 0 (symmetry)"))
+    s.runout_reference = r0 * (1.0 + lube2004_runout(h0 / r0))
+    s.runout_label = "Lube et al. 2004: r\u221e"
+    s.tau = math.sqrt(h0 / g)
+    s.label = time_label(s.tau, "h0")
+    return s
 
 
 #: The registered ``column-collapse`` scene (all geometries).

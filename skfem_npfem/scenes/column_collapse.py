@@ -48,14 +48,16 @@ from typing import Any
 import numpy as np
 
 from ..boundary import floor, wall_x
+from ..constants import GRAVITY
 from ..errors import ParameterError
+from ..laws import lube2005_runout as lube_runout
 from ..materials import DruckerPrager, MohrCoulomb
-from ..model import Model
+from ..mesh.smoothing import nodal_integration
+from ..mesh.sources import AlphaShapeMesher, main_body
 from ..particles import Particles
-from ..pfem import AlphaShapeMesher, main_body
-from ..simulation import AtRest, Simulation
-from ..smoothing import nodal_integration
-from ..step import StepResult
+from ..run.simulation import AtRest, Simulation
+from ..step.model import Model
+from ..step.stages import StepResult
 from .base import Param, Scene, SceneRun
 from .common import (
     check_size,
@@ -68,6 +70,7 @@ from .common import (
     solver_params,
 )
 from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
+from .scenery import Scenery, box, number, time_label
 
 MATERIALS = ("mohr-coulomb", "drucker-prager")
 #: Largest cohesion in units of rho g H0 (beyond it, displacements of a
@@ -156,7 +159,7 @@ PARAMS = [
     ),
     Param(
         "gravity",
-        9.81,
+        GRAVITY,
         "m/s^2",
         "gravitational acceleration",
         float,
@@ -282,21 +285,6 @@ def lattice(x0: float, x1: float, height: float, spacing: float) -> np.ndarray:
         np.linspace(x0, x1, nx + 1), np.linspace(0.0, height, ny + 1), indexing="ij"
     )
     return np.column_stack([X.ravel(), Y.ravel()])
-
-
-def lube_runout(aspect: float) -> float:
-    """Normalised run-out of Lube et al. (2005), 2D channel experiments.
-
-    ``1.2 a`` for ``a <= 1.8`` and ``1.9 a^(2/3)`` for ``a >= 2.8``; inside the
-    transition band the two laws are joined linearly in log-log coordinates.
-    """
-    lo, hi = 1.8, 2.8
-    if aspect <= lo:
-        return 1.2 * aspect
-    if aspect >= hi:
-        return 1.9 * aspect ** (2.0 / 3.0)
-    w = math.log(aspect / lo) / math.log(hi / lo)
-    return math.exp((1 - w) * math.log(1.2 * lo) + w * math.log(1.9 * hi ** (2 / 3)))
 
 
 def mass_front(x: np.ndarray, mass: np.ndarray, symmetric: bool) -> float:
@@ -582,10 +570,30 @@ def run_control(
     return run_kwargs, stop
 
 
+def collapse_scenery(p: dict, folder: Path | None = None) -> Scenery:
+    """The plane-strain collapse's scenery: rough floor, symmetry wall, Lube 2005."""
+    s = Scenery(scene="column-collapse")
+    a, L0 = number(p, "aspect"), number(p, "length")
+    if a is None or L0 is None:
+        return s
+    H0, g = a * L0, number(p, "gravity", GRAVITY) or GRAVITY
+    s.symmetric = bool(p.get("symmetric", True))
+    s.floor, s.floor_label = 0.0, "rough floor"
+    s.outline = box(0.0 if s.symmetric else -L0, L0, 0.0, H0)
+    if s.symmetric:
+        s.walls.append((0.0, 1, "smooth wall (symmetry plane)"))
+    s.runout_reference = L0 * (1.0 + lube_runout(a))
+    s.runout_label = "Lube et al. 2005: L\u221e"
+    s.tau = math.sqrt(H0 / g)
+    s.label = time_label(s.tau)
+    return s
+
+
 SCENE = Scene(
     name="column-collapse",
     description=__doc__.strip().splitlines()[0].split(": ", 1)[1],
     params=PARAMS,
     build=build,
     metrics_doc=METRICS,
+    scenery=collapse_scenery,
 )

@@ -13,8 +13,8 @@ from typing import Any
 
 from ..errors import ParameterError
 from ..io import ResultWriter, checkpoint_step
-from ..model import NODAL_MASS
-from ..solver import ACCURACY_PRESETS, LINEAR_SOLVERS, SolverOptions
+from ..step.model import NODAL_MASS
+from ..step.solver import ACCURACY_PRESETS, LINEAR_SOLVERS, SolverOptions
 from .base import Param
 from .limits import check_size, check_steps
 
@@ -135,7 +135,7 @@ def fidelity_params(
 
     ``stabilisation`` and ``volume_correction`` are the scene's defaults of
     ``beta`` and ``kappa`` for N-PFEM, chosen from measurements
-    (docs/validation.md); see :class:`~skfem_npfem.model.Model`.  ``where``
+    (docs/validation.md); see :class:`~skfem_npfem.step.model.Model`.  ``where``
     qualifies the stabilisation's default in the help (e.g. "in plane strain"),
     ``kappa_where`` the volume correction's.
     """

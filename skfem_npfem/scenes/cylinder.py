@@ -4,7 +4,7 @@ Two models of the same column of radius ``r0`` and height ``h0`` standing on a
 floor (gravity along the last axis):
 
 * ``"axisymmetric"``: the ``(r, z)`` half-section ``[0, r0] x [0, h0]`` of
-  :mod:`skfem_npfem.axisymmetric` (volumes and masses of the full ring, kg);
+  :mod:`skfem_npfem.mesh.axisymmetric` (volumes and masses of the full ring, kg);
   particles on the axis have ``u_r`` fixed and a frictionless wall at ``r = 0``
   keeps every other particle at ``r >= 0``;
 * ``"quarter-cylinder"``: a 3D quarter ``x, y >= 0`` (masses of the quarter,
@@ -35,15 +35,16 @@ from typing import Any
 
 import numpy as np
 
-from ..axisymmetric import AxisymmetricMohrCoulomb, axisymmetric_integration
 from ..boundary import RigidWall, floor, wall_x
+from ..constants import GRAVITY
 from ..errors import ParameterError
 from ..materials import DruckerPrager
-from ..model import Model
+from ..mesh.axisymmetric import AxisymmetricMohrCoulomb, axisymmetric_integration
+from ..mesh.smoothing import nodal_integration
+from ..mesh.sources import AlphaShapeMesher
 from ..particles import Particles
-from ..pfem import AlphaShapeMesher
-from ..smoothing import nodal_integration
-from ..solver import SolverOptions
+from ..step.model import Model
+from ..step.solver import SolverOptions
 
 __all__ = [
     "GEOMETRIES",
@@ -81,7 +82,7 @@ SEED: dict[str, Any] = {
     "theta1": 1.0,
     "theta2": 1.0,
     "K0": 0.5,
-    "gravity": 9.81,
+    "gravity": GRAVITY,
     "alpha": 1.3,
 }
 
@@ -291,7 +292,7 @@ def cylinder_column(
         Drucker-Prager match to Mohr-Coulomb (default triaxial compression).
     material : {"drucker-prager", "mohr-coulomb"}
         Yield criterion; Mohr-Coulomb (three cones with the hoop stress,
-        :class:`~skfem_npfem.axisymmetric.AxisymmetricMohrCoulomb`) only in
+        :class:`~skfem_npfem.mesh.axisymmetric.AxisymmetricMohrCoulomb`) only in
         axisymmetry (3D Mohr-Coulomb is not a second-order cone).
     solver : SolverOptions, optional
         Clarabel settings.
@@ -353,7 +354,7 @@ def column_model(
     """The dynamic model of a column: the soil of ``v`` (keys of :data:`SEED`).
 
     ``material="mohr-coulomb"`` is exact Mohr-Coulomb with the hoop stress
-    (:class:`~skfem_npfem.axisymmetric.AxisymmetricMohrCoulomb`, three cones)
+    (:class:`~skfem_npfem.mesh.axisymmetric.AxisymmetricMohrCoulomb`, three cones)
     and exists only in axisymmetry: in 3D Mohr-Coulomb is not a second-order
     cone.  Drucker-Prager takes the fit ``match`` to Mohr-Coulomb.
     """

@@ -15,13 +15,14 @@ from typing import Any
 import numpy as np
 from skfem import MeshTet, MeshTri
 
+from ..constants import GRAVITY
 from ..errors import ParameterError
 from ..materials import LinearElastic
-from ..model import Model
+from ..mesh.smoothing import nodal_integration
+from ..mesh.sources import FixedMesh
 from ..particles import Particles
-from ..pfem import FixedMesh
-from ..simulation import Simulation
-from ..smoothing import nodal_integration
+from ..run.simulation import Simulation
+from ..step.model import Model
 from .base import Param, Scene, SceneRun
 from .common import (
     check_size,
@@ -33,12 +34,13 @@ from .common import (
     solver_params,
 )
 from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
+from .scenery import Scenery, box, number
 
 PARAMS = [
     Param("dim", 2, "-", "spatial dimension (2: plane strain, 3: 3D)", int, (2, 3)),
     *elastic_params(1.0e7),
     Param("rho", 2000.0, "kg/m^3", "density", float, lo=0, lo_open=True),
-    Param("gravity", 9.81, "m/s^2", "gravitational acceleration", float, lo=0),
+    Param("gravity", GRAVITY, "m/s^2", "gravitational acceleration", float, lo=0),
     Param("height", 4.0, "m", "column height H", float, lo=0, lo_open=True),
     Param(
         "width", 1.0, "m", "column width (and depth in 3D)", float, lo=0, lo_open=True
@@ -216,10 +218,25 @@ def oscillation_period(history: list[tuple[float, float]]) -> float:
     return float(2.0 * np.mean(np.diff(tc)))
 
 
+def column_scenery(p: dict, folder: Path | None = None) -> Scenery:
+    """The column's scenery: fixed base, roller side walls, static label."""
+    s = Scenery(scene="elastic-column")
+    H, W = number(p, "height"), number(p, "width")
+    if H is None or W is None:
+        return s
+    s.floor, s.floor_label = 0.0, "fixed base"
+    s.walls += [(0.0, 1, "smooth side walls (rollers)"), (W, -1, "")]
+    s.outline = box(0.0, W, 0.0, H)
+    if p.get("mode") == "static":
+        s.label = lambda t: f"static load step (pseudo-time {t:.3g})"
+    return s
+
+
 SCENE = Scene(
     name="elastic-column",
     description=__doc__.strip().splitlines()[0].split(": ", 1)[1],
     params=PARAMS,
     build=build,
     metrics_doc=METRICS,
+    scenery=column_scenery,
 )

@@ -7,11 +7,12 @@ run then keeps the scene's particles, walls, mesh source, time stepping,
 callbacks and output; only the step changes (``Simulation.stepper``), so a
 comparison changes one word: ``--set method=fem-remap``.
 
-Options and their checks live in :func:`skfem_npfem.baseline.make_method`
-(an unknown method, or an ``element``/``transfer`` given to a method other
-than fem-remap, or ``damping``/``explicit_dt`` to one other than spfem) and in
-:meth:`~skfem_npfem.baseline.SPFEM.check` (a quasi-static scene, an explicit
-step above the stable one): each is one
+This module is the one place where a method is chosen by name:
+:func:`make_method` checks the name and its options (an unknown method, or an
+``element``/``transfer`` given to a method other than fem-remap, or
+``damping``/``explicit_dt`` to one other than spfem), and
+:meth:`~skfem_npfem.baseline.SPFEM.check` checks the run (a quasi-static scene,
+an explicit step above the stable one): each is one
 :class:`~skfem_npfem.errors.ParameterError` before the first step.
 
 Every method reports the stress roughness of :mod:`skfem_npfem.baseline.roughness`
@@ -25,12 +26,72 @@ from typing import Any
 
 import numpy as np
 
-from ..baseline import METHODS, SPFEM, TRANSFERS, make_method, stress_roughness
+from ..baseline import SPFEM, TRANSFERS, FemRemap, stress_roughness
 from ..baseline.operators import ELEMENTS
 from ..errors import ParameterError
 from .base import Param, SceneRun
 
-__all__ = ["METHOD_METRICS", "METHOD_PARAMS", "method_metrics", "with_method"]
+__all__ = [
+    "METHODS",
+    "METHOD_METRICS",
+    "METHOD_OPTIONS",
+    "METHOD_PARAMS",
+    "make_method",
+    "method_metrics",
+    "with_method",
+]
+
+#: Method names: the library's N-PFEM, FEM with remapping, explicit SPFEM.
+METHODS = ("npfem", "fem-remap", "spfem")
+
+#: Options each method accepts.
+METHOD_OPTIONS: dict[str, tuple[str, ...]] = {
+    "npfem": (),
+    "fem-remap": ("element", "transfer"),
+    "spfem": ("damping", "explicit_dt"),
+}
+
+
+def make_method(name: str, **options: Any) -> FemRemap | SPFEM | None:
+    """Build a baseline method object (None for N-PFEM, the library's step).
+
+    Parameters
+    ----------
+    name : {"npfem", "fem-remap", "spfem"}
+    **options
+        ``element``, ``transfer`` (fem-remap) or ``damping``, ``explicit_dt``
+        (spfem); options given as None are ignored.
+
+    Raises
+    ------
+    ParameterError
+        Unknown method, an option the method does not have, or a bad value.
+
+    Examples
+    --------
+    >>> make_method("fem-remap", element="p2", transfer="nearest")
+    FemRemap(element='p2', transfer='nearest')
+    >>> make_method("spfem", element="p2")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    skfem_npfem.errors.ParameterError: invalid element='p2': spfem has no option ...
+    """
+    if name not in METHODS:
+        raise ParameterError("method", name, f"one of {METHODS}")
+    given = {k: v for k, v in options.items() if v is not None}
+    allowed = METHOD_OPTIONS[name]
+    for key, value in given.items():
+        if key not in allowed:
+            has = ", ".join(allowed) if allowed else "none"
+            raise ParameterError(
+                key, value, f"{name} has no option {key}; its options: {has}"
+            )
+    if name == "fem-remap":
+        return FemRemap(**given)
+    if name == "spfem":
+        return SPFEM(**given)
+    return None
+
 
 METHOD_PARAMS = [
     Param(
@@ -116,7 +177,7 @@ def with_method(values: dict[str, Any], srun: SceneRun) -> SceneRun:
     Raises
     ------
     ParameterError
-        For a bad method or option (:func:`~skfem_npfem.baseline.make_method`),
+        For a bad method or option (:func:`make_method`),
         SPFEM in a quasi-static run, or an ``explicit_dt`` above the stable
         step of the initial mesh.
     """

@@ -20,6 +20,7 @@ References (weightless soil): Prandtl ``q/c = 2 + pi``; Mohr-Coulomb
 
 from __future__ import annotations
 
+import json
 import math
 import warnings
 from pathlib import Path
@@ -28,13 +29,16 @@ from typing import Any
 import numpy as np
 from skfem import MeshTri
 
-from ..errors import ParameterError
+from ..constants import GRAVITY
+from ..errors import CheckpointError, ParameterError
+from ..io import latest_checkpoint, load_checkpoint
+from ..laws import prandtl_nc
 from ..materials import DruckerPrager, Material, MohrCoulomb, Tresca
-from ..model import Model
+from ..mesh.smoothing import nodal_integration
+from ..mesh.sources import FixedMesh
 from ..particles import Particles
-from ..pfem import FixedMesh
-from ..simulation import Simulation
-from ..smoothing import nodal_integration
+from ..run.simulation import Simulation
+from ..step.model import Model
 from .base import Param, Scene, SceneRun
 from .common import (
     check_size,
@@ -47,6 +51,7 @@ from .common import (
 )
 from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
 from .plateau import PlateauRule
+from .scenery import Scenery, box, number
 
 MATERIALS = ("tresca", "mohr-coulomb", "drucker-prager")
 
@@ -209,15 +214,6 @@ def graded_coordinates(b: float, h: float, length: float, ratio: float) -> np.nd
     return np.array(xs)
 
 
-def n_c(phi_deg: float) -> float:
-    """Prandtl-Reissner bearing factor N_c (2 + pi for phi = 0)."""
-    if phi_deg == 0.0:
-        return 2.0 + math.pi
-    f = math.radians(phi_deg)
-    nq = math.exp(math.pi * math.tan(f)) * math.tan(math.pi / 4 + f / 2) ** 2
-    return (nq - 1.0) / math.tan(f)
-
-
 def graded_count(b: float, h: float, length: float, ratio: float) -> float:
     """Number of :func:`graded_coordinates` (estimated without building them)."""
     n_fine = max(2, round(1.5 * b / h))
@@ -248,7 +244,7 @@ def soil_material(values: dict[str, Any]) -> tuple[Material, float]:
     c, phi = values["c"], values["phi"]
     psi = phi if values["psi"] is None else values["psi"]
     gamma = values["gamma"]
-    rho = gamma / 9.81
+    rho = gamma / GRAVITY
     E, nu = values["E"], values["nu"]
     if name == "tresca":
         if c <= 0:
@@ -277,7 +273,7 @@ def soil_particles(
     pseudo-time), so a step's ``dt`` is its settlement increment.
     """
     b, gamma = values["half_width"], values["gamma"]
-    L, rho = values["domain"] * b, gamma / 9.81
+    L, rho = values["domain"] * b, gamma / GRAVITY
     ni = nodal_integration(mesh)
     x = mesh.p.T.copy()
     fixed = np.zeros_like(x, dtype=bool)
@@ -333,7 +329,7 @@ def build(
     model = Model(
         dim=2,
         materials=[mat],
-        gravity=9.81 if gamma > 0 else 0.0,
+        gravity=GRAVITY if gamma > 0 else 0.0,
         mode="static",
         objective_rotation=values["large_deformation"],
         update_geometry=values["large_deformation"],
@@ -364,7 +360,7 @@ def build(
         return rule.stop_reason(load_curve(sim_)) is not None
 
     sim.callbacks.append(record)
-    ref = n_c(phi) if gamma == 0 and c > 0 else None
+    ref = prandtl_nc(phi) if gamma == 0 and c > 0 else None
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
         curve = load_curve(sim_)
@@ -397,10 +393,62 @@ def load_curve(sim: Simulation) -> list[list[float]]:
     ]
 
 
+def footing_scenery(p: dict, folder: Path | None = None) -> Scenery:
+    """The footing's scenery: base, rollers, symmetry axis, footing, load curve.
+
+    The load curve comes from ``folder``'s ``summary.json``, else from the
+    latest checkpoint there; steps are labelled by their settlement.
+    """
+    s = Scenery(scene="strip-footing")
+    b, domain = number(p, "half_width"), number(p, "domain")
+    if b is None or domain is None:
+        return s
+    L = domain * b
+    s.half_width = b
+    s.floor, s.floor_label = 0.0, "fixed base"
+    s.walls.append((L, -1, "rollers"))
+    s.symmetry = 0.0
+    s.outline = box(0.0, L, 0.0, L)
+    s.footing = (0.0, b, L)
+    s.label = s.settlement_label
+    c, gamma, phi = number(p, "c", 0.0), number(p, "gamma", 0.0), number(p, "phi", 0.0)
+    if p.get("material") == "tresca":
+        phi = 0.0
+    if gamma == 0 and c and c > 0:
+        s.q_reference = prandtl_nc(phi or 0.0) * c
+    if folder is not None:
+        s.load_curve = saved_load_curve(Path(folder))
+    return s
+
+
+def saved_load_curve(folder: Path) -> np.ndarray | None:
+    """``[settlement, pressure]`` rows of a result folder (summary, else checkpoint)."""
+    try:
+        data = json.loads((folder / "summary.json").read_text())
+        return np.array(data["metrics"]["load_curve"], dtype=float).reshape(-1, 2)
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
+    path = latest_checkpoint(folder)
+    if path is None:
+        return None
+    try:
+        _, meta = load_checkpoint(path)
+        records = list(meta.get("records", []))
+    except CheckpointError:
+        return None
+    rows = []
+    for r in records:
+        extra = r.get("extra", {}) if isinstance(r, dict) else {}
+        if "settlement" in extra and "pressure" in extra:
+            rows.append([extra["settlement"], extra["pressure"]])
+    return np.array(rows, dtype=float).reshape(-1, 2) if rows else None
+
+
 SCENE = Scene(
     name="strip-footing",
     description=__doc__.strip().splitlines()[0].split(": ", 1)[1],
     params=PARAMS,
     build=build,
     metrics_doc=METRICS,
+    scenery=footing_scenery,
 )

@@ -16,8 +16,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from ..backends import available_cores
 from ..errors import NpfemError, ParameterError
+from ..step.backends import available_cores
 
 __all__ = [
     "CONNECT_TIMEOUT",

@@ -1,8 +1,0 @@
-"""Verification cases shared by the tests and the demos.
-
-:mod:`skfem_npfem.cases.extremes` is the extremes matrix (benchmarks.md T1,
-T5-T9): short runs of the ``elastic-column`` and ``strip-footing`` scenes, and
-of the step API where a scene cannot express the case, with parameters pushed
-to the edges.  ``tests/test_extremes.py`` asserts every case;
-``demos/extremes_matrix.py`` runs them all and writes docs/extremes.md.
-"""

@@ -1,0 +1,68 @@
+"""Published reference values the library is checked against: one home for each.
+
+* :func:`lube2005_runout` -- run-out of 2D (channel) granular column collapses,
+  Lube et al. (2005);
+* :func:`lube2004_runout` -- run-out of axisymmetric column collapses, Lube et
+  al. (2004);
+* :func:`prandtl_nc` -- the exact bearing factor ``N_c`` of a smooth strip
+  footing on a weightless Mohr-Coulomb soil (Prandtl 1920, Reissner 1924).
+
+References are listed in ``docs/references.md``.
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ["lube2004_runout", "lube2005_runout", "prandtl_nc"]
+
+
+def lube2005_runout(aspect: float) -> float:
+    """Normalised run-out ``(L_inf - L0)/L0`` of Lube et al. (2005), 2D channel.
+
+    ``1.2 a`` for ``a <= 1.8`` and ``1.9 a^(2/3)`` for ``a >= 2.8``; inside the
+    transition band the two laws are joined linearly in log-log coordinates.
+
+    Examples
+    --------
+    >>> lube2005_runout(1.0), round(lube2005_runout(8.0), 4)
+    (1.2, 7.6)
+    """
+    lo, hi = 1.8, 2.8
+    if aspect <= lo:
+        return 1.2 * aspect
+    if aspect >= hi:
+        return 1.9 * aspect ** (2.0 / 3.0)
+    w = math.log(aspect / lo) / math.log(hi / lo)
+    return math.exp((1 - w) * math.log(1.2 * lo) + w * math.log(1.9 * hi ** (2 / 3)))
+
+
+def lube2004_runout(aspect: float) -> float:
+    """Normalised run-out ``(r_inf - r0)/r0`` of Lube et al. (2004), axisymmetric.
+
+    ``1.24 a`` for ``a <= 1.7`` and ``1.6 a^(1/2)`` above (the two laws meet
+    within 1 % at ``a = 1.7``).
+
+    Examples
+    --------
+    >>> round(lube2004_runout(2.0), 4)
+    2.2627
+    """
+    return 1.24 * aspect if aspect <= 1.7 else 1.6 * math.sqrt(aspect)
+
+
+def prandtl_nc(phi_deg: float) -> float:
+    """Exact bearing factor ``N_c`` of a smooth strip footing (``2 + pi`` at phi = 0).
+
+    ``N_c = (N_q - 1) cot(phi)`` with ``N_q = exp(pi tan phi) tan^2(45 + phi/2)``.
+
+    Examples
+    --------
+    >>> round(prandtl_nc(0.0), 4), round(prandtl_nc(30.0), 2)
+    (5.1416, 30.14)
+    """
+    if phi_deg == 0.0:
+        return 2.0 + math.pi
+    f = math.radians(phi_deg)
+    nq = math.exp(math.pi * math.tan(f)) * math.tan(math.pi / 4 + f / 2) ** 2
+    return (nq - 1.0) / math.tan(f)

@@ -1,0 +1,12 @@
+"""Particles to mesh: where each step's P1 mesh and its smoothing cells come from.
+
+* :mod:`.sources` -- mesh sources: :class:`FixedMesh` (a mesh that does not change)
+  and :class:`AlphaShapeMesher` (Delaunay triangulation of the particles and the
+  alpha-shape test), free surface and main body;
+* :mod:`.delaunay` -- the Delaunay triangulation, alpha shape and element quality;
+* :mod:`.surface` -- boundary facets and free-surface particles;
+* :mod:`.smoothing` -- nodal integration: smoothing cells and the smoothed strain
+  operator ``G`` from scikit-fem's P1 gradients;
+* :mod:`.axisymmetric` -- the same for the (r, z) half-section of a body of
+  revolution, with the hoop strain.
+"""

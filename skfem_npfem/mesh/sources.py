@@ -1,0 +1,304 @@
+"""Mesh sources: how the particles become a mesh for one step.
+
+A mesh source (:class:`MeshSource`) is called by :func:`~skfem_npfem.advance`
+with the particle positions at the start of a step and returns the active
+particles and the (local) connectivity of that step's mesh.
+:class:`FixedMesh` keeps one connectivity (small deformations);
+:class:`AlphaShapeMesher` is the PFEM one: it runs
+:func:`~skfem_npfem.mesh.delaunay.alpha_shape` afresh every step.  Nothing is
+mapped between meshes: every state variable lives on the particles, so the mesh is
+thrown away after the step.  The last triangulation is kept for output (cells,
+free-surface flags).  :func:`main_body` finds the main body of a flow for
+run-out measurements.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from ..boundary import RigidWall
+from ..errors import NpfemError, ParameterError
+from .delaunay import Triangulation, alpha_shape
+from .surface import free_surface
+
+__all__ = ["AlphaShapeMesher", "FixedMesh", "MeshSource", "folded_facets", "main_body"]
+
+
+class MeshSource(Protocol):
+    """Turns particle positions into a mesh for one step."""
+
+    def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return ``(active_index (N_a,), local_t (d+1, ne))`` for positions x."""
+        ...
+
+
+@dataclass
+class FixedMesh:
+    """Keep the initial connectivity (small-deformation problems, no remeshing).
+
+    Parameters
+    ----------
+    t : ndarray (d+1, ne)
+        Connectivity over all particles (every particle in an element).
+
+    Raises
+    ------
+    ParameterError
+        When called, if ``t`` indexes particles that do not exist or the mesh
+        is tangled (two elements on the same side of a shared side).
+    NpfemError
+        When called, if an element has turned inside out: the deformation is
+        too large for a fixed connectivity (use smaller steps).
+    """
+
+    t: np.ndarray
+
+    def __post_init__(self) -> None:
+        self.t = np.asarray(self.t, dtype=np.int64)
+        self._active = np.unique(self.t)
+        self._signs: np.ndarray | None = None
+
+    def _check_orientation(self, x: np.ndarray) -> None:
+        """Refuse a folded mesh: tangled at the start, or an element flipped later."""
+        d = x.shape[1]
+        if self.t.shape[0] != d + 1:
+            return
+        v = x[self.t[1:]] - x[self.t[0]][None]  # (d, ne, d)
+        signs = np.sign(np.linalg.det(np.moveaxis(v, 0, 1)))
+        if self._signs is None:
+            folded = folded_facets(x, self.t)
+            if folded.size:
+                a, b = (int(e) for e in folded[0])
+                raise ParameterError(
+                    "t",
+                    f"a tangled mesh: {len(folded)} shared side(s) with both "
+                    f"elements on the same side, first elements {a} and {b}",
+                    "a mesh whose elements do not overlap (an inverted element "
+                    "folds over its neighbours; check the node order and positions)",
+                )
+            self._signs = signs
+            return
+        flipped = (signs * self._signs) < 0
+        if np.any(flipped):
+            e = int(np.flatnonzero(flipped)[0])
+            raise NpfemError(
+                f"{int(flipped.sum())} element(s) of the fixed mesh turned inside "
+                f"out (first: element {e}); the deformation is too large for a "
+                "fixed connectivity: use smaller steps (dt, or the load increment "
+                "of a static run) or remeshing (AlphaShapeMesher)"
+            )
+
+    def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # noqa: D102
+        n = x.shape[0]
+        if self.t.size and (self.t.min() < 0 or self.t.max() >= n):
+            raise ParameterError(
+                "t",
+                f"indices {int(self.t.min())}..{int(self.t.max())}",
+                f"particle indices in 0..{n - 1}",
+            )
+        self._check_orientation(x)
+        if self._active.size != x.shape[0]:
+            local = np.searchsorted(self._active, self.t)
+            return self._active, local
+        return self._active, self.t
+
+
+class AlphaShapeMesher:
+    """Remesh every step: Delaunay plus the alpha-shape test.
+
+    Parameters
+    ----------
+    h : float
+        Characteristic particle spacing, m (the initial lattice spacing).
+    alpha : float
+        Alpha-shape factor: simplices with circumradius ``>= alpha * h`` are
+        dropped (1.2-1.6; larger keeps thin fronts longer but bridges gaps).
+    walls : sequence of RigidWall
+        Walls used to tell free-surface particles from boundary particles that
+        rest on a wall (within ``wall_distance * h`` of it).
+    wall_distance : float
+        Distance from a wall, in units of ``h``, under which a boundary particle
+        is "on the wall" rather than on the free surface.
+    min_quality, jitter : float
+        Passed to :func:`~skfem_npfem.mesh.delaunay.alpha_shape` (defaults 1e-3 and
+        1e-6); the jitter is deterministic, so equal positions give equal
+        meshes (restarts reproduce).
+    seed : int
+        Seed of the jitter (default 0).
+
+    Attributes
+    ----------
+    last : Triangulation or None
+        Triangulation of the last call (the mesh the last step was solved on).
+
+    Raises
+    ------
+    ParameterError
+        If ``h``, ``alpha`` or ``wall_distance`` is not a finite number > 0;
+        when called, if the alpha shape keeps no simplex (increase ``alpha``
+        or ``h``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> g = np.linspace(0.0, 1.0, 5)
+    >>> x = np.stack(np.meshgrid(g, g), axis=-1).reshape(-1, 2)
+    >>> mesher = AlphaShapeMesher(h=0.25)
+    >>> active, t = mesher(x)
+    >>> active.size, t.shape
+    (25, (3, 32))
+    """
+
+    def __init__(
+        self,
+        h: float,
+        alpha: float = 1.3,
+        *,
+        walls: Sequence[RigidWall] = (),
+        wall_distance: float = 0.5,
+        min_quality: float = 1e-3,
+        jitter: float = 1e-6,
+        seed: int = 0,
+    ) -> None:
+        for name, val in (("h", h), ("alpha", alpha), ("wall_distance", wall_distance)):
+            if not (isinstance(val, int | float) and math.isfinite(val) and val > 0):
+                raise ParameterError(name, val, "a finite number > 0")
+        self.h = float(h)
+        self.alpha = float(alpha)
+        self.walls = list(walls)
+        self.wall_distance = float(wall_distance)
+        self.min_quality = min_quality
+        self.jitter = jitter
+        self.seed = seed
+        self.last: Triangulation | None = None
+
+    def triangulate(self, x: np.ndarray) -> Triangulation:
+        """Alpha-shape triangulation of positions ``x`` (N, d)."""
+        return alpha_shape(
+            x,
+            self.h,
+            self.alpha,
+            min_quality=self.min_quality,
+            jitter=self.jitter,
+            seed=self.seed,
+        )
+
+    def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Remesh ``x``; return ``(active_index (N_a,), local_t (d+1, ne))``."""
+        tri = self.triangulate(x)
+        if tri.simplices.shape[0] == 0:
+            raise ParameterError(
+                "particles",
+                f"{x.shape[0]} particles",
+                "the alpha shape kept no simplex; increase alpha or h "
+                f"(alpha={self.alpha:g}, h={self.h:g} m)",
+            )
+        self.last = tri
+        return tri.active_index, np.ascontiguousarray(tri.local_simplices.T)
+
+    def on_wall(self, tri: Triangulation | None = None) -> np.ndarray:
+        """Particles within ``wall_distance * h`` of any wall (N,) bool."""
+        tri = self.last if tri is None else tri
+        near = np.zeros(tri.points.shape[0], bool)
+        for wall in self.walls:
+            near |= wall.gap(tri.points) < self.wall_distance * self.h
+        return near
+
+    def free_surface(self) -> np.ndarray | None:
+        """Free-surface flags of the last mesh: boundary particles off the walls.
+
+        Returns None before the first call.
+        """
+        if self.last is None:
+            return None
+        return free_surface(self.last, self.on_wall())
+
+
+def folded_facets(x: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Pairs of elements that lie on the same side of the facet they share.
+
+    In a valid mesh the two elements sharing an interior edge (2D) or face
+    (3D) lie on opposite sides of it, whatever the order of their nodes; an
+    inverted (tangled) element lies on the same side as its neighbour.  A
+    facet shared by more than two elements also folds the mesh.
+
+    Parameters
+    ----------
+    x : ndarray (N, d)
+        Node positions.
+    t : ndarray (d+1, ne)
+        Connectivity.
+
+    Returns
+    -------
+    ndarray (n_folded, 2)
+        Element pairs, empty for a valid mesh.
+
+    Examples
+    --------
+    >>> x = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
+    >>> folded_facets(x, np.array([[0, 1, 2], [1, 3, 2]]).T).shape
+    (0, 2)
+    >>> x[3] = [0.2, 0.2]  # node 3 pulled across the shared edge 1-2
+    >>> folded_facets(x, np.array([[0, 1, 2], [1, 3, 2]]).T).tolist()
+    [[0, 1]]
+    """
+    t = np.asarray(t, dtype=np.int64)
+    nv, ne = t.shape
+    d = nv - 1
+    if ne < 2 or x.shape[1] != d:
+        return np.zeros((0, 2), np.int64)
+    # facet k of element e: all nodes but the k-th; the k-th is "opposite"
+    local = np.array([[j for j in range(nv) if j != k] for k in range(nv)])
+    facets = np.sort(t[local].transpose(2, 0, 1).reshape(ne * nv, d), axis=1)
+    opposite = t.T.reshape(-1)  # element-major: (e, k) -> t[k, e]
+    owner = np.repeat(np.arange(ne), nv)
+    _, inv, counts = np.unique(facets, axis=0, return_inverse=True, return_counts=True)
+    inv = inv.ravel()
+    order = np.argsort(inv, kind="stable")
+    shared = np.flatnonzero(counts[inv[order]] == 2)[::2]
+    i, j = order[shared], order[shared + 1]
+    base = x[facets[i, 0]]
+    span = np.stack([x[facets[i, k]] - base for k in range(1, d)], axis=1)
+
+    def side(p: np.ndarray) -> np.ndarray:
+        return np.sign(np.linalg.det(np.concatenate([span, (p - base)[:, None]], 1)))
+
+    same = side(x[opposite[i]]) * side(x[opposite[j]]) > 0
+    pairs = [np.stack([owner[i[same]], owner[j[same]]], axis=1)]
+    for f in np.flatnonzero(counts > 2)[:10]:  # facets in 3+ elements (rare)
+        e = owner[inv == f]
+        pairs.append(np.array([[e[0], e[1]]]))
+    return np.concatenate(pairs).astype(np.int64)
+
+
+def main_body(x: np.ndarray, radius: float) -> np.ndarray:
+    """Particles of the largest cluster of a particle cloud (N,) bool.
+
+    Two particles are linked when they are closer than ``radius``; the main body
+    is the largest set of linked particles.  Unlike the connectivity of an alpha
+    shape (which breaks and heals as a thin spreading front thins out), this
+    keeps a sparse deposit tail attached as long as its gaps stay below
+    ``radius``; grains that flew further away are left out.
+
+    Examples
+    --------
+    >>> x = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [9.0, 0.0]])
+    >>> main_body(x, radius=1.5).tolist()
+    [True, True, True, False]
+    """
+    n = x.shape[0]
+    pairs = cKDTree(x).query_pairs(radius, output_type="ndarray")
+    graph = sp.coo_matrix(
+        (np.ones(pairs.shape[0]), (pairs[:, 0], pairs[:, 1])), shape=(n, n)
+    )
+    _, labels = connected_components(graph, directed=False)
+    return labels == np.argmax(np.bincount(labels))

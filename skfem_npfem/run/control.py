@@ -1,0 +1,165 @@
+"""Progress reports and interrupt handling of the time loop.
+
+:class:`Progress` reports on stderr while :class:`~skfem_npfem.Simulation`
+runs: on a terminal one line that is rewritten after every step; elsewhere (CI,
+``nohup``, a notebook, a pipe) a new line every :data:`INTERVAL` seconds, plus
+the first and the last step, so that a long run is never silent.  Each report
+gives the step, t, Δt, the solver status and IPM iterations, the share done,
+the wall time and an estimate of the time left.  :func:`end_line` ends an open
+terminal line, so that whatever is printed next starts on its own line.
+
+:class:`SignalGuard` turns SIGINT (Ctrl-C) and SIGTERM into a request to stop
+after the step in progress; a second signal while a step is being solved
+abandons that step (:class:`AbandonStep`).  Only the main thread can install
+signal handlers; elsewhere (Dask workers) the guard does nothing.
+"""
+
+from __future__ import annotations
+
+import math
+import signal
+import sys
+import threading
+import time
+from typing import Any
+
+__all__ = ["INTERVAL", "AbandonStep", "Progress", "SignalGuard", "end_line"]
+
+#: Seconds between progress lines when stderr is not a terminal.
+INTERVAL = 10.0
+
+_open_line = {"width": 0}
+
+
+def end_line() -> None:
+    """End a progress line left open on a terminal (no-op otherwise)."""
+    if _open_line["width"]:
+        _open_line["width"] = 0
+        print(file=sys.stderr, flush=True)
+
+
+def _isatty() -> bool:
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
+class Progress:
+    """Progress reports of one :meth:`Simulation.run` call on stderr.
+
+    Parameters
+    ----------
+    enabled : bool
+        False: report nothing.
+    n_target : int or None
+        Step at which the run ends (None: unknown).
+    t_end : float or None
+        End time, s (None: unknown).
+    interval : float
+        Seconds between lines when stderr is not a terminal.
+    """
+
+    def __init__(
+        self,
+        enabled: bool,
+        n_target: int | None,
+        t_end: float | None,
+        interval: float = INTERVAL,
+    ) -> None:
+        self.enabled = enabled
+        self.tty = _isatty()
+        self.n_target, self.t_end, self.interval = n_target, t_end, interval
+        self.start = time.perf_counter()
+        self.last_line = -math.inf
+        self.lines = 0
+        self.pending: str | None = None
+
+    def text(self, rec: Any, t: float, start_step: int, start_time: float) -> str:
+        """One report: step, t, dt, status, iterations, done, wall and ETA."""
+        done = math.nan
+        if self.n_target:
+            span = self.n_target - start_step
+            done = (rec.step - start_step) / span if span > 0 else 1.0
+        elif self.t_end:
+            span = self.t_end - start_time
+            done = (t - start_time) / span if span > 0 else 1.0
+        wall = time.perf_counter() - self.start
+        left = wall * (1 - done) / done if done > 0 else math.nan
+        share = f"{100 * done:5.1f}%" if math.isfinite(done) else "   ? %"
+        eta = f"{left:7.1f} s" if math.isfinite(left) else "      ?  "
+        return (
+            f"step {rec.step:5d}  t={t:.4g} s  dt={rec.dt:.3g}  "
+            f"{rec.status} ({rec.iterations} it)  {share}  "
+            f"wall {wall:7.1f} s  eta {eta}"
+        )
+
+    def update(self, rec: Any, t: float, start_step: int, start_time: float) -> None:
+        """Report the step just finished (rate-limited off a terminal)."""
+        if not self.enabled:
+            return
+        msg = self.text(rec, t, start_step, start_time)
+        if self.tty:
+            pad = max(0, _open_line["width"] - len(msg))
+            print("\r" + msg + " " * pad, end="", file=sys.stderr, flush=True)
+            _open_line["width"] = len(msg)
+            return
+        now = time.perf_counter()
+        if self.lines == 0 or now - self.last_line >= self.interval:
+            print(msg, file=sys.stderr, flush=True)
+            self.last_line, self.pending = now, None
+            self.lines += 1
+        else:
+            self.pending = msg
+
+    def close(self) -> None:
+        """End the terminal line, or print the last step if not yet reported."""
+        if not self.enabled:
+            return
+        if self.tty:
+            end_line()
+        elif self.pending is not None:
+            print(self.pending, file=sys.stderr, flush=True)
+            self.pending = None
+
+
+class AbandonStep(KeyboardInterrupt):
+    """A second SIGINT/SIGTERM arrived while a step was being solved."""
+
+
+class SignalGuard:
+    """Turn SIGINT/SIGTERM into a stop request while a run is in progress.
+
+    Use as a context manager around the time loop; check :attr:`signum` after
+    each step.  While :attr:`in_step` is True, a second signal raises
+    :class:`AbandonStep` (the step in progress is dropped; the state of the
+    last finished step is intact).
+    """
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self.in_step = False
+        self._previous: dict[int, Any] = {}
+
+    def _handler(self, signum: int, frame: Any) -> None:
+        if self.signum is not None and self.in_step:
+            self.in_step = False
+            raise AbandonStep
+        if self.signum is None:
+            self.signum = signum
+
+    def __enter__(self) -> SignalGuard:
+        if threading.current_thread() is threading.main_thread():
+            for sig in self.SIGNALS:
+                try:
+                    self._previous[sig] = signal.signal(sig, self._handler)
+                except (ValueError, OSError):  # pragma: no cover - exotic hosts
+                    pass
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for sig, old in self._previous.items():
+            signal.signal(sig, old)
+        self._previous.clear()

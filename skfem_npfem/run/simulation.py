@@ -1,0 +1,521 @@
+"""The time loop: many steps with output, checkpoints and adaptive time stepping.
+
+:class:`Simulation` drives :func:`~skfem_npfem.advance`: fixed or adaptive
+time step (halve and retry when the solver fails, grow back after successes),
+an end time or a stopping rule (:class:`AtRest`), callbacks, progress
+reporting, VTU output as steps finish, and checkpoints to resume from (the
+files themselves are :mod:`skfem_npfem.io`'s).  Each step's arrays reach the
+callbacks and the writer in a :class:`~skfem_npfem.step.stages.StepResult` and are
+dropped after them; the run keeps one scalar
+:class:`~skfem_npfem.step.stages.StepRecord` per step.
+"""
+
+from __future__ import annotations
+
+import math
+import signal
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import ParameterError, RunInterrupted, SolverError
+from ..io import read_checkpoint, write_checkpoint
+from ..mesh.sources import MeshSource
+from ..particles import Particles
+from ..step.kinematics import energies
+from ..step.model import Model
+from ..step.stages import StepRecord, StepResult, advance
+from .control import INTERVAL, AbandonStep, Progress, SignalGuard
+
+__all__ = ["AtRest", "Simulation", "peak_memory_mb"]
+
+
+class Simulation:
+    """Run many steps with output, checkpoints and adaptive time stepping.
+
+    Parameters
+    ----------
+    particles : Particles
+        Initial state.
+    model : Model
+        Physics and solver settings.
+    mesh_source : callable
+        See :func:`advance`.
+    dt : float
+        Initial (and maximum) time step, s.
+    adaptive : bool
+        On a solver failure halve ``dt`` and retry (down to ``dt_min``); grow it back
+        by 2x after ``grow_after`` consecutive successes.
+    dt_min : float or None
+        Smallest step allowed (default ``dt / 64``).
+    max_displacement : float or None
+        Displacement-based step control: keep the largest particle displacement
+        per step below ``max_displacement * h`` (h: the mean particle spacing of
+        the step's mesh).  The step that exceeds it is kept and the next step is
+        shortened to ``0.9 * dt * limit / max|du|`` (never below ``dt_min``); the
+        step grows back (at most 2x per step, never above the initial ``dt``)
+        while the displacement stays below the limit.  None: off.
+    writer : ResultWriter or None
+        Receives a VTU per output step.
+    output_every : int
+        Write every k-th step (the last step is always written).
+    checkpoint_dir : path or None
+        Folder for ``checkpoint_XXXXXX.npz`` files.
+    checkpoint_every : int
+        Steps between checkpoints.
+    callbacks : list of callables
+        ``f(sim, particles, result)`` after every step, with the new particles
+        and the :class:`~skfem_npfem.step.stages.StepResult` (``result.record`` is
+        the kept :class:`~skfem_npfem.step.stages.StepRecord`: store scene values in
+        ``result.record.extra``); return True to stop.
+    progress : bool or None
+        Progress on stderr (None: on): on a terminal one line rewritten after
+        every step, otherwise a line every ``progress_interval`` seconds (and
+        the first and last steps); see :mod:`skfem_npfem.run.control`.
+    meta : dict
+        Stored in checkpoints (scene name, parameters).
+    extra_point_data : callable or None
+        ``f(particles) -> dict`` of more point data for the VTU files.
+    stepper : callable or None
+        The step, ``stepper(particles, model, dt, mesh_source, step=k) ->
+        (particles, StepResult)``; None: N-PFEM's
+        :func:`~skfem_npfem.advance`.  Another method (FEM with remapping,
+        explicit SPFEM: :mod:`skfem_npfem.baseline`) plugs in here and may keep
+        more state in a subclass of :class:`Particles`; checkpoints keep it.
+
+    Raises
+    ------
+    ParameterError
+        If ``dt`` is not a finite time > 0, or ``max_displacement`` is given
+        and not > 0.  :meth:`run` raises
+        :class:`~skfem_npfem.errors.SolverError` when a step fails at the
+        smallest allowed ``dt`` (naming the step and what to change) and
+        :class:`~skfem_npfem.errors.RunInterrupted` on SIGINT/SIGTERM.
+    """
+
+    def __init__(
+        self,
+        particles: Particles,
+        model: Model,
+        mesh_source: MeshSource,
+        dt: float,
+        *,
+        adaptive: bool = False,
+        dt_min: float | None = None,
+        grow_after: int = 4,
+        max_displacement: float | None = None,
+        writer: Any = None,
+        output_every: int = 1,
+        checkpoint_dir: str | Path | None = None,
+        checkpoint_every: int = 0,
+        callbacks: list[Callable[..., Any]] | None = None,
+        progress: bool | None = None,
+        meta: dict | None = None,
+        extra_point_data: Callable[[Particles], dict[str, np.ndarray]] | None = None,
+        stepper: Callable[..., tuple[Particles, StepResult]] | None = None,
+    ) -> None:
+        if not (isinstance(dt, int | float) and math.isfinite(dt) and dt > 0):
+            raise ParameterError("dt", dt, "a finite time step > 0 (s)")
+        self.particles = particles
+        self.model = model
+        self.mesh_source = mesh_source
+        self.dt_max = float(dt)
+        self.dt = float(dt)
+        self.adaptive = adaptive
+        self.dt_min = float(dt_min) if dt_min is not None else dt / 64.0
+        self.grow_after = grow_after
+        if max_displacement is not None and not (
+            isinstance(max_displacement, int | float)
+            and math.isfinite(max_displacement)
+            and max_displacement > 0
+        ):
+            raise ParameterError(
+                "max_displacement", max_displacement, "a number > 0 (fraction of h)"
+            )
+        self.max_displacement = max_displacement
+        self.writer = writer
+        self.output_every = max(1, int(output_every))
+        self.checkpoint_dir = Path(checkpoint_dir) if checkpoint_dir else None
+        self.checkpoint_every = int(checkpoint_every)
+        self.callbacks = list(callbacks or [])
+        self.progress = True if progress is None else bool(progress)
+        #: Seconds between progress lines when stderr is not a terminal.
+        self.progress_interval = INTERVAL
+        self._last_checkpoint: dict[int, Path] = {}
+        self.meta = dict(meta or {})
+        self.extra_point_data = extra_point_data
+        self.stepper = stepper
+        self.time = 0.0
+        self.step = 0
+        self.records: list[StepRecord] = []
+        self._successes = 0
+        self.last_record: StepRecord | None = None
+        #: Mass and energies of the initial state (see :func:`energies`).
+        self.initial = energies(particles, model.gravity)
+
+    # -- output ---------------------------------------------------------------
+    def point_data(self, p: Particles, active: np.ndarray | None) -> dict:
+        """Point data written to the VTU files."""
+        act = np.zeros(p.n, bool)
+        if active is not None:
+            act[active] = True
+        data = {
+            "displacement": p.u,
+            "velocity": p.v,
+            "stress": p.stress,
+            "plastic_strain_eq": p.eps_p,
+            "mass": p.mass,
+            "active": act,
+        }
+        # Mesh sources that know the free surface (AlphaShapeMesher) report it
+        # for the mesh the step was solved on.
+        free = getattr(self.mesh_source, "free_surface", None)
+        flags = free() if callable(free) else None
+        if flags is not None:
+            data["free_surface"] = flags
+        if self.extra_point_data is not None:
+            data.update(self.extra_point_data(p))
+        return data
+
+    def write_output(self, cells_global: np.ndarray | None, active) -> None:
+        """Write the current particles as one VTU step."""
+        if self.writer is None:
+            return
+        self.writer.write(
+            self.step,
+            self.time,
+            self.particles.x,
+            cells_global,
+            self.point_data(self.particles, active),
+        )
+
+    def save_checkpoint(self) -> Path | None:
+        """Write ``checkpoint_<step>.npz`` (see :mod:`skfem_npfem.io`)."""
+        if self.checkpoint_dir is None:
+            return None
+        state = {
+            **self.meta,
+            "step": self.step,
+            "time": self.time,
+            "dt": self.dt,
+            "successes": self._successes,
+            "initial": self.initial,
+            "records": [r.as_dict() for r in self.records],
+        }
+        path = write_checkpoint(self.checkpoint_dir, self.step, self.particles, state)
+        self._last_checkpoint = {self.step: path}
+        return path
+
+    def restore(self, path: str | Path) -> dict:
+        """Continue from a checkpoint written by :meth:`save_checkpoint`.
+
+        Restores the particles, step, time, the adaptive time-step state and the
+        step records, so that the continued run repeats the uninterrupted one
+        step for step.  The particles are read back as the class of the current
+        ones (a method's state subclass keeps its extra arrays).  Returns the
+        checkpoint's metadata.
+        """
+        self.particles, meta = read_checkpoint(path, type(self.particles))
+        self.step = int(meta["step"])
+        self.time = float(meta["time"])
+        self.dt = float(meta["dt"])
+        self._successes = int(meta.get("successes", 0))
+        self.initial = dict(meta.get("initial", self.initial))
+        self.records = [StepRecord.from_dict(r) for r in meta.get("records", [])]
+        self.last_record = self.records[-1] if self.records else None
+        return meta
+
+    # -- loop -----------------------------------------------------------------
+    def run(
+        self,
+        *,
+        steps: int | None = None,
+        t_end: float | None = None,
+        stop: Callable[[Simulation], bool] | None = None,
+    ) -> list[StepRecord]:
+        """Advance until a step count, an end time or a stop rule is reached.
+
+        The run stops after ``steps`` more steps, at ``t_end``, or when
+        ``stop(sim)`` returns True, whichever comes first.  On SIGINT (Ctrl-C)
+        or SIGTERM it stops after the step in progress (a second signal
+        abandons that step), writes a checkpoint (with a ``checkpoint_dir``) and
+        raises :class:`~skfem_npfem.errors.RunInterrupted`.
+
+        Returns
+        -------
+        list of StepRecord
+            All records of the run so far.
+        """
+        if steps is None and t_end is None and stop is None:
+            raise ParameterError("steps", None, "give steps, t_end or a stop rule")
+        if self.step == 0 and self.writer is not None and not self.writer.entries:
+            # The initial state, with the mesh the first step will be built on.
+            active, local_t = self.mesh_source(self.particles.x)
+            self.write_output(active[local_t].T, active)
+        n_target = None if steps is None else self.step + int(steps)
+        progress = Progress(
+            bool(self.progress), n_target, t_end, self.progress_interval
+        )
+        first = (self.step, self.time)
+        guard = SignalGuard()
+        try:
+            with guard:
+                self._loop(n_target, t_end, stop, progress, first, guard)
+        finally:
+            progress.close()
+        return self.records
+
+    def _loop(self, n_target, t_end, stop, progress, first, guard) -> None:
+        """The steps of :meth:`run`; stops at a signal after the step."""
+        while True:
+            if n_target is not None and self.step >= n_target:
+                break
+            if t_end is not None and self.time >= t_end * (1 - 1e-12):
+                break
+            if stop is not None and self.records and stop(self):
+                break  # a resumed run that had already stopped
+            dt = self.dt
+            if t_end is not None and t_end - self.time < dt * (1 - 1e-9):
+                # Land on t_end, but never shorten a step by round-off only.
+                dt = t_end - self.time
+            try:
+                last = self._step_once(dt, n_target, t_end, stop, guard)
+            except AbandonStep:
+                self._interrupted(guard.signum, abandoned=True)
+            progress.update(self.records[-1], self.time, *first)
+            if last:
+                break
+            if guard.signum is not None:
+                self._interrupted(guard.signum)
+
+    def _interrupted(self, signum: int | None, abandoned: bool = False) -> None:
+        """Checkpoint the last finished step and raise RunInterrupted."""
+        path = self._last_checkpoint.get(self.step)
+        if path is None:
+            path = self.save_checkpoint()
+        raise RunInterrupted(
+            signal.SIGINT if signum is None else signum,
+            self.step,
+            self.time,
+            path,
+            abandoned,
+        )
+
+    def _step_once(
+        self,
+        dt: float,
+        n_target: int | None,
+        t_end: float | None,
+        stop: Callable[[Simulation], bool] | None,
+        guard: SignalGuard | None = None,
+    ) -> bool:
+        """One step with its output, callbacks and checkpoint; True: stop now.
+
+        The step's :class:`~skfem_npfem.step.stages.StepResult` lives only here: the
+        run keeps its record.
+        """
+        if guard is not None:
+            guard.in_step = True  # a second signal abandons this step
+        new, result = self._try_step(dt)
+        if guard is not None:
+            guard.in_step = False
+        rec = result.record
+        self.particles = new
+        self.step += 1
+        self.time += rec.dt
+        rec.step, rec.time = self.step, self.time
+        v0 = self.records[0].mesh_volume if self.records else rec.mesh_volume
+        rec.volume_change = rec.mesh_volume / v0 - 1.0 if v0 > 0 else 0.0
+        self.records.append(rec)
+        self.last_record = rec
+        last = (n_target is not None and self.step >= n_target) or (
+            t_end is not None and self.time >= t_end * (1 - 1e-12)
+        )
+        t_out = time.perf_counter()
+        if self.writer is not None and (self.step % self.output_every == 0 or last):
+            self.write_output(result.cells, result.active)
+        stop_now = any(bool(cb(self, new, result)) for cb in self.callbacks)
+        if stop is not None and stop(self):
+            stop_now = True
+        if self.checkpoint_every and (
+            self.step % self.checkpoint_every == 0 or stop_now or last
+        ):
+            self.save_checkpoint()
+        rec.timings["output"] = time.perf_counter() - t_out
+        return stop_now
+
+    def _try_step(self, dt: float) -> tuple[Particles, StepResult]:
+        retries = 0
+        while True:
+            try:
+                new, result = self._advance(dt)
+            except SolverError as err:
+                if not self.adaptive or dt / 2 < self.dt_min:
+                    saved = self.save_checkpoint()
+                    # Keep the solver's own advice (e.g. "use displacement
+                    # control" for a static overload) and add the loop's context.
+                    advice = str(err).split("; ", 1)[1] if "; " in str(err) else ""
+                    unit = " s" if self.model.mode == "dynamic" else " (load step)"
+                    where = f"dt={dt:g}{unit}" + (
+                        f" (floor {self.dt_min:g} s)" if self.adaptive else ""
+                    )
+                    if saved is not None:
+                        where += f"; results up to step {self.step} are on disk"
+                    raise SolverError(
+                        err.status,
+                        self.step + 1,
+                        err.iterations,
+                        "; ".join(s for s in (advice, where) if s),
+                    ) from err
+                dt /= 2.0
+                retries += 1
+                self._successes = 0
+                continue
+            rec = result.record
+            rec.retries = retries
+            if self.adaptive:
+                self._successes += 1
+                if retries:
+                    self.dt = dt
+                elif self._successes >= self.grow_after and self.dt < self.dt_max:
+                    self.dt = min(2 * self.dt, self.dt_max)
+                    self._successes = 0
+            if self.max_displacement is not None:
+                self._displacement_control(new, rec, dt)
+                if retries:  # do not grow straight after a failure
+                    self.dt = min(self.dt, dt)
+            return new, result
+
+    def _displacement_control(self, new: Particles, rec: StepRecord, dt: float):
+        """Set the next step from the largest displacement of this one."""
+        h = (rec.mesh_volume / max(rec.n_active, 1)) ** (1.0 / new.dim)
+        du = float(np.max(np.linalg.norm(new.x - self.particles.x, axis=1)))
+        limit = self.max_displacement * h
+        rec.extra["max_displacement_ratio"] = du / limit
+        if du > limit:
+            self.dt = max(0.9 * dt * limit / du, self.dt_min)
+        elif du > 0:
+            self.dt = min(self.dt_max, 2 * dt, 0.9 * dt * limit / du)
+
+    def _advance(self, dt: float) -> tuple[Particles, StepResult]:
+        args = (self.particles, self.model, dt, self.mesh_source)
+        if self.stepper is not None:
+            return self.stepper(*args, step=self.step + 1)
+        # The volume correction's filter state lives in the last record (so
+        # checkpoints, which keep the records, carry it).
+        last = self.last_record
+        state = None if last is None else last.extra.get("volume_correction_strain")
+        return advance(*args, step=self.step + 1, volume_state=state)
+
+    def summary(self) -> dict[str, Any]:
+        """Solver statistics of the run (steps, iterations, time per phase)."""
+        recs = self.records
+        phases: dict[str, float] = {}
+        for r in recs:
+            for k, v in r.timings.items():
+                phases[k] = phases.get(k, 0.0) + v
+        its = [r.iterations for r in recs]
+        keys = sorted({k for r in recs for k in r.timings})
+        median = {
+            k: float(np.median([r.timings.get(k, 0.0) for r in recs])) for k in keys
+        }
+        step_times = [sum(r.timings.values()) for r in recs]
+        return {
+            "steps": len(recs),
+            "time": self.time,
+            "ipm_iterations_total": int(sum(its)),
+            "ipm_iterations_max": int(max(its, default=0)),
+            "ipm_iterations_mean": float(np.mean(its)) if its else 0.0,
+            "statuses": sorted({r.status for r in recs}),
+            "retries": int(sum(r.retries for r in recs)),
+            "wall_time": phases,
+            "step_time_median": float(np.median(step_times)) if recs else 0.0,
+            "step_time_median_by_phase": median,
+            "n_particles": int(self.particles.n),
+            "mass_change": (
+                float(recs[-1].mass / self.initial["mass"] - 1.0) if recs else 0.0
+            ),
+            "volume_change": float(recs[-1].volume_change) if recs else 0.0,
+            "max_kinetic_energy": float(
+                max((r.kinetic_energy for r in recs), default=0.0)
+            ),
+            "linear_solvers": sorted({r.linear_solver for r in recs} - {""}),
+            "peak_memory_mb": peak_memory_mb(),
+        }
+
+
+def peak_memory_mb() -> float:
+    """Peak resident memory of this process so far, MiB (0 where unknown)."""
+    try:
+        import resource
+    except ImportError:  # pragma: no cover - not on Windows
+        return 0.0
+    kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return float(kib) / (1024.0 if sys.platform != "darwin" else 1024.0**2)
+
+
+@dataclass
+class AtRest:
+    """Stop rule for :meth:`Simulation.run`: the flow has come to rest.
+
+    Stops once ``time >= min_time`` and the kinetic energy of the last step is
+    at most ``fraction`` times a reference energy:
+
+    * ``"max_kinetic"``: the largest kinetic energy of the run so far;
+    * ``"potential_drop"``: the potential energy released since the start,
+      ``E_p(0) - E_p(t)`` (never stops while nothing has fallen).
+
+    It reads only :attr:`Simulation.records`, so a resumed run stops at the same
+    step as an uninterrupted one.
+
+    Parameters
+    ----------
+    fraction : float
+        Kinetic energy at rest as a fraction of the reference, in (0, 1);
+        default 1e-3.
+    min_time : float
+        Earliest time to stop, s, >= 0; default 0.
+    reference : {"max_kinetic", "potential_drop"}
+        The reference energy (above); default ``"max_kinetic"``.
+
+    Raises
+    ------
+    ParameterError
+        If ``fraction``, ``min_time`` or ``reference`` is outside the ranges
+        above.
+
+    Examples
+    --------
+    >>> rule = AtRest(fraction=0.01, min_time=0.2)
+    >>> rule.reference
+    'max_kinetic'
+    """
+
+    fraction: float = 1e-3
+    min_time: float = 0.0
+    reference: str = "max_kinetic"
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.fraction) and 0 < self.fraction < 1):
+            raise ParameterError("fraction", self.fraction, "a number in (0, 1)")
+        if not (math.isfinite(self.min_time) and self.min_time >= 0):
+            raise ParameterError("min_time", self.min_time, "a time >= 0 (s)")
+        if self.reference not in ("max_kinetic", "potential_drop"):
+            raise ParameterError(
+                "reference", self.reference, "'max_kinetic' or 'potential_drop'"
+            )
+
+    def __call__(self, sim: Simulation) -> bool:  # noqa: D102
+        recs = sim.records
+        if not recs or sim.time < self.min_time * (1 - 1e-12):
+            return False
+        if self.reference == "max_kinetic":
+            ref = max(r.kinetic_energy for r in recs)
+        else:
+            ref = sim.initial["potential_energy"] - recs[-1].potential_energy
+        return ref > 0 and recs[-1].kinetic_energy <= self.fraction * ref

@@ -1,0 +1,104 @@
+"""What a picture of a result shows besides the particles: a scene's scenery.
+
+Each scene describes its own scenery (:attr:`Scene.scenery
+<skfem_npfem.scenes.base.Scene>`): the floor, walls and footing, the initial
+outline of the body, the reference run-out of the collapse, the footing's
+load-settlement curve and how to label a step (time, or settlement for the
+footing, whose pseudo-time is its settlement).  This module holds the
+description (:class:`Scenery`) and the small helpers the scenes share; the
+drawing code (:mod:`skfem_npfem.viz`) reads it and holds no scene knowledge.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["Scenery", "box", "number", "time_label"]
+
+
+@dataclass
+class Scenery:
+    """Everything drawn around the particles of a 2D result.
+
+    Attributes
+    ----------
+    scene : str
+        Scene name ("" when unknown).
+    floor : float or None
+        Height of a rigid base (the collapse floor, the fixed base of the
+        column and of the footing's soil block), m.
+    floor_label : str
+        Legend text of the base.
+    walls : list of (float, int, str)
+        Vertical walls: x position, the side the body is on (+1: right of the
+        wall), legend text.
+    outline : ndarray (n, 2) or None
+        Closed polygon of the body at the start.
+    footing : (float, float, float) or None
+        ``(x0, x1, surface)``: the footing spans x0..x1 on the soil surface.
+    symmetry : float or None
+        x of a symmetry axis (the footing's half model).
+    runout_reference : float or None
+        Lube et al. (2005) final run-out, m from x = 0 (the collapse; Lube et
+        al. 2004's run-out radius for an axisymmetric collapse).
+    runout_label : str
+        Legend text of the reference run-out (before its value).
+    symmetric : bool
+        Collapse against the wall at x = 0 (run-out measured from it).
+    tau : float or None
+        ``sqrt(H0 / g)`` of the collapse, s.
+    load_curve : ndarray (n, 2) or None
+        Footing: settlement (m) and pressure (Pa) per step.
+    q_reference : float or None
+        Footing: Prandtl-Reissner ``N_c c`` of a weightless soil, Pa.
+    half_width : float or None
+        Footing half width b, m.
+    label : callable
+        ``label(t)``: the text naming a step of time t in titles.
+    """
+
+    scene: str = ""
+    floor: float | None = None
+    floor_label: str = "rigid base"
+    walls: list[tuple[float, int, str]] = field(default_factory=list)
+    outline: np.ndarray | None = None
+    footing: tuple[float, float, float] | None = None
+    symmetry: float | None = None
+    runout_reference: float | None = None
+    runout_label: str = "reference run-out"
+    symmetric: bool = True
+    tau: float | None = None
+    load_curve: np.ndarray | None = None
+    q_reference: float | None = None
+    half_width: float | None = None
+    label: Callable[[float], str] = field(default=lambda t: f"t = {t:.4g} s")
+
+    def settlement_label(self, t: float) -> str:
+        """The footing's step label: settlement in mm and relative to B = 2b."""
+        text = f"settlement s = {1e3 * t:.3g} mm"
+        if self.half_width:
+            text += f"  (s/B = {t / (2 * self.half_width):.3g})"
+        return text
+
+
+def box(x0: float, x1: float, y0: float, y1: float) -> np.ndarray:
+    """The closed polygon of the rectangle ``[x0, x1] x [y0, y1]``."""
+    return np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1], [x0, y0]])
+
+
+def number(params: dict, name: str, default: float | None = None) -> float | None:
+    """``params[name]`` as a finite float, else ``default`` (scene.json values)."""
+    try:
+        value = float(params[name])
+    except (KeyError, TypeError, ValueError):
+        return default
+    return value if math.isfinite(value) else default
+
+
+def time_label(tau: float, height: str = "H0") -> Callable[[float], str]:
+    """A step label with the time in s and normalised by ``tau = sqrt(H/g)``."""
+    return lambda t: f"t = {t:.3g} s   (t/\u221a({height}/g) = {t / tau:.2f})"

@@ -1,0 +1,32 @@
+"""One N-PFEM step: the cone program built from the particles, solved, read back.
+
+The data flow of :func:`advance` (in :mod:`.stages`) goes through these modules:
+
+* :mod:`.model` -- what is solved: materials, mode, walls, time scheme, options;
+* :mod:`.program` -- the step's data (:class:`StepData`) and its cone program's
+  blocks;
+* :mod:`.families`, :mod:`.stabilisation`, :mod:`.volume` -- the program's terms:
+  the yield cones per material family, the consistent element-residual
+  stabilisation and the volume correction;
+* :mod:`.conic` -- scaling, Clarabel's problem and the solution read back from the
+  duals (:class:`StepSolution`);
+* :mod:`.solver`, :mod:`.backends` -- solver options and the direct linear solvers;
+* :mod:`.kinematics` -- stress rotation, strain measures, energies.
+"""
+
+from .conic import StepSolution, solve_step
+from .model import Model
+from .program import StepData
+from .solver import SolverOptions
+from .stages import StepRecord, StepResult, advance
+
+__all__ = [
+    "Model",
+    "SolverOptions",
+    "StepData",
+    "StepRecord",
+    "StepResult",
+    "StepSolution",
+    "advance",
+    "solve_step",
+]

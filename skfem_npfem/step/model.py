@@ -1,0 +1,206 @@
+"""The physics and numerics shared by all steps of a run (:class:`Model`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..boundary import RigidWall
+from ..constants import GRAVITY
+from ..errors import ParameterError
+from ..materials import Material
+from .solver import SolverOptions
+
+__all__ = ["NODAL_MASS", "Model"]
+
+#: Allowed values of :attr:`Model.nodal_mass`.
+NODAL_MASS = ("mesh", "particle")
+
+
+@dataclass
+class Model:
+    """Physics and numerics shared by all steps of a run.
+
+    Parameters
+    ----------
+    dim : int
+        2 (plane strain) or 3.
+    materials : list of Material
+        Referenced by :attr:`Particles.material`.
+    gravity : float
+        Gravitational acceleration along ``-e_d``, m/s^2.
+    mode : {"dynamic", "static"}
+        Include inertia (theta1/theta2 scheme) or solve quasi-static steps.
+    theta1, theta2 : float
+        Time-integration parameters in [1/2, 1] (1, 1: backward Euler, the PFEM
+        default; 1/2, 1/2: trapezoidal, energy conserving, elastic waves only).
+    walls : list of RigidWall
+        Rigid planes the particles may touch.
+    objective_rotation : bool
+        Rotate stresses with the smoothed spin (Hughes-Winget, exactly orthogonal).
+    update_geometry : bool
+        Move the particles by each increment (updated Lagrangian, large
+        deformation).  False keeps the initial geometry (small-strain analysis, as
+        in limit-load benchmarks); displacements still accumulate in ``u``.
+    stress_scale : float or None
+        Stress scale for non-dimensionalisation (None: automatic).
+    solver : SolverOptions
+        Clarabel settings.
+    stabilisation : float
+        Factor ``beta >= 0`` of the consistent element-residual stabilisation
+        of the stresses (:mod:`skfem_npfem.step.stabilisation`); 0 switches it off.
+    nodal_mass : {"mesh", "particle"}
+        Masses of a step's nodes.  ``"mesh"`` (default): each node's cell
+        volume times the mean density of its material over the current mesh
+        (``sum m / sum V`` over that material's active particles), so that the
+        load density is uniform and the total mass exact while the cells change
+        from remesh to remesh.  ``"particle"``: each node carries its particle's
+        own mass; a remeshed body then sees a body force ``m_i g`` that no
+        longer matches its cell ``V_i``, which roughens the stresses (the
+        remeshed column at rest in docs/validation.md).  On a fixed mesh whose
+        particle masses are ``rho V_i`` the two agree.
+    volume_correction : float
+        Rate ``kappa`` in [0, 1] at which a uniform volumetric eigenstrain
+        returns the body's volume deficit (:mod:`skfem_npfem.step.volume`): each
+        material's particles should fill ``sum m / rho``; remeshing and
+        linearised increments lose some of it, and this returns it through
+        the solve, the deficit decaying as ``(1 + kappa n)(1 - kappa)^n`` over
+        ``n`` steps (a critically damped filter; its state travels in the
+        step records).  0 (default) switches it off; needs ``rho > 0``.
+        The plane-strain ``column-collapse`` scene defaults to 0.05 for a
+        material whose own volume barely changes (psi = 0, rho g H0 / E <=
+        0.01; docs/validation.md, "At the default spacing").
+    axisymmetric : bool
+        2D only: the mesh is the ``(r, z)`` half-section of a body of revolution
+        about ``x = 0`` (:mod:`skfem_npfem.mesh.axisymmetric`).  Stresses are
+        ``(rr, zz, tt, rz)`` with the hoop component in the ``zz`` slot, the
+        cells are weighted by ``2 pi r`` and particle masses must be the full-ring
+        masses ``rho V_i`` of those cells.  Needs cones with ``sigma_tt`` as a
+        variable (Drucker-Prager, von Mises, AxisymmetricMohrCoulomb); particles
+        on the axis should have ``u_r`` fixed.
+    """
+
+    dim: int
+    materials: list[Material]
+    gravity: float = GRAVITY
+    mode: str = "dynamic"
+    theta1: float = 1.0
+    theta2: float = 1.0
+    walls: list[RigidWall] = field(default_factory=list)
+    objective_rotation: bool = True
+    update_geometry: bool = True
+    stress_scale: float | None = None
+    solver: SolverOptions = field(default_factory=SolverOptions)
+    stabilisation: float = 0.0
+    nodal_mass: str = "mesh"
+    axisymmetric: bool = False
+    volume_correction: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.dim not in (2, 3):
+            raise ParameterError("dim", self.dim, "2 or 3")
+        if isinstance(self.materials, Material | str) or not self.materials:
+            raise ParameterError(
+                "materials", self.materials, "a list of at least one Material"
+            )
+        for i, m in enumerate(self.materials):
+            if not isinstance(m, Material):
+                raise ParameterError(
+                    f"materials[{i}]",
+                    m,
+                    "a Material object, e.g. MohrCoulomb(E, nu, rho, c=0, phi=30)",
+                )
+            m.check_dim(self.dim)
+        if self.mode not in ("dynamic", "static"):
+            raise ParameterError("mode", self.mode, "'dynamic' or 'static'")
+        for name in ("theta1", "theta2"):
+            val = getattr(self, name)
+            if not (isinstance(val, int | float) and 0.5 <= val <= 1.0):
+                raise ParameterError(name, val, "a number in [0.5, 1]")
+        s = self.stress_scale
+        if s is not None and not (
+            isinstance(s, int | float) and math.isfinite(s) and s > 0
+        ):
+            raise ParameterError("stress_scale", s, "a stress > 0 (Pa) or None")
+        g = self.gravity
+        if not (isinstance(g, int | float) and math.isfinite(g) and g >= 0):
+            raise ParameterError("gravity", g, "a finite number >= 0 (m/s^2)")
+        for w in self.walls:
+            if w.normal.size != self.dim:
+                raise ParameterError("walls", w, f"walls must be {self.dim}D")
+        b = self.stabilisation
+        if isinstance(b, bool) or not (
+            isinstance(b, int | float) and math.isfinite(b) and b >= 0
+        ):
+            raise ParameterError("stabilisation", b, "a finite number >= 0")
+        k = self.volume_correction
+        if isinstance(k, bool) or not (
+            isinstance(k, int | float) and math.isfinite(k) and 0 <= k <= 1
+        ):
+            raise ParameterError("volume_correction", k, "a number in [0, 1]")
+        if k and any(m.rho <= 0 for m in self.materials):
+            raise ParameterError(
+                "volume_correction",
+                k,
+                "0 unless every material has a density rho > 0 (a particle's "
+                "reference volume is its mass / rho)",
+            )
+        if self.nodal_mass not in NODAL_MASS:
+            raise ParameterError("nodal_mass", self.nodal_mass, f"one of {NODAL_MASS}")
+        if not isinstance(self.axisymmetric, bool):
+            raise ParameterError("axisymmetric", self.axisymmetric, "True or False")
+        if self.axisymmetric:
+            self._check_axisymmetric()
+
+    def _check_axisymmetric(self) -> None:
+        """Axisymmetry is 2D, and every plastic cone must see sigma_tt."""
+        if self.dim != 2:
+            raise ParameterError(
+                "axisymmetric", True, "only with dim=2 (the (r, z) half-section)"
+            )
+        for m in self.materials:
+            if m.plastic and not m.needs_zz(2):
+                raise ParameterError(
+                    "materials",
+                    type(m).__name__,
+                    "a cone with the hoop stress as a variable in axisymmetry: "
+                    "DruckerPrager, VonMises or AxisymmetricMohrCoulomb "
+                    "(plane-strain MohrCoulomb/Tresca ignore sigma_tt)",
+                )
+
+    def node_masses(
+        self, mass: np.ndarray, material: np.ndarray, volumes: np.ndarray
+    ) -> np.ndarray:
+        """Masses of a step's nodes from their particles' (see ``nodal_mass``).
+
+        Examples
+        --------
+        >>> from skfem_npfem.materials import LinearElastic
+        >>> m = Model(dim=2, materials=[LinearElastic(1e6, 0.3)])
+        >>> m.node_masses(np.array([1.0, 3.0]), np.array([0, 0]), np.ones(2))
+        array([2., 2.])
+        """
+        if self.nodal_mass == "particle":
+            return mass
+        total = np.bincount(material, weights=mass)
+        space = np.bincount(material, weights=volumes)
+        density = np.divide(total, space, out=np.zeros_like(total), where=space > 0)
+        return density[material] * volumes
+
+    @property
+    def components(self) -> tuple[int, ...]:
+        """Full-Voigt components carried as cone variables."""
+        if self.dim == 3:
+            return (0, 1, 2, 3, 4, 5)
+        if self.axisymmetric or any(m.needs_zz(2) for m in self.materials):
+            return (0, 1, 2, 3)
+        return (0, 1, 3)
+
+    @property
+    def gravity_vector(self) -> np.ndarray:
+        """Gravity as a vector (along ``-e_d``)."""
+        g = np.zeros(self.dim)
+        g[-1] = -self.gravity
+        return g
