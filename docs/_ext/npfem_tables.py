@@ -99,7 +99,7 @@ def statuses(counts: dict) -> str:
 
 
 # ---------------------------------------------------------------------------
-# Verification: the footing plateau (demos/footing_plateau.py).
+# Verification: the footing plateau (demos/studies/footing_plateau.py).
 
 
 @table("docs/validation/footing_plateau.json")
@@ -214,7 +214,7 @@ def prandtl() -> str:
 
 
 # ---------------------------------------------------------------------------
-# Validation: the column collapse (demos/collapse_validation.py).
+# Validation: the column collapse (demos/studies/collapse_validation.py).
 
 COLLAPSE = "docs/validation/collapse_validation.json"
 #: The same study rerun with the defaults of 2026-12-02 (stabilisation beta =
@@ -590,7 +590,7 @@ def collapse_before_after() -> str:
 
 @table("docs/validation/area_budget.json")
 def area_budget() -> str:
-    """Where the collapse's mesh area goes (demos/area_budget.py)."""
+    """Where the collapse's mesh area goes (demos/studies/area_budget.py)."""
     out = []
     for r in load("docs/validation/area_budget.json")["runs"]:
         dt = r["overrides"].get("dt")
@@ -623,7 +623,7 @@ def area_budget() -> str:
 
 
 # ---------------------------------------------------------------------------
-# Baselines (demos/compare_*.py).
+# Baselines (demos/studies/compare_*.py).
 
 
 @table("docs/validation/comparison/locking.json")

@@ -23,8 +23,8 @@ its change exactly into the two things a PFEM step does:
 
 Usage::
 
-    PYTHONPATH=. python demos/area_budget.py                     # dt = 2, 5, 10 ms
-    PYTHONPATH=. python demos/area_budget.py --dt 0.005 --set alpha=1.6
+    PYTHONPATH=. python demos/studies/area_budget.py                  # dt = 2, 5, 10 ms
+    PYTHONPATH=. python demos/studies/area_budget.py --dt 0.005 --set alpha=1.6
 
 Writes ``docs/validation/area_budget.json`` and prints a Markdown table.
 """
@@ -37,8 +37,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-
-ROOT = Path(__file__).resolve().parents[1]
+from _common import ROOT
 
 
 def budget(overrides: dict) -> dict:

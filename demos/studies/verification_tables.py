@@ -21,7 +21,7 @@ documentation builds the tables of docs/verification.md from that file.
 
 About two minutes on one core.  Usage (from the repository root)::
 
-    python demos/verification_tables.py [--out docs/validation]
+    python demos/studies/verification_tables.py [--out docs/validation]
 """
 
 from __future__ import annotations
@@ -34,9 +34,9 @@ import platform
 import time
 from pathlib import Path
 
-import skfem_npfem as npfem
+from _common import ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
+import skfem_npfem as npfem
 
 COLUMNS = [
     {"dim": 2, "spacing": 0.25},

@@ -34,7 +34,7 @@ the same command with ``--force --out docs/validation/current`` wrote the
 rerun with the defaults of 2026-12-02: 14 minutes of wall time with two cases
 in parallel, beside a 3D run)::
 
-    PYTHONPATH=. python demos/collapse_validation.py \\
+    PYTHONPATH=. python demos/studies/collapse_validation.py \\
         --aspects 0.5,1,2,4,8 --particles-across 12,8,16,22 \\
         --refinement 8,10,12,14,16,19,22 --jobs 2 \\
         --variants "dt=0.01;dt=0.0025;dt=0.00125;alpha=1.6;E=1e8;\\
@@ -62,6 +62,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _common import ROOT, floats, ints
 
 SCENE = "column-collapse"
 G = 9.81
@@ -264,7 +265,7 @@ def launch(
 ) -> tuple:
     """Run one case in a subprocess (single-threaded BLAS); returns (rc, wall)."""
     env = dict(os.environ)
-    root = str(Path(__file__).resolve().parents[1])
+    root = str(ROOT)
     env["PYTHONPATH"] = root + os.pathsep + env.get("PYTHONPATH", "")
     for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         env.setdefault(var, "1")
@@ -773,15 +774,8 @@ def print_tables(sweep: list[dict], ref: list[dict], fit: dict) -> None:
 # ---------------------------------------------------------------------------
 
 
-def floats(text: str) -> list[float]:
-    return [float(t) for t in text.split(",") if t.strip()]
-
-
-def ints(text: str) -> list[int]:
-    return [int(t) for t in text.split(",") if t.strip()]
-
-
-def main(argv=None) -> int:
+def parser() -> argparse.ArgumentParser:
+    """The command line of the study."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--aspects", type=floats, default=floats("0.5,1,2,4,8"))
     ap.add_argument(
@@ -842,33 +836,35 @@ def main(argv=None) -> int:
     ap.add_argument("--force", action="store_true", help="rerun existing cases")
     ap.add_argument("--plot-only", action="store_true")
     ap.add_argument("--run-case", help=argparse.SUPPRESS)
-    args = ap.parse_args(argv)
+    return ap
 
-    if args.run_case:
-        spec = json.loads(args.run_case)
-        run_case(
-            spec["aspect"],
-            spec["N"],
-            spec["params"],
-            Path(spec["path"]),
-            spec.get("variant"),
-        )
-        return 0
 
-    if args.threads is None:
-        args.threads = 1 if args.jobs > 1 else 0
-    out = args.out
-    cases_dir = out / "cases"
-    cases_dir.mkdir(parents=True, exist_ok=True)
+def _variants(text: str) -> dict[str, dict]:
+    """``--variants``: tag -> scene overrides (';'-separated 'name=value,...')."""
+    variants: dict[str, dict] = {}
+    for spec in filter(None, (v.strip() for v in text.split(";"))):
+        over = {}
+        for item in spec.split(","):
+            k, v = item.split("=", 1)
+            over[k.strip()] = float(v)
+        variants[spec.replace(",", "_")] = over
+    return variants
 
+
+def _particles(a: float, n: int) -> int:
+    """Particles of the column a = H0/L0 with N across L0 (the lattice)."""
+    return (n + 1) * (round(a * n) + 1)
+
+
+def wanted_cases(args, ap) -> tuple[dict[tuple[float, int], dict], list[str]]:
+    """(a, N) -> parameters of the sweeps and the refinement; skipped case names."""
     n_sweeps = args.particles_across
     n0 = n_sweeps[0]
     wanted: dict[tuple[float, int], dict] = {}
     skipped = []
     for nn in n_sweeps:
         for a in args.aspects:
-            npart = (nn + 1) * (round(a * nn) + 1)
-            if nn != n0 and npart > args.max_particles:
+            if nn != n0 and _particles(a, nn) > args.max_particles:
                 skipped.append(case_name(a, nn))  # secondary sweeps: skip, say so
                 continue
             wanted[(a, nn)] = case_params(a, nn, args)
@@ -878,54 +874,53 @@ def main(argv=None) -> int:
         wanted[(args.refinement_aspect, n)] = case_params(
             args.refinement_aspect, n, args
         )
-    variants: dict[str, dict] = {}
-    for spec in filter(None, (v.strip() for v in args.variants.split(";"))):
-        over = {}
-        for item in spec.split(","):
-            k, v = item.split("=", 1)
-            over[k.strip()] = float(v)
-        variants[spec.replace(",", "_")] = over
     for a, n in wanted:
-        npart = (n + 1) * (round(a * n) + 1)
+        npart = _particles(a, n)
         if a in args.aspects and n == n0 and npart > args.max_particles:
             ap.error(f"a = {a:g}, N = {n}: {npart} particles > --max-particles")
+    return wanted, skipped
 
+
+def _up_to_date(path: Path, params: dict) -> bool:
+    """True if the stored case at ``path`` ran with ``params`` (threads aside)."""
+    old = json.loads(path.read_text())
+    return all(
+        old["case"]["params"].get(k) == v for k, v in params.items() if k != "threads"
+    )
+
+
+def cases_to_run(
+    args, wanted: dict, variants: dict, cases_dir: Path
+) -> list[tuple[float, int, dict, Path, str | None]]:
+    """The cases to (re)run, largest first: (a, N, params, path, variant)."""
     todo = []
     for (a, n), params in wanted.items():
         path = cases_dir / f"{case_name(a, n)}.json"
         if path.exists() and not args.force:
-            old = json.loads(path.read_text())
-            same = all(
-                old["case"]["params"].get(k) == v
-                for k, v in params.items()
-                if k != "threads"
-            )
-            if same or args.plot_only:
+            if args.plot_only or _up_to_date(path, params):
                 continue
         if args.plot_only:
             print(f"missing case {case_name(a, n)} (skipped, --plot-only)")
             continue
-        todo.append((a, n, params, path))
+        todo.append((a, n, params, path, None))
+    a, n = args.refinement_aspect, args.particles_across[0]
     for tag, over in variants.items():
-        a, n = args.refinement_aspect, n0
         params = {**case_params(a, n, args), **over}
         path = cases_dir / f"{case_name(a, n)}_{tag}.json"
         if path.exists() and not args.force:
-            old = json.loads(path.read_text())
-            if args.plot_only or all(
-                old["case"]["params"].get(k) == v
-                for k, v in params.items()
-                if k != "threads"
-            ):
+            if args.plot_only or _up_to_date(path, params):
                 continue
         if not args.plot_only:
             todo.append((a, n, params, path, tag))
-    todo = [c if len(c) == 5 else (*c, None) for c in todo]
     # Largest first (load balance).
-    todo.sort(key=lambda c: -(c[1] + 1) * (round(c[0] * c[1]) + 1) * math.sqrt(c[0]))
+    todo.sort(key=lambda c: -_particles(c[0], c[1]) * math.sqrt(c[0]))
+    return todo
 
+
+def run_all(todo: list, args, cases_dir: Path) -> float:
+    """Run ``todo`` on Dask (local --jobs workers or --scheduler); wall time."""
     t0 = time.perf_counter()
-    if todo:  # on Dask (issue 14): a local cluster of --jobs workers or --scheduler
+    if todo:
         from skfem_npfem.sweeps import run_tasks
 
         outcomes = run_tasks(
@@ -936,8 +931,18 @@ def main(argv=None) -> int:
         )
         if not all(o.ok for o in outcomes.values()):
             print("some cases failed; see the logs in", cases_dir)
-    wall_all = time.perf_counter() - t0
+    return time.perf_counter() - t0
 
+
+def _fits_of(sweep: list[dict]) -> tuple[dict, dict]:
+    """Fits of the primary run-out measure and of the alternative ones."""
+    alt = {k: fits(sweep, k) for k in ("front_q99_normalised", "normalised_runout_tip")}
+    return fits(sweep), alt
+
+
+def collect(args, wanted: dict, variants: dict, cases_dir: Path) -> dict:
+    """Rows of the stored cases: sweeps by N, refinement, variants, fits."""
+    n0 = args.particles_across[0]
     rows = {}
     for a, n in wanted:
         path = cases_dir / f"{case_name(a, n)}.json"
@@ -945,9 +950,8 @@ def main(argv=None) -> int:
             rows[(a, n)] = row_from_summary(json.loads(path.read_text()))
     sweeps = {
         nn: [rows[(a, nn)] for a in sorted(args.aspects) if (a, nn) in rows]
-        for nn in n_sweeps
+        for nn in args.particles_across
     }
-    sweep = sweeps[n0]
     ref = [
         rows[(args.refinement_aspect, n)]
         for n in sorted(args.refinement)
@@ -958,54 +962,58 @@ def main(argv=None) -> int:
         path = cases_dir / f"{case_name(args.refinement_aspect, n0)}_{tag}.json"
         if path.exists():
             var_rows.append(row_from_summary(json.loads(path.read_text())))
-    fit = fits(sweep)
-    fit_alt = {
-        k: fits(sweep, k) for k in ("front_q99_normalised", "normalised_runout_tip")
+    fit, fit_alt = _fits_of(sweeps[n0])
+    other = {}
+    for nn, sw in sweeps.items():
+        if nn != n0:
+            f, f_alt = _fits_of(sw)
+            other[str(nn)] = {"sweep": sw, "fits": f, "fits_alternative": f_alt}
+    return {
+        "rows": list(rows.values()) + var_rows,
+        "sweep": sweeps[n0],
+        "refinement": ref,
+        "variants": var_rows,
+        "fits": fit,
+        "fits_alternative_measures": fit_alt,
+        "other_sweeps": other,
     }
-    other = {
-        str(nn): {
-            "sweep": sw,
-            "fits": fits(sw),
-            "fits_alternative": {
-                k: fits(sw, k)
-                for k in ("front_q99_normalised", "normalised_runout_tip")
-            },
-        }
-        for nn, sw in sweeps.items()
-        if nn != n0
+
+
+def setup(args) -> dict:
+    """The ``setup`` entry of collapse_validation.json."""
+    return {
+        "phi_deg": 30.0,
+        "psi_deg": 0.0,
+        "c": 0.0,
+        "floor_friction_deg": args.floor_friction
+        if args.floor_friction is not None
+        else 30.0,
+        "E": 1.0e7,
+        "nu": 0.3,
+        "rho": 1800.0,
+        "K0": 0.5,
+        "dt": args.dt,
+        "alpha": args.alpha,
+        "theta1": 1.0,
+        "theta2": 1.0,
+        "L0": args.length,
+        "plane_strain": True,
+        "symmetric_half_column_smooth_wall": True,
+        "rest_fraction": args.rest_fraction,
+        "t_end_factor": args.t_end_factor,
+        "particles_across_sweep": args.particles_across[0],
+        "refinement_aspect": args.refinement_aspect,
     }
-    libs = sorted(
-        {
-            (r.get("library") or {}).get("source_sha1", "?")
-            for r in list(rows.values()) + var_rows
-        }
-    )
-    result = {
+
+
+def record(args, got: dict, skipped: list[str], wall_all: float) -> dict:
+    """collapse_validation.json: setup, laws, rows, fits and the library versions."""
+    all_rows = got["rows"]
+    libs = sorted({(r.get("library") or {}).get("source_sha1", "?") for r in all_rows})
+    return {
         "benchmark": "G1, 2D column collapse (benchmarks.md section 4)",
         "scene": SCENE,
-        "setup": {
-            "phi_deg": 30.0,
-            "psi_deg": 0.0,
-            "c": 0.0,
-            "floor_friction_deg": args.floor_friction
-            if args.floor_friction is not None
-            else 30.0,
-            "E": 1.0e7,
-            "nu": 0.3,
-            "rho": 1800.0,
-            "K0": 0.5,
-            "dt": args.dt,
-            "alpha": args.alpha,
-            "theta1": 1.0,
-            "theta2": 1.0,
-            "L0": args.length,
-            "plane_strain": True,
-            "symmetric_half_column_smooth_wall": True,
-            "rest_fraction": args.rest_fraction,
-            "t_end_factor": args.t_end_factor,
-            "particles_across_sweep": n0,
-            "refinement_aspect": args.refinement_aspect,
-        },
+        "setup": setup(args),
         "laws": {
             "lube_2005": "1.2a for a <= 1.8; 1.9a^(2/3) for a >= 2.8 "
             "(transition between)",
@@ -1013,32 +1021,34 @@ def main(argv=None) -> int:
             "final_height": "H_inf/L0 = a for a <~ 1; ~ a^0.4 for large a "
             "[approximate]",
         },
-        "sweep": sweep,
-        "refinement": ref,
-        "fits": fit,
-        "fits_alternative_measures": fit_alt,
-        "other_sweeps": other,
+        "sweep": got["sweep"],
+        "refinement": got["refinement"],
+        "fits": got["fits"],
+        "fits_alternative_measures": got["fits_alternative_measures"],
+        "other_sweeps": got["other_sweeps"],
         "skipped_above_max_particles": skipped,
         "library_versions": libs,
         "library_changed_during_a_case": [
             case_name(r["aspect"], r["N"])
             + (f"_{r['variant']}" if r.get("variant") else "")
-            for r in list(rows.values()) + var_rows
+            for r in all_rows
             if (r.get("library") or {}).get("changed_during_run")
         ],
-        "variants": var_rows,
+        "variants": got["variants"],
         "wall_time_this_invocation": wall_all,
     }
-    from skfem_npfem.io import write_json
 
-    write_json(out / "collapse_validation.json", result)
+
+def write_figures(result: dict, out: Path, cases_dir: Path, n0: int) -> None:
+    """runout_vs_aspect.png, refinement_a2.png and deposits.png under ``out``."""
+    sweep, ref = result["sweep"], result["refinement"]
     if sweep:
         plot_aspect(
             sweep,
-            fit,
+            result["fits"],
             out / "runout_vs_aspect.png",
             f"N = {n0} across L0",
-            {nn: v["sweep"] for nn, v in other.items()},
+            {nn: v["sweep"] for nn, v in result["other_sweeps"].items()},
         )
     if len(ref) >= 2:
         plot_refinement(ref, out / "refinement_a2.png")
@@ -1050,24 +1060,63 @@ def main(argv=None) -> int:
         for r in sweep[:1]
     ):
         plot_deposits(sweep, cases_dir, out / "deposits.png")
-    print_tables(sweep, ref, fit)
+
+
+def print_summary(result: dict, refinement_aspect: float, n0: int) -> None:
+    """The tables, the alternative fits and the library versions, printed."""
+    print_tables(result["sweep"], result["refinement"], result["fits"])
     print(
         "alternative measures:",
         json.dumps(
             {
                 k: {kk: v.get(kk) for kk in ("small_a", "large_a")}
-                for k, v in fit_alt.items()
+                for k, v in result["fits_alternative_measures"].items()
             },
             indent=1,
         ),
     )
-    print("library versions:", libs, result["library_changed_during_a_case"])
-    for nn, v in other.items():
+    print(
+        "library versions:",
+        result["library_versions"],
+        result["library_changed_during_a_case"],
+    )
+    for nn, v in result["other_sweeps"].items():
         print(f"\nsweep N = {nn}")
         print_tables(v["sweep"], [], v["fits"])
-    if var_rows:
-        print(f"\nvariants (a = {args.refinement_aspect:g}, N = {n0})")
-        print_tables(var_rows, [], {})
+    if result["variants"]:
+        print(f"\nvariants (a = {refinement_aspect:g}, N = {n0})")
+        print_tables(result["variants"], [], {})
+
+
+def main(argv=None) -> int:
+    ap = parser()
+    args = ap.parse_args(argv)
+    if args.run_case:
+        spec = json.loads(args.run_case)
+        run_case(
+            spec["aspect"],
+            spec["N"],
+            spec["params"],
+            Path(spec["path"]),
+            spec.get("variant"),
+        )
+        return 0
+    if args.threads is None:
+        args.threads = 1 if args.jobs > 1 else 0
+    out = args.out
+    cases_dir = out / "cases"
+    cases_dir.mkdir(parents=True, exist_ok=True)
+    n0 = args.particles_across[0]
+    wanted, skipped = wanted_cases(args, ap)
+    variants = _variants(args.variants)
+    todo = cases_to_run(args, wanted, variants, cases_dir)
+    wall_all = run_all(todo, args, cases_dir)
+    result = record(args, collect(args, wanted, variants, cases_dir), skipped, wall_all)
+    from skfem_npfem.io import write_json
+
+    write_json(out / "collapse_validation.json", result)
+    write_figures(result, out, cases_dir, n0)
+    print_summary(result, args.refinement_aspect, n0)
     return 0
 
 

@@ -28,8 +28,8 @@ The committed results (2026-12-03) ran two configurations at a time
 
 Usage (from the repository root)::
 
-    python demos/compare_results.py                 # full
-    python demos/compare_results.py --quick         # reduced (tests), in-process
+    python demos/studies/compare_results.py                 # full
+    python demos/studies/compare_results.py --quick        # reduced (tests), in-process
 """
 
 from __future__ import annotations
@@ -39,11 +39,12 @@ import math
 import time
 from pathlib import Path
 
+from _common import ROOT
+
 from skfem_npfem.baseline.reporting import markdown_table, save_png, write_result
 from skfem_npfem.baseline.study import run_cases, study_arguments, study_folders
 from skfem_npfem.scenes.strip_footing import n_c
 
-ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "docs" / "validation" / "comparison"
 WORK = ROOT / "out" / "comparison" / "results"
 

@@ -7,7 +7,7 @@ tests/test_extremes.py asserts; this script runs all of them, default and slow
 
 Usage::
 
-    python demos/extremes_matrix.py [--only-default] [--out docs]
+    python demos/studies/extremes_matrix.py [--only-default] [--out docs]
 """
 
 from __future__ import annotations
@@ -20,11 +20,10 @@ import time
 from pathlib import Path
 
 import clarabel
+from _common import ROOT
 
 import skfem_npfem
 from skfem_npfem.cases import extremes as tx
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def fmt_params(params: dict) -> str:
@@ -46,59 +45,47 @@ def fmt_iters(its: list[int]) -> str:
     return f"{lo}" if lo == hi else f"{lo}-{hi}"
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--only-default", action="store_true", help="skip slow cases")
-    ap.add_argument("--out", default=str(ROOT / "docs"), help="output folder")
-    args = ap.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-
-    rows = []
-    start = time.perf_counter()
-    for c in tx.CASES:
-        if c.slow and args.only_default:
-            continue
-        t0 = time.perf_counter()
-        try:
-            o = tx.result(c.name)
-            passed, outcome, error, its, plastic = (
-                o.passed,
-                o.outcome,
-                o.error,
-                o.iterations,
-                o.plastic,
-            )
-            yielding = o.yielding
-        except Exception as err:  # a crash is a finding, not a demo failure
-            passed, outcome, error, its, plastic = (
-                False,
-                f"{type(err).__name__}: {err}",
-                float("nan"),
-                [],
-                False,
-            )
-            yielding = False
-        rows.append(
-            {
-                "case": c.name,
-                "group": c.group,
-                "scene": c.scene,
-                "parameters": c.params,
-                "expected": c.expected,
-                "outcome": outcome,
-                "passed": bool(passed),
-                "error": error if error is None or math.isfinite(error) else None,
-                "iterations": list(its),
-                "plastic": plastic,
-                "yielding": yielding,
-                "slow": c.slow,
-                "seconds": round(time.perf_counter() - t0, 3),
-            }
+def case_row(c) -> dict:
+    """Run one case of ``skfem_npfem.cases.extremes``; its row of extremes.json."""
+    t0 = time.perf_counter()
+    try:
+        o = tx.result(c.name)
+        passed, outcome, error, its, plastic = (
+            o.passed,
+            o.outcome,
+            o.error,
+            o.iterations,
+            o.plastic,
         )
-        flag = "ok  " if passed else "FAIL"
-        print(f"{flag} {c.name:<40} {outcome}", flush=True)
+        yielding = o.yielding
+    except Exception as err:  # a crash is a finding, not a demo failure
+        passed, outcome, error, its, plastic = (
+            False,
+            f"{type(err).__name__}: {err}",
+            float("nan"),
+            [],
+            False,
+        )
+        yielding = False
+    return {
+        "case": c.name,
+        "group": c.group,
+        "scene": c.scene,
+        "parameters": c.params,
+        "expected": c.expected,
+        "outcome": outcome,
+        "passed": bool(passed),
+        "error": error if error is None or math.isfinite(error) else None,
+        "iterations": list(its),
+        "plastic": plastic,
+        "yielding": yielding,
+        "slow": c.slow,
+        "seconds": round(time.perf_counter() - t0, 3),
+    }
 
+
+def summarise(rows: list[dict], wall: float) -> dict:
+    """Counts, IPM iteration ranges and versions of the rows (``summary``)."""
     peaks = [max(r["iterations"]) for r in rows if r["plastic"] and r["iterations"]]
     ypeaks = [max(r["iterations"]) for r in rows if r["yielding"] and r["iterations"]]
     summary = {
@@ -113,13 +100,33 @@ def main(argv=None) -> int:
         "elastic_iterations": sorted(
             {i for r in rows if not r["plastic"] for i in r["iterations"]}
         ),
-        "wall_time": round(time.perf_counter() - start, 1),
+        "wall_time": round(wall, 1),
         "versions": {
             "skfem_npfem": skfem_npfem.__version__,
             "clarabel": getattr(clarabel, "__version__", "?"),
             "python": platform.python_version(),
         },
     }
+    return summary
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--only-default", action="store_true", help="skip slow cases")
+    ap.add_argument("--out", default=str(ROOT / "docs"), help="output folder")
+    args = ap.parse_args(argv)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+
+    rows = []
+    start = time.perf_counter()
+    for c in tx.CASES:
+        if c.slow and args.only_default:
+            continue
+        rows.append(case_row(c))
+        flag = "ok  " if rows[-1]["passed"] else "FAIL"
+        print(f"{flag} {c.name:<40} {rows[-1]['outcome']}", flush=True)
+    summary = summarise(rows, time.perf_counter() - start)
     (out / "extremes.json").write_text(
         json.dumps({"summary": summary, "cases": rows}, indent=1) + "\n"
     )
@@ -136,7 +143,7 @@ def markdown(rows: list[dict], summary: dict) -> str:
     lines = [
         "# Extreme parameters and bad input",
         "",
-        "Generated by `python demos/extremes_matrix.py` from the cases of "
+        "Generated by `python demos/studies/extremes_matrix.py` from the cases of "
         "`skfem_npfem.cases.extremes` (asserted by `tests/test_extremes.py`: the "
         "default cases run in the test suite, the ones marked *slow* with "
         "`pytest -m slow`). Each case asserts the "

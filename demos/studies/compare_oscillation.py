@@ -9,7 +9,7 @@ recovery) and the explicit SPFEM through the same scene (``--set method=``):
    floor), from release to rest.  The stress roughness ``R`` of every step
    (``stress_roughness`` of the step records: rms over interior particles of
    the departure of sigma_v from its mesh neighbours' mean, relative to rms
-   sigma_v; ``shared/tools/stress_roughness.py``) against the normalised time
+   sigma_v; ``skfem_npfem.baseline.roughness``) against the normalised time
    ``t_bar = t / sqrt(H0 / g)``, and the vertical stress of the particles at
    ``t_bar`` = 1, 2, 3 and at rest (the VTU files of the runs), side by side.
 2. **Elastic column under sudden gravity** (scene ``elastic-column``, dynamic,
@@ -27,8 +27,8 @@ under ``--out`` (default ``docs/validation/comparison``).
 
 Usage (from the repository root)::
 
-    python demos/compare_oscillation.py              # full: L0/16, ~20 CPU-min
-    python demos/compare_oscillation.py --quick      # reduced (tests), in-process
+    python demos/studies/compare_oscillation.py              # full: L0/16, ~20 CPU-min
+    python demos/studies/compare_oscillation.py --quick    # reduced (tests), in-process
 """
 
 from __future__ import annotations
@@ -39,12 +39,12 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _common import ROOT
 
 from skfem_npfem.baseline.reporting import markdown_table, save_png, write_result
 from skfem_npfem.baseline.study import run_cases, study_arguments, study_folders
 from skfem_npfem.io import read_pvd, read_step
 
-ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "docs" / "validation" / "comparison"
 WORK = ROOT / "out" / "comparison" / "oscillation"
 G = 9.81
@@ -52,7 +52,7 @@ G = 9.81
 #: Methods compared: label -> scene parameters.
 METHODS = {
     "N-PFEM": {"method": "npfem"},
-    # N-PFEM as before issue 10 (particle masses, no stabilisation, no volume
+    # N-PFEM as before the stabilisation (particle masses, no stabilisation, no volume
     # correction): the before/after pictures of docs/validation.md.
     "N-PFEM unstabilised": {
         "method": "npfem",

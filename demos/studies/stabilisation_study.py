@@ -7,9 +7,9 @@ Measures what ``docs/validation.md`` (section "Stress oscillation") and
 1. **Column collapse** (scene ``column-collapse``, a = 2, its default
    resolution, dt = 5 ms) from release to rest, for the node-mass rule and the
    factor ``beta`` of the element-residual stabilisation: ``particle`` masses
-   without stabilisation (the code before issue 10), ``mesh`` masses with
+   without stabilisation (the code before the stabilisation), ``mesh`` masses with
    beta = 0, 3, 10, 30, 100.  Reported: the stress roughness ``R`` (the
-   reference measure of ``shared/tools/stress_roughness.py``) after 20, 40,
+   reference measure of ``skfem_npfem.baseline.roughness``) after 20, 40,
    80, 160 steps, its maximum over the run and at rest, the normalised run-out,
    the final height, the volume change and the median time of a step.
 2. **Remeshed elastic column at rest** (the same scene with c = 1 MPa: no
@@ -22,17 +22,17 @@ Measures what ``docs/validation.md`` (section "Stress oscillation") and
 Writes ``docs/validation/stabilisation.json`` and the page generated from it,
 ``docs/validation/stabilisation.md``.  Usage (repository root)::
 
-    python demos/stabilisation_study.py            # ~20 CPU-min
-    python demos/stabilisation_study.py --quick    # reduced (tests)
-    python demos/stabilisation_study.py --page     # page from the JSON only
+    python demos/studies/stabilisation_study.py            # ~20 CPU-min
+    python demos/studies/stabilisation_study.py --quick    # reduced (tests)
+    python demos/studies/stabilisation_study.py --page     # page from the JSON only
 
 The aspect-ratio sweep with the new defaults runs through the validation demo
 and is condensed here (the committed ``collapse_validation.json`` holds the
 sweep before the change)::
 
-    python demos/collapse_validation.py --aspects 0.5,1,2,4,8 \
+    python demos/studies/collapse_validation.py --aspects 0.5,1,2,4,8 \
         --particles-across 12 --refinement "" --variants "" --out DIR
-    python demos/stabilisation_study.py --sweep DIR   # adds it to the JSON
+    python demos/studies/stabilisation_study.py --sweep DIR   # adds it to the JSON
 """
 
 from __future__ import annotations
@@ -40,21 +40,17 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import runpy
-import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from _common import AT_REST, REPORT_STEPS, VALIDATION, benchmark
+from _common import roughness_run as one_run
 
-from skfem_npfem.baseline.roughness import stress_roughness
 from skfem_npfem.io import write_json
-from skfem_npfem.scenes import get_scene
 from skfem_npfem.sweeps import run_tasks
 
-ROOT = Path(__file__).resolve().parent.parent
-OUT = ROOT / "docs" / "validation" / "stabilisation.json"
-BEFORE = ROOT / "docs" / "validation" / "collapse_validation.json"
+OUT = VALIDATION / "stabilisation.json"
+BEFORE = VALIDATION / "collapse_validation.json"
 PAGE_TITLE = "# Stress oscillation: node masses and the stabilisation factor"
 
 #: Collapse cases: label -> scene parameters.
@@ -66,50 +62,6 @@ COLLAPSE = {
     "mesh mass, beta=30": {"nodal_mass": "mesh", "stabilisation": 30.0},
     "mesh mass, beta=100": {"nodal_mass": "mesh", "stabilisation": 100.0},
 }
-#: Elastic column at rest: the collapse scene with a cohesion it never reaches.
-AT_REST = {"c": 1e6, "t_end": 1.0, "rest_fraction": 0.0}
-REPORT_STEPS = (20, 40, 80, 160)
-
-
-def one_run(params: dict[str, Any], steps: int | None = None) -> dict[str, Any]:
-    """Run the collapse scene with ``params``; roughness, creep and metrics."""
-    scene = get_scene("column-collapse")
-    # Measured without the volume correction (the scene's default since; the
-    # study is about the stresses): kappa = 0 unless params say otherwise.
-    values = scene.resolve({"volume_correction": 0.0, **params, "threads": 1})
-    run = scene.build(values, out=None, progress=False)
-    sim = run.simulation
-    x0 = sim.particles.x.copy()
-    rough: list[tuple[int, float]] = []
-
-    def record(sim_, p, res) -> bool:
-        r = stress_roughness(res.cells, p.stress)
-        rough.append((res.record.step, float(r)))
-        return False
-
-    sim.callbacks.append(record)
-    kwargs = {"steps": steps} if steps else dict(run.run_kwargs)
-    start = time.perf_counter()
-    sim.run(**kwargs)
-    wall = time.perf_counter() - start
-    metrics = run.metrics(sim)
-    p = sim.particles
-    per_step = [sum(r.timings.values()) for r in sim.records]
-    finite = [r for _, r in rough if math.isfinite(r)]
-    return {
-        "params": params,
-        "steps": len(rough),
-        "R_at": {s: r for s, r in rough if s in REPORT_STEPS},
-        "R_final": rough[-1][1] if rough else None,
-        "R_max": max(finite) if finite else None,
-        "normalised_runout": metrics.get("normalised_runout"),
-        "final_height": metrics.get("final_height"),
-        "volume_change": metrics.get("volume_change"),
-        "max_displacement": float(np.linalg.norm(p.x - x0, axis=1).max()),
-        "max_speed_end": float(np.linalg.norm(p.v, axis=1).max()),
-        "median_step_s": float(np.median(per_step)) if per_step else None,
-        "wall_s": wall,
-    }
 
 
 def cost(spacing_divisor: int, steps: int) -> dict[str, Any]:
@@ -117,9 +69,8 @@ def cost(spacing_divisor: int, steps: int) -> dict[str, Any]:
 
     The measurement is ``alternate`` of benchmarks/stabilisation_cost.py.
     """
-    bench = runpy.run_path(str(ROOT / "benchmarks" / "stabilisation_cost.py"))
     params = {"spacing": 0.2 / spacing_divisor, "threads": 1}
-    r = bench["alternate"](params, steps)
+    r = benchmark("stabilisation_cost").alternate(params, steps)
     med = r["median_step_s"]
     return {
         "particles": r["particles"],
@@ -142,7 +93,7 @@ def page(result: dict[str, Any]) -> str:
     lines = [
         PAGE_TITLE,
         "",
-        "Generated by `python demos/stabilisation_study.py` from",
+        "Generated by `python demos/studies/stabilisation_study.py` from",
         "`stabilisation.json` (do not edit by hand).  `R`: the reference stress",
         "roughness (`shared/tools/stress_roughness.py`) of sigma_v over interior",
         "particles.  Column collapse a = 2 at the scene's default resolution,",
@@ -227,7 +178,7 @@ def condense_sweep(folder: Path) -> list[dict[str, Any]]:
     """Per aspect ratio: the validation demo's cases in ``folder`` against before.
 
     ``before`` is the primary sweep of the committed ``collapse_validation.json``
-    (made before issue 10: particle masses, no stabilisation).
+    (made before the stabilisation: particle masses, no stabilisation).
     """
     before = {}
     if BEFORE.exists():

@@ -21,8 +21,8 @@ order).  The catalogue's independent value for nu = 0.4999 is 7.77 +- 0.01
 
 Usage (from the repository root)::
 
-    PYTHONPATH=. python demos/compare_locking.py            # full (~1 min)
-    PYTHONPATH=. python demos/compare_locking.py --quick    # nu = 0.4999, n = 8, 16
+    PYTHONPATH=. python demos/studies/compare_locking.py            # full (~1 min)
+    PYTHONPATH=. python demos/studies/compare_locking.py --quick  # nu 0.4999, n 8, 16
 
 Writes ``docs/validation/comparison/locking.json`` and ``locking.png``.
 """
@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 import scipy.sparse.linalg as sla
+from _common import ROOT
 from skfem import (
     Basis,
     BilinearForm,
@@ -56,7 +57,6 @@ from skfem_npfem.baseline.reporting import save_png, write_result
 from skfem_npfem.materials import LinearElastic
 from skfem_npfem.smoothing import nodal_integration
 
-ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "docs" / "validation" / "comparison"
 E, F = 250.0, 100.0
 CORNER = np.array([48.0, 60.0])

@@ -30,8 +30,8 @@ Two experiments, each for N-PFEM and FEM-remap P1/P2 x nearest/recovery:
 
 Usage (from the repository root)::
 
-    PYTHONPATH=. python demos/compare_mapping.py            # full (~1 min)
-    PYTHONPATH=. python demos/compare_mapping.py --quick    # reduced
+    PYTHONPATH=. python demos/studies/compare_mapping.py            # full (~1 min)
+    PYTHONPATH=. python demos/studies/compare_mapping.py --quick    # reduced
 
 Writes ``docs/validation/comparison/mapping.json`` and ``mapping.png``
 (``--out`` to change the folder).
@@ -46,6 +46,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _common import ROOT
 
 from skfem_npfem.baseline import FemRemap
 from skfem_npfem.baseline.fem_nodes import gauss_points
@@ -58,7 +59,6 @@ from skfem_npfem.pfem import AlphaShapeMesher
 from skfem_npfem.scenes import get_scene
 from skfem_npfem.step import advance
 
-ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "docs" / "validation" / "comparison"
 VARIANTS = [(e, t) for e in ("p1", "p2") for t in ("nearest", "recovery")]
 

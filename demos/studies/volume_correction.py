@@ -12,9 +12,9 @@ process pool, so the step times share one machine load).
 
 Usage (repository root)::
 
-    python demos/volume_correction.py                 # kappa 0, 0.03, 0.1, 0.3
+    python demos/studies/volume_correction.py                 # kappa 0, 0.03, 0.1, 0.3
     # more sweep runs added to the committed JSON (runs already in it are kept)
-    python demos/volume_correction.py --kappas "" --sweep-kappas 0.03 --append
+    python demos/studies/volume_correction.py --kappas "" --sweep-kappas 0.03 --append
 
 Writes ``docs/validation/volume_correction.json`` and its tables,
 ``volume_correction.md`` beside it (included by docs/validation.md).
@@ -24,84 +24,22 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import time
-from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from _common import (
+    ASPECTS,
+    LENGTH,
+    VALIDATION,
+    floats,
+    replace_rows,
+    run_to_rest,
+    write_results,
+)
 
-ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "docs" / "validation" / "volume_correction.json"
-ASPECTS = (0.5, 1.0, 2.0, 4.0, 8.0)
-LENGTH = 0.2
-
-
-#: t_end = T_END_FACTOR * sqrt(H0 / g), a cap the at-rest rule stops before (as
-#: in demos/collapse_validation.py); the scene's own 1 s stops tall columns early.
-T_END_FACTOR = 15.0
-
-
-def run(overrides: dict[str, Any]) -> dict[str, Any]:
-    """One scene run to rest; its metrics and step times."""
-    from skfem_npfem.scenes import get_scene
-
-    scene = get_scene("column-collapse")
-    h0 = overrides.get("aspect", 2.0) * overrides.get("length", LENGTH)
-    t_end = T_END_FACTOR * math.sqrt(h0 / 9.81)
-    # kappa = 0 unless the overrides say otherwise (0.1 became the scene's
-    # default after this study).
-    values = scene.resolve(
-        {"t_end": t_end, "volume_correction": 0.0, **overrides, "threads": 1}
-    )
-    srun = scene.build(values, out=None, progress=False)
-    sim = srun.simulation
-    t0 = time.perf_counter()
-    sim.run(**srun.run_kwargs)
-    m = srun.metrics(sim)
-    steps = [sum(r.timings.values()) for r in sim.records]
-    return {
-        "overrides": overrides,
-        "particles": int(sim.particles.n),
-        "steps": len(sim.records),
-        "volume_change": m["volume_change"],
-        "normalised_runout": m["normalised_runout"],
-        "final_height": m.get("final_height"),
-        "R_at_rest": m["stress_roughness"],
-        "R_max": m["stress_roughness_max"],
-        "at_rest": bool(m["at_rest"]),
-        "step_median_s": float(np.median(steps)),
-        "wall_s": time.perf_counter() - t0,
-    }
-
-
-def _floats(text: str) -> list[float]:
-    return [float(k) for k in text.split(",") if k.strip()]
-
-
-def replace_rows(
-    old: list[dict], new: list[dict], key: Callable[[dict], Any]
-) -> list[dict]:
-    """Runs of ``old`` whose ``key`` no run of ``new`` has, then ``new``.
-
-    How the studies of this folder add runs to their committed JSON (``--append``).
-    """
-    done = {key(r) for r in new}
-    return [r for r in old if key(r) not in done] + list(new)
-
-
-def write_results(path: Path, text: str | None, page: str) -> None:
-    """The JSON ``text`` at ``path`` (None: keep it), ``page`` beside it as .md.
-
-    The page is printed too.
-    """
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if text is not None:
-        path.write_text(text)
-    path.with_suffix(".md").write_text(page)
-    print(page)
+OUT = VALIDATION / "volume_correction.json"
 
 
 def _merge(old: list[dict], new: list[dict]) -> list[dict]:
@@ -155,7 +93,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", type=Path, default=OUT)
     args = ap.parse_args(argv)
-    default = [{"volume_correction": float(k)} for k in _floats(args.kappas)]
+    default = [{"volume_correction": float(k)} for k in floats(args.kappas)]
     sweep = [
         {
             "aspect": a,
@@ -163,14 +101,14 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             "spacing": LENGTH / 12,
             "volume_correction": k,
         }
-        for a in _floats(args.aspects)
-        for k in _floats(args.sweep_kappas)
+        for a in floats(args.aspects)
+        for k in floats(args.sweep_kappas)
     ]
     start = time.perf_counter()
     # Largest first, so that the pool ends together.
     tasks = sorted(default + sweep, key=lambda o: -o.get("aspect", 3.0))
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
-        results = list(pool.map(run, tasks))
+        results = list(pool.map(run_to_rest, tasks))
     by_task = {
         json.dumps(t, sort_keys=True): r for t, r in zip(tasks, results, strict=True)
     }
@@ -193,8 +131,9 @@ def page_tables(out: dict[str, Any]) -> str:
     """The two tables of docs/validation.md, with how they were made."""
     return (
         "# Volume correction: measured\n\n"
-        "Generated by `demos/volume_correction.py` from `volume_correction.json` "
-        "(do not edit by hand). Volume: mesh-volume change at the end; run-out "
+        "Generated by `demos/studies/volume_correction.py` from "
+        "`volume_correction.json` (do not edit by hand). Volume: mesh-volume change "
+        "at the end; run-out "
         "(L - L0)/L0; R: stress roughness of sigma_v; s/step: median step time "
         f"({out['workers']} runs at a time on 2 cores).\n\n"
         "Default collapse (a = 2, 1 035 particles, beta = 30):\n\n"
