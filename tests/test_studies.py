@@ -61,3 +61,32 @@ def test_speed_accuracy_page_and_fronts_reproduce_the_committed_record():
     ref = record["reference"]["collapse"]
     assert f"{ref:.4g}" in page
     assert 2.4 <= ref <= 3.6  # a = 2: 1.2 a .. 1.8 a
+
+
+def test_committed_figures_are_stored_with_a_palette(tmp_path):
+    """Figures of the studies: 256 colours, within 3 levels of the true colours."""
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+    from PIL import Image
+
+    from skfem_npfem.baseline.reporting import save_png
+
+    fig, ax = plt.subplots(figsize=(4, 3))
+    x = np.linspace(0, 1, 200)
+    ax.imshow(np.outer(x, x), cmap="viridis")
+    ax.plot(200 * x, 200 * x**2, "r-")
+    true = io.BytesIO()
+    fig.savefig(true, dpi=100, format="png")
+    path = save_png(fig, tmp_path / "f.png", dpi=100)
+    a = np.asarray(Image.open(true).convert("RGB"), float)
+    b = np.asarray(Image.open(path).convert("RGB"), float)
+    assert Image.open(path).mode == "P" and a.shape == b.shape
+    assert np.abs(a - b).mean() < 3.0  # of 255 levels
+    assert path.stat().st_size < 0.6 * len(true.getvalue())
+    for png in (ROOT / "docs" / "validation").glob("*.png"):
+        assert Image.open(png).mode == "P", png

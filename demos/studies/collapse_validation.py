@@ -14,11 +14,13 @@ Writes (under ``--out``, default ``docs/validation``):
   sqrt(H0/g)), volume change, wall time, median time per step and the solver
   statuses; the experimental laws; the fitted small-a slope and large-a
   exponent against the gates of benchmarks.md G1;
-* ``cases/a<a>_N<N>[_<variant>].json``: the full scene summary of each case
-  (per-step history, final particle cloud, library commit and source hash);
 * ``runout_vs_aspect.png``: run-out and final height against a (log-log);
 * ``refinement_a2.png``: run-out and final height against N at a = 2;
-* ``deposits.png``: the final deposits of the primary sweep.
+* ``deposits.png``: the final deposits of the primary sweep;
+
+and under ``--cases`` (default ``out/collapse_validation/cases``, not
+committed) ``a<a>_N<N>[_<variant>].json``: the full scene summary of each case
+(per-step history, final particle cloud, library commit and source hash).
 
 Run-out measures stored: the scene's ``normalised_runout``, the primary
 measure (the front of the main body until 2026-11, the 99 % mass front of the
@@ -29,10 +31,10 @@ stress roughness (at rest and its maximum) and the stabilisation factor and
 volume correction the scene resolved are stored too.
 
 Usage (from the repository root; the command below wrote
-docs/validation/collapse_validation.json, the record before the stabilisation;
-the same command with ``--force --out docs/validation/current`` wrote the
-rerun with the defaults of 2026-12-02: 14 minutes of wall time with two cases
-in parallel, beside a 3D run)::
+docs/validation/collapse_validation.json with the defaults of 2026-12-02 (14
+minutes of wall time with two cases in parallel, beside a 3D run); the record
+before the stabilisation, run with the same command, is kept in compact form as
+docs/validation/collapse_validation_before.json)::
 
     PYTHONPATH=. python demos/studies/collapse_validation.py \\
         --aspects 0.5,1,2,4,8 --particles-across 12,8,16,22 \\
@@ -45,7 +47,7 @@ gates); the others are secondary sweeps, whose cases above ``--max-particles``
 (1 500) are skipped.  ``--variants`` are sensitivity runs at the refinement
 aspect and the primary N.
 
-Cases whose ``cases/*.json`` already exist with the same parameters are not
+Cases whose ``--cases`` files already exist with the same parameters are not
 run again (``--force`` reruns them); ``--plot-only`` only rebuilds the JSON and
 the figures from the stored cases.
 """
@@ -62,7 +64,9 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _common import ROOT, floats, ints
+from _common import ROOT, WORK, floats, ints
+
+from skfem_npfem.baseline.reporting import save_png
 
 SCENE = "column-collapse"
 G = 9.81
@@ -308,7 +312,7 @@ def row_from_summary(s: dict) -> dict:
     n = int(s["case"]["N"])
     m, sol, p = s["metrics"], s["solver"], s["parameters"]
     # The scene metric: the main body's front when the study began
-    # (docs/validation/collapse_validation.json), the 99 % mass front since
+    # (docs/validation/collapse_validation_before.json), the 99 % mass front since
     # (the main body is then runout_main_body, kept below).
     r = float(m["normalised_runout"])
     lube, laj = lube_law(a), lajeunesse_law(a)
@@ -607,8 +611,7 @@ def plot_aspect(
         fontsize=10,
     )
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+    save_png(fig, path, dpi=130)
 
 
 def plot_refinement(ref: list[dict], path: Path) -> None:
@@ -662,8 +665,7 @@ def plot_refinement(ref: list[dict], path: Path) -> None:
     ax2.grid(True, alpha=0.3)
     ax2.legend(fontsize=7.5)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+    save_png(fig, path, dpi=130)
 
 
 def plot_deposits(sweep: list[dict], cases_dir: Path, path: Path) -> None:
@@ -726,8 +728,7 @@ def plot_deposits(sweep: list[dict], cases_dir: Path, path: Path) -> None:
         shrink=0.8,
         pad=0.01,
     )
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_png(fig, path, dpi=120)
 
 
 def print_tables(sweep: list[dict], ref: list[dict], fit: dict) -> None:
@@ -793,6 +794,12 @@ def parser() -> argparse.ArgumentParser:
     )
     ap.add_argument("--refinement-aspect", type=float, default=2.0)
     ap.add_argument("--out", type=Path, default=Path("docs/validation"))
+    ap.add_argument(
+        "--cases",
+        type=Path,
+        default=WORK / "collapse_validation" / "cases",
+        help="folder of the per-case scene summaries (full records, not committed)",
+    )
     ap.add_argument(
         "--jobs", type=int, default=2, help="cases run in parallel (local Dask workers)"
     )
@@ -1104,7 +1111,7 @@ def main(argv=None) -> int:
     if args.threads is None:
         args.threads = 1 if args.jobs > 1 else 0
     out = args.out
-    cases_dir = out / "cases"
+    cases_dir = args.cases
     cases_dir.mkdir(parents=True, exist_ok=True)
     n0 = args.particles_across[0]
     wanted, skipped = wanted_cases(args, ap)

@@ -28,8 +28,9 @@ Usage (repository root)::
     python demos/studies/roughness_floor.py --across 22 --kappas 0,0.1 \\
         --repeats 1 --append
 
-Writes ``docs/validation/roughness_floor.json`` and its table
-``roughness_floor.md`` (included by docs/validation.md).
+Writes ``docs/validation/roughness_floor.json`` (per run its summary) and its
+table ``roughness_floor.md`` (included by docs/validation.md); the runs with
+their per-step histories go to ``out/roughness_floor.json`` (not committed).
 """
 
 from __future__ import annotations
@@ -51,11 +52,14 @@ from _common import (
     LENGTH,
     T_END_FACTOR,
     VALIDATION,
+    WORK,
     replace_rows,
     write_results,
 )
 
 OUT = VALIDATION / "roughness_floor.json"
+#: The same runs with their per-step histories (gitignored).
+FULL = WORK / "roughness_floor.json"
 ACROSS = (12, 22)
 
 
@@ -124,7 +128,12 @@ def run(spec: tuple[float, int, float, int]) -> dict[str, Any]:
 
 
 def summary(r: dict[str, Any]) -> dict[str, float]:
-    """R max, the floor at that step, the largest floor and excess, the end."""
+    """R max, the floor at that step, the largest floor and excess, the end.
+
+    A compact row (committed, without its per-step history) carries it.
+    """
+    if "history" not in r:
+        return r["summary"]
     R = np.array(r["history"]["R"], float)
     F = np.array(r["history"]["floor"], float)
     ok = np.isfinite(R) & np.isfinite(F)
@@ -176,6 +185,13 @@ def page(rows: list[dict[str, Any]]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def compact(r: dict[str, Any]) -> dict[str, Any]:
+    """The committed row: the run without its per-step history, its summary."""
+    out = {k: v for k, v in r.items() if k != "history"}
+    out["summary"] = summary(r)
+    return out
+
+
 def _key(r: dict[str, Any]) -> tuple[int, float, float, int]:
     return (r["across"], r["volume_correction"], r["aspect"], r["repeat"])
 
@@ -192,8 +208,16 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     ap.add_argument("--append", action="store_true", help="keep --out's other runs")
     ap.add_argument("--page", action="store_true", help="only the page from the JSON")
     ap.add_argument("--out", type=Path, default=OUT)
+    ap.add_argument(
+        "--full",
+        type=Path,
+        default=FULL,
+        help="the runs with their per-step histories (not committed; --out "
+        "holds the summaries the page needs)",
+    )
     args = ap.parse_args(argv)
-    old = json.loads(args.out.read_text()) if args.out.exists() else []
+    source = args.full if args.full.exists() else args.out
+    old = json.loads(source.read_text()) if source.exists() else []
     text = None
     if args.page:
         rows = old
@@ -222,7 +246,9 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
                 )
         rows = replace_rows(old if args.append else [], new, _key)
         # One run a line: the per-step histories make an indented file large.
-        text = "[\n" + ",\n".join(json.dumps(r) for r in rows) + "\n]\n"
+        args.full.parent.mkdir(parents=True, exist_ok=True)
+        args.full.write_text("[\n" + ",\n".join(json.dumps(r) for r in rows) + "\n]\n")
+        text = "[\n" + ",\n".join(json.dumps(compact(r)) for r in rows) + "\n]\n"
     write_results(args.out, text, page(rows))
     return rows
 

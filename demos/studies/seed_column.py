@@ -66,6 +66,8 @@ from pathlib import Path
 import numpy as np
 from _common import ROOT
 
+from skfem_npfem.baseline.reporting import save_png
+
 R0, H0, G, RHO = 0.039, 0.078, 9.81, 1800.0
 T_SCALE = math.sqrt(H0 / G)
 SNAPSHOTS = (0.0, 1.0, 2.0, 3.0)
@@ -380,8 +382,7 @@ def render_panels(
     sm = plt.cm.ScalarMappable(cmap="viridis", norm=plt.Normalize(lo, 0.0))
     fig.colorbar(sm, ax=axes, shrink=0.6, label="sigma_v (kPa)")
     path = out / filename
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_png(fig, path, dpi=110)
     return path
 
 
@@ -405,8 +406,7 @@ def plot_profiles(results: dict, out: Path) -> Path | None:
     ax.legend(fontsize=7)
     fig.tight_layout()
     path = out / "profiles.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_png(fig, path, dpi=110)
     return path
 
 

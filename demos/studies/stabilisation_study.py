@@ -27,11 +27,12 @@ Writes ``docs/validation/stabilisation.json`` and the page generated from it,
     python demos/studies/stabilisation_study.py --page     # page from the JSON only
 
 The aspect-ratio sweep with the new defaults runs through the validation demo
-and is condensed here (the committed ``collapse_validation.json`` holds the
-sweep before the change)::
+and is condensed here (the committed ``collapse_validation_before.json`` holds
+the sweep before the change)::
 
     python demos/studies/collapse_validation.py --aspects 0.5,1,2,4,8 \
-        --particles-across 12 --refinement "" --variants "" --out DIR
+        --particles-across 12 --refinement "" --variants "" --out DIR \
+        --cases DIR/cases
     python demos/studies/stabilisation_study.py --sweep DIR   # adds it to the JSON
 """
 
@@ -50,7 +51,7 @@ from skfem_npfem.io import write_json
 from skfem_npfem.sweeps import run_tasks
 
 OUT = VALIDATION / "stabilisation.json"
-BEFORE = VALIDATION / "collapse_validation.json"
+BEFORE = VALIDATION / "collapse_validation_before.json"
 PAGE_TITLE = "# Stress oscillation: node masses and the stabilisation factor"
 
 #: Collapse cases: label -> scene parameters.
@@ -177,8 +178,9 @@ def page(result: dict[str, Any]) -> str:
 def condense_sweep(folder: Path) -> list[dict[str, Any]]:
     """Per aspect ratio: the validation demo's cases in ``folder`` against before.
 
-    ``before`` is the primary sweep of the committed ``collapse_validation.json``
-    (made before the stabilisation: particle masses, no stabilisation).
+    ``before`` is the primary sweep of the committed
+    ``collapse_validation_before.json`` (made before the stabilisation:
+    particle masses, no stabilisation).
     """
     before = {}
     if BEFORE.exists():
