@@ -498,6 +498,32 @@ def fits(sweep: list[dict], key: str = "normalised_runout") -> dict:
     return out
 
 
+def _other_sweeps(ax, other: dict | None, key: str) -> None:
+    """The secondary sweeps' ``key`` against a, open squares in colours C3, C4..."""
+    for i, (nn, sw) in enumerate((other or {}).items()):
+        ax.plot(
+            [r["aspect"] for r in sw],
+            [r[key] for r in sw],
+            "s",
+            mfc="none",
+            mec=f"C{i + 3}",
+            ms=7,
+            label=f"N-PFEM (N = {nn})",
+        )
+
+
+def _large_a_fit(ax, la: dict, prefactor: str, exponent: str) -> None:
+    """The large-a power fit ``la[prefactor] a^la[exponent]``, dashed."""
+    xx = np.geomspace(min(la["aspects"]), max(la["aspects"]), 20)
+    ax.plot(
+        xx,
+        la[prefactor] * xx ** la[exponent],
+        "k--",
+        lw=1,
+        label=f"fit a ≥ 2: {la[prefactor]:.2f}a$^{{{la[exponent]:.2f}}}$",
+    )
+
+
 def plot_aspect(
     sweep: list[dict], fit: dict, path: Path, n_label: str, other: dict | None = None
 ) -> None:
@@ -537,26 +563,9 @@ def plot_aspect(
             ms=7,
             label="N-PFEM, 99 % mass front",
         )
-    for i, (nn, sw) in enumerate((other or {}).items()):
-        ax1.plot(
-            [r["aspect"] for r in sw],
-            [r["normalised_runout"] for r in sw],
-            "s",
-            mfc="none",
-            mec=f"C{i + 3}",
-            ms=7,
-            label=f"N-PFEM (N = {nn})",
-        )
+    _other_sweeps(ax1, other, "normalised_runout")
     if "large_a" in fit:
-        la = fit["large_a"]
-        xx = np.geomspace(min(la["aspects"]), max(la["aspects"]), 20)
-        ax1.plot(
-            xx,
-            la["prefactor"] * xx ** la["exponent"],
-            "k--",
-            lw=1,
-            label=f"fit a ≥ 2: {la['prefactor']:.2f}a$^{{{la['exponent']:.2f}}}$",
-        )
+        _large_a_fit(ax1, fit["large_a"], "prefactor", "exponent")
     if "small_a" in fit:
         k = fit["small_a"]["slope_through_origin"]
         xx = np.geomspace(amin, 1.0, 10)
@@ -575,29 +584,9 @@ def plot_aspect(
     ax2.plot(x1, x1, "C0-", label="H∞/L0 = a (top undisturbed, a ≲ 1)")
     ax2.plot(x2, x2**0.4, "C0--", label="H∞/L0 ≈ a$^{0.4}$ (large a, approximate)")
     ax2.plot(a, h, "ks", ms=7, label=f"N-PFEM ({n_label})")
-    for i, (nn, sw) in enumerate((other or {}).items()):
-        ax2.plot(
-            [r["aspect"] for r in sw],
-            [r["final_height_L0"] for r in sw],
-            "s",
-            mfc="none",
-            mec=f"C{i + 3}",
-            ms=7,
-            label=f"N-PFEM (N = {nn})",
-        )
+    _other_sweeps(ax2, other, "final_height_L0")
     if "large_a" in fit:
-        la = fit["large_a"]
-        xx = np.geomspace(min(la["aspects"]), max(la["aspects"]), 20)
-        ax2.plot(
-            xx,
-            la["height_prefactor"] * xx ** la["height_exponent"],
-            "k--",
-            lw=1,
-            label=(
-                f"fit a ≥ 2: {la['height_prefactor']:.2f}"
-                f"a$^{{{la['height_exponent']:.2f}}}$"
-            ),
-        )
+        _large_a_fit(ax2, fit["large_a"], "height_prefactor", "height_exponent")
     ax2.set_xscale("log")
     ax2.set_yscale("log")
     ax2.set_xlim(amin, amax)
