@@ -49,7 +49,6 @@ exclude_patterns = [
     "jupyter_execute",
     ".jupyter_cache",
     "**.ipynb_checkpoints",
-    "validation/cases",
 ]
 source_suffix = {".md": "myst-nb", ".rst": "restructuredtext"}
 root_doc = "index"

@@ -11,7 +11,7 @@ the static value; the Prandtl factor 2 + pi; exact mass conservation.
 
 from __future__ import annotations
 
-import importlib.util
+import importlib
 import json
 import math
 from pathlib import Path
@@ -23,10 +23,8 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def load(name: str):
-    spec = importlib.util.spec_from_file_location(name, ROOT / "demos" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    """A study of demos/studies (on sys.path through tests/conftest.py)."""
+    return importlib.import_module(name)
 
 
 def test_locking_demo_quick_matches_the_catalogue():

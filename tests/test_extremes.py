@@ -2,7 +2,7 @@
 
 The cases (parameters, expected physical answer or documented error, the
 check) live in :mod:`cases.extremes`, shared with
-``demos/extremes_matrix.py`` (which writes docs/extremes.md); this module
+``demos/studies/extremes_matrix.py`` (which writes docs/extremes.md); this module
 asserts each of them and that the interior-point iterations stay roughly
 constant across the matrix.  The column-collapse part of the matrix is in
 tests/test_extremes_collapse.py.

@@ -462,7 +462,7 @@ def test_10_extremes_page_lists_no_stale_gaps():
     # the page and its generator say so, with the same words.
     root = Path(__file__).parents[1]
     page = (root / "docs/extremes.md").read_text()
-    demo = (root / "demos/extremes_matrix.py").read_text()
+    demo = (root / "demos/studies/extremes_matrix.py").read_text()
     assert "strict xfails" not in page and "strict xfails" not in demo
     assert "No known gaps" in page and "No known gaps" in demo
     start = demo.index('"with 2. No known gaps')

@@ -1,4 +1,4 @@
-"""``demos/seed_column.py --quick``: the whole study at a tiny resolution.
+"""``demos/studies/seed_column.py --quick``: the whole study at a tiny resolution.
 
 References: lattice counts by enumeration, exact mass conservation, the seed
 case's parameters, and a resumed study that repeats the finished one.
@@ -6,7 +6,7 @@ case's parameters, and a resumed study that repeats the finished one.
 
 from __future__ import annotations
 
-import importlib.util
+import importlib
 import json
 from pathlib import Path
 
@@ -16,12 +16,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def load_demo():
-    spec = importlib.util.spec_from_file_location(
-        "seed_column", ROOT / "demos" / "seed_column.py"
-    )
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    """demos/studies/seed_column.py (on sys.path through tests/conftest.py)."""
+    return importlib.import_module("seed_column")
 
 
 @pytest.fixture(scope="module")

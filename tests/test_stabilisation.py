@@ -230,19 +230,18 @@ def test_mesh_masses_keep_a_remeshed_column_at_rest_smooth():
 def test_the_study_demo_writes_its_json_and_page(tmp_path):
     # Reduced study (coarse, 20 steps): every case ran, the page is generated
     # from the JSON, and the maximum roughness bounds the final one.
-    import runpy
+    import stabilisation_study as demo  # demos/studies, on sys.path (conftest)
 
-    demo = runpy.run_path(str(ROOT / "demos" / "stabilisation_study.py"))
     out = tmp_path / "stabilisation.json"
-    result = demo["main"](["--quick", "--workers", "1", "--out", str(out)])
-    assert set(result["collapse"]) == set(demo["COLLAPSE"])
+    result = demo.main(["--quick", "--workers", "1", "--out", str(out)])
+    assert set(result["collapse"]) == set(demo.COLLAPSE)
     for r in [*result["collapse"].values(), *result["at_rest"].values()]:
         assert "error" not in r and r["steps"] > 0
         if r["R_max"] is not None and r["R_final"] == r["R_final"]:
             assert r["R_max"] >= r["R_final"]
     assert result["cost"]["ratio"] > 0
     text = out.with_suffix(".md").read_text()
-    assert text.startswith(demo["PAGE_TITLE"]) and "mesh mass, beta=30" in text
+    assert text.startswith(demo.PAGE_TITLE) and "mesh mass, beta=30" in text
 
 
 def _bench(name: str):

@@ -99,7 +99,7 @@ def statuses(counts: dict) -> str:
 
 
 # ---------------------------------------------------------------------------
-# Verification: the footing plateau (demos/footing_plateau.py).
+# Verification: the footing plateau (demos/studies/footing_plateau.py).
 
 
 @table("docs/validation/footing_plateau.json")
@@ -214,12 +214,14 @@ def prandtl() -> str:
 
 
 # ---------------------------------------------------------------------------
-# Validation: the column collapse (demos/collapse_validation.py).
+# Validation: the column collapse (demos/studies/collapse_validation.py).
 
-COLLAPSE = "docs/validation/collapse_validation.json"
-#: The same study rerun with the defaults of 2026-12-02 (stabilisation beta =
-#: 30, volume correction kappa = 0.05); COLLAPSE is kept as the record before.
-COLLAPSE_NOW = "docs/validation/current/collapse_validation.json"
+#: The record before the stabilisation (particle masses, beta = 0), compact:
+#: the summary rows of the study, without its per-case records.
+COLLAPSE = "docs/validation/collapse_validation_before.json"
+#: The study with the defaults of 2026-12-02 (stabilisation beta = 30, volume
+#: correction kappa = 0.05), as the study writes it.
+COLLAPSE_NOW = "docs/validation/collapse_validation.json"
 
 
 def _measures(path: str) -> tuple[str, str, str]:
@@ -590,7 +592,7 @@ def collapse_before_after() -> str:
 
 @table("docs/validation/area_budget.json")
 def area_budget() -> str:
-    """Where the collapse's mesh area goes (demos/area_budget.py)."""
+    """Where the collapse's mesh area goes (demos/studies/area_budget.py)."""
     out = []
     for r in load("docs/validation/area_budget.json")["runs"]:
         dt = r["overrides"].get("dt")
@@ -623,7 +625,7 @@ def area_budget() -> str:
 
 
 # ---------------------------------------------------------------------------
-# Baselines (demos/compare_*.py).
+# Baselines (demos/studies/compare_*.py).
 
 
 @table("docs/validation/comparison/locking.json")
@@ -744,7 +746,7 @@ def _s(summary: dict | None) -> str:
 #: The suite-format reports pooled by the time-per-step table.
 SUITE_REPORTS = (
     "suite",
-    "suite_big2",
+    "suite_16k_default",
     "suite_refinement",
     "suite_16k",
     "threads",
@@ -932,7 +934,7 @@ def cnr() -> str:
     )
 
 
-@table(f"{RESULTS}/full_2k_v2.json")
+@table(f"{RESULTS}/full_2k_cnr.json")
 def full_runs() -> str:
     """Whole 2k collapse runs to rest with the MKL settings (presets.py)."""
     names = {
@@ -942,7 +944,7 @@ def full_runs() -> str:
         "fast-nocnr": "both",
     }
     out = []
-    for r in load(f"{RESULTS}/full_2k_v2.json")["runs"]:
+    for r in load(f"{RESULTS}/full_2k_cnr.json")["runs"]:
         m = r["metrics"]
         out.append(
             [

@@ -4,5 +4,5 @@
 T5-T9): short runs of the ``elastic-column`` and ``strip-footing`` scenes, and
 of the step API where a scene cannot express the case, with parameters pushed
 to the edges.  ``tests/test_extremes.py`` asserts every case;
-``demos/extremes_matrix.py`` runs them all and writes docs/extremes.md.
+``demos/studies/extremes_matrix.py`` runs them all and writes docs/extremes.md.
 """
