@@ -37,6 +37,18 @@ print(f"(L_inf - L0)/L0 = {normalised_runout:.2f}; experiments {1.2 * a}..{1.8 *
 print(f"H_inf/L0 = {m['final_height']:.2f}, at rest: {m['at_rest']}")
 
 # %%
+# Every step's record is in `summary["history"]`: the front spreads and stops.
+t = [r["time"] for r in summary["history"]]
+front = [r["runout"] for r in summary["history"]]
+fig, ax = plt.subplots(figsize=(5, 3.2))
+ax.plot(t, front)
+ax.axhline(summary["parameters"]["length"] * (1 + 1.2 * a), ls=":", c="k")
+ax.axhline(summary["parameters"]["length"] * (1 + 1.8 * a), ls=":", c="k")
+ax.set(xlabel="t (s)", ylabel="run-out (m)", title="front against the band")
+fig.tight_layout()
+fig.savefig(OUT / "runout.png", dpi=100)
+
+# %%
 # The pictures of `skfem-npfem plot OUT/run`: the particles' mesh coloured by a
 # field at chosen times (in units of sqrt(H0/g)), with the floor, the wall, the
 # initial outline and Lube's run-out.
@@ -48,15 +60,3 @@ pictures = plot_results(
     out_dir=OUT,
 )
 print([p.name for p in pictures])
-
-# %%
-# Every step's record is in `summary["history"]`: the front spreads and stops.
-t = [r["time"] for r in summary["history"]]
-front = [r["runout"] for r in summary["history"]]
-fig, ax = plt.subplots(figsize=(5, 3.2))
-ax.plot(t, front)
-ax.axhline(summary["parameters"]["length"] * (1 + 1.2 * a), ls=":", c="k")
-ax.axhline(summary["parameters"]["length"] * (1 + 1.8 * a), ls=":", c="k")
-ax.set(xlabel="t (s)", ylabel="run-out (m)", title="front against the band")
-fig.tight_layout()
-fig.savefig(OUT / "runout.png", dpi=100)
