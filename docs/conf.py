@@ -5,8 +5,10 @@ Build (from the repository root, with the ``docs`` extra installed)::
     python -m sphinx -W -b html docs docs/_build/html
 
 The build needs no network (no intersphinx) and runs nothing heavy: the
-tutorials execute (a few seconds each), everything from ``demos/`` and
-``benchmarks/`` is shown from the results those scripts committed.  Pages
+tutorials and the short gallery examples of ``demos/*.py`` execute (a few
+seconds each; the examples' results are cached under ``gallery/_run/``), the
+studies of ``demos/studies/`` and the benchmarks are shown from the results
+those scripts committed.  Pages
 generated at build time (``api/``, ``gallery/``) are written by the local
 extension ``_ext/npfem_docs`` and are not committed.
 """

@@ -75,6 +75,22 @@ def test_gallery_has_a_page_per_demo(site):
         page = site / "gallery" / f"demos-{script.stem}.html"
         assert page.exists(), page
         assert f"demos/{script.name}" in page_text(site, page.relative_to(site))
+    for script in sorted((ROOT / "demos" / "studies").glob("*.py")):
+        page = site / "gallery" / f"studies-{script.stem}.html"
+        assert page.exists(), page
+        text = page_text(site, page.relative_to(site))
+        assert f"demos/studies/{script.name}" in text
+
+
+def test_gallery_examples_ran_and_show_their_figures(site):
+    # The short examples run at build time: the one-step page shows the
+    # printed error of the column against sigma_yy = -rho g (H - y) (E1) and
+    # the figure the script saved.
+    text = page_text(site, "gallery/demos-one_step_by_hand.html")
+    err = float(re.search(r"sigma_yy relative L2 error: ([\d.e+-]+)", text)[1])
+    assert err < 5e-3
+    raw = (site / "gallery" / "demos-one_step_by_hand.html").read_text()
+    assert re.search(r'<img [^>]*src="[^"]*sigma_yy\.png"', raw)
 
 
 def test_tutorial_one_step_recovers_the_displacement_from_the_duals(site):

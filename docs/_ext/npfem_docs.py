@@ -5,9 +5,11 @@ At ``builder-inited`` it writes the generated pages (never committed):
 * ``api/``: one page per group of ``skfem_npfem.__all__`` (the ``#:`` comments
   of ``skfem_npfem/__init__.py``), so a name added to ``__all__`` appears in
   the reference without editing the docs (:mod:`npfem_api`);
-* ``gallery/``: one page per script of ``demos/`` with its docstring, the
-  figures it committed under ``docs/``, the pages that quote it and its source
-  (:mod:`npfem_gallery`).
+* ``gallery/``: one page per script of ``demos/`` and ``benchmarks/``: the
+  short examples of ``demos/`` run (cached under ``gallery/_run/``) and shown
+  cell by cell with their output and figures; the studies and benchmarks
+  with their docstring, the figures they committed under ``docs/``, the pages
+  that quote them and their source (:mod:`npfem_gallery`).
 
 It also registers the directives that build tables from the JSON the demos
 and benchmarks commit (:mod:`npfem_tables`) and the ``pending-section``
@@ -52,7 +54,7 @@ def generate(app: Sphinx) -> None:
     src = Path(app.srcdir)
     for rel, text in npfem_api.pages().items():
         write_if_changed(src / "api" / rel, text)
-    for rel, text in npfem_gallery.pages(src).items():
+    for rel, text in npfem_gallery.pages(src, warn=logger.warning).items():
         write_if_changed(src / "gallery" / rel, text)
 
 
