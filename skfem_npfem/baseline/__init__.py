@@ -2,7 +2,7 @@
 
 Both advance the same particles as :func:`skfem_npfem.step.advance`, on the
 same meshes (``mesh_source``), with the same walls and materials, and return
-the same ``(particles, StepResult)``, so :class:`~skfem_npfem.simulation.Simulation`
+the same ``(particles, Step)``, so :class:`~skfem_npfem.simulation.Simulation`
 runs them as its ``stepper`` (the scenes' ``--set method=``):
 
 * :class:`FemRemap` - the classical PFEM: stress and plastic strain at the

@@ -25,7 +25,7 @@ import numpy as np
 
 from ..pfem import main_body
 from ..simulation import AtRest, Simulation
-from ..step import StepResult
+from ..step import Step
 from .base import Scene, SceneRun
 from .box_column import box_column
 from .collapse_geometry import (
@@ -132,7 +132,7 @@ def _recorder(values: dict[str, Any], h: float):
     """
     geo, symmetric = values["geometry"], values["symmetric"]
 
-    def record(sim_: Simulation, p, step: StepResult) -> bool:
+    def record(sim_: Simulation, p, step: Step) -> bool:
         body = np.zeros(p.n, bool)
         body[step.active[main_body(p.x[step.active], 3.0 * h)]] = True
         extra = step.record.extra

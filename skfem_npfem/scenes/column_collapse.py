@@ -55,7 +55,7 @@ from ..particles import Particles
 from ..pfem import AlphaShapeMesher, main_body
 from ..simulation import AtRest, Simulation
 from ..smoothing import nodal_integration
-from ..step import StepResult
+from ..step import Step
 from .base import Param, Scene, SceneRun
 from .common import (
     check_size,
@@ -462,7 +462,7 @@ def _model(values: dict[str, Any]) -> Model:
 def _front_recorder(h: float, symmetric: bool):
     """Callback storing the run-out measures on each step record."""
 
-    def record_front(sim_: Simulation, p: Particles, step: StepResult) -> bool:
+    def record_front(sim_: Simulation, p: Particles, step: Step) -> bool:
         body = np.zeros(p.n, bool)
         body[step.active[main_body(p.x[step.active], 3.0 * h)]] = True
         edge, top = front(p.x, body, symmetric)
