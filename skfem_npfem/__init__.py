@@ -14,6 +14,12 @@ Ready problems are :mod:`.scenes`; :mod:`.baseline` holds the methods N-PFEM is
 compared with, :mod:`.sweeps` runs parameter studies on Dask, :mod:`.viz` draws,
 :mod:`.cli` is the command line.  Every public name is available flat from the
 package.
+
+A scikit-fem mesh goes in and comes out: :meth:`Particles.from_mesh` puts a
+particle on every node of a ``MeshTri``/``MeshTet``, the same mesh is the mesh
+source of :func:`advance`, and :meth:`Step.to_skfem` returns the step's mesh
+with the particle fields as P1 degrees of freedom.  ``__all__`` groups the
+names by what a user does (the API reference follows it).
 """
 
 from __future__ import annotations
@@ -22,13 +28,19 @@ from . import _compat
 
 __version__ = "0.1.0"
 
-# High level: ready scenes and the time loop.
-from .run.simulation import AtRest, Simulation
-from .scenes import SCENES, get_scene, run_scene
+from ._deprecated import RENAMED as _RENAMED
+from ._deprecated import renamed as _renamed
 
 # isort: split
-# Building blocks: particles, meshes, materials, smoothing, boundaries, the step.
 from .boundary import Contacts, RigidWall, floor, wall_x
+from .errors import (
+    CheckpointError,
+    NpfemError,
+    ParameterError,
+    RunInterrupted,
+    SolverError,
+)
+from .io import read_pvd, read_step
 from .materials import (
     DruckerPrager,
     LinearElastic,
@@ -38,39 +50,43 @@ from .materials import (
     VonMises,
     compliance_matrix,
 )
+from .mesh.axisymmetric import (
+    AxisymmetricIntegration,
+    AxisymmetricMohrCoulomb,
+    axisymmetric_integration,
+)
 from .mesh.delaunay import Triangulation, alpha_shape
 from .mesh.smoothing import NodalIntegration, nodal_integration, p1_gradients
 from .mesh.sources import AlphaShapeMesher, FixedMesh, main_body
 from .particles import Particles
-from .step.conic import StepSolution, solve_step
+from .run.simulation import AtRest, Simulation
+from .scenes import SCENES, get_scene, run_scene
+from .step.conic import ConeSolution, solve_step
 from .step.model import Model
-from .step.program import StepData
+from .step.program import ConeInput
 from .step.solver import SolverOptions
-from .step.stages import StepRecord, StepResult, advance
+from .step.stages import Step, StepRecord, advance, skfem_fields
 from .sweeps import sweep
 
-# isort: split
-from .errors import (
-    CheckpointError,
-    NpfemError,
-    ParameterError,
-    RunInterrupted,
-    SolverError,
-)
-
-#: High level: ready scenes and the time loop.
+#: Run a scene.
 __all__ = ["SCENES", "AtRest", "Simulation", "__version__", "get_scene", "run_scene"]
-#: Particles and their meshes.
+#: Build particles and meshes.
 __all__ += [
     "AlphaShapeMesher",
+    "AxisymmetricIntegration",
     "FixedMesh",
+    "NodalIntegration",
     "Particles",
     "Triangulation",
     "alpha_shape",
+    "axisymmetric_integration",
     "main_body",
+    "nodal_integration",
+    "p1_gradients",
 ]
 #: Materials.
 __all__ += [
+    "AxisymmetricMohrCoulomb",
     "DruckerPrager",
     "LinearElastic",
     "Material",
@@ -79,22 +95,23 @@ __all__ += [
     "VonMises",
     "compliance_matrix",
 ]
-#: Smoothing cells.
-__all__ += ["NodalIntegration", "nodal_integration", "p1_gradients"]
 #: Boundaries.
 __all__ += ["Contacts", "RigidWall", "floor", "wall_x"]
-#: The step.
+#: One step.
 __all__ += [
+    "ConeInput",
+    "ConeSolution",
     "Model",
     "SolverOptions",
-    "StepData",
+    "Step",
     "StepRecord",
-    "StepResult",
-    "StepSolution",
     "advance",
     "solve_step",
-    "sweep",
 ]
+#: Sweeps.
+__all__ += ["sweep"]
+#: Post-processing.
+__all__ += ["read_pvd", "read_step", "skfem_fields"]
 #: Errors.
 __all__ += [
     "CheckpointError",
@@ -131,3 +148,15 @@ _MOVED = {
     "scenery": "viz.scenery",
 }
 _compat.install_aliases(__name__, _MOVED)
+
+
+def __getattr__(name: str) -> object:
+    """Old names of the step types, with a ``DeprecationWarning``.
+
+    ``StepData`` is :class:`ConeInput`, ``StepSolution`` :class:`ConeSolution`
+    and ``StepResult`` :class:`Step` (the same classes: ``isinstance`` keeps
+    working); they go in the next release.
+    """
+    return _renamed(
+        __name__, name, {old: globals()[new] for old, new in _RENAMED.items()}
+    )

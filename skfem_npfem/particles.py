@@ -7,12 +7,14 @@ function takes particles and returns *new* particles.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, fields, replace
 
 import numpy as np
+from skfem import Mesh
 
 from .errors import ParameterError
-from .materials import full_voigt_size
+from .materials import Material, full_voigt_size
 
 __all__ = ["Particles"]
 
@@ -141,6 +143,124 @@ class Particles:
         )
         p.validate()
         return p
+
+    @classmethod
+    def from_mesh(
+        cls,
+        mesh: Mesh,
+        materials: Material | Sequence[Material],
+        *,
+        material: np.ndarray | None = None,
+        fixed: np.ndarray | None = None,
+        stress: np.ndarray | None = None,
+        v: np.ndarray | None = None,
+        n_walls: int = 0,
+        axisymmetric: bool = False,
+    ) -> Particles:
+        """Particles at the nodes of a scikit-fem mesh, at rest.
+
+        Particle ``i`` is node ``i`` of ``mesh`` (at ``mesh.p[:, i]``), and its
+        mass is ``rho V_i``: the density of its material times the volume of
+        its smoothing cell (:func:`~skfem_npfem.nodal_integration`; with
+        ``axisymmetric=True`` the ``2 pi r``-weighted ring volume of
+        :func:`~skfem_npfem.axisymmetric_integration`, kg of the full ring).
+        The masses add up to ``rho`` times the mesh's area or volume.  The same
+        mesh is the mesh source of a small-deformation step:
+        ``advance(p, model, dt, mesh)`` or ``FixedMesh(mesh)``.
+
+        Parameters
+        ----------
+        mesh : skfem.MeshTri or skfem.MeshTet
+            P1 triangles (2D; ``(r, z)`` half-section if ``axisymmetric``) or
+            tetrahedra (3D); every node in an element.
+        materials : Material or sequence of Material
+            The material, or the model's material list (then ``material``
+            picks one per particle).
+        material : array_like (N,) of int, optional
+            Index into ``materials`` per particle (default 0).
+        fixed : array_like (N, d) or (N,) of bool, optional
+            Prescribed degrees of freedom; a row of one flag fixes every
+            component of that particle.
+        stress, v : array_like, optional
+            Initial stress (N, n_full), Pa, and velocity (N, d), m/s.
+        n_walls : int
+            Number of rigid walls of the model.
+        axisymmetric : bool
+            Masses of an axisymmetric model (``Model(axisymmetric=True)``).
+
+        Returns
+        -------
+        Particles
+
+        Raises
+        ------
+        ParameterError
+            If ``mesh`` is not a P1 simplex mesh, a material has no positive
+            density, an index is outside ``materials``, or an array has the
+            wrong shape (as :meth:`create`).
+
+        Examples
+        --------
+        >>> from skfem import MeshTri
+        >>> from skfem_npfem import LinearElastic
+        >>> soil = LinearElastic(E=1e7, nu=0.3, rho=2000.0)
+        >>> mesh = MeshTri.init_tensor(np.linspace(0, 1, 3), np.linspace(0, 2, 5))
+        >>> base = mesh.p[1] == 0.0
+        >>> p = Particles.from_mesh(mesh, soil, fixed=base)
+        >>> p.n, float(p.mass.sum()), int(p.fixed.sum())
+        (15, 4000.0, 6)
+        """
+        from .axisymmetric import axisymmetric_integration
+        from .smoothing import check_p1_mesh, nodal_integration
+
+        if not isinstance(mesh, Mesh):
+            raise ParameterError(
+                "mesh", type(mesh).__name__, "a scikit-fem MeshTri or MeshTet"
+            )
+        check_p1_mesh(mesh)
+        mats = [materials] if isinstance(materials, Material) else list(materials)
+        if not mats or not all(isinstance(m, Material) for m in mats):
+            raise ParameterError(
+                "materials", _describe(materials), "a Material or a list of them"
+            )
+        rho = np.array([m.rho for m in mats], float)
+        if not np.all(rho > 0):
+            i = int(np.flatnonzero(~(rho > 0))[0])
+            raise ParameterError(
+                "materials",
+                f"{type(mats[i]).__name__} with rho={rho[i]:g}",
+                "a density rho > 0 (kg/m^3) for the masses rho V_i",
+            )
+        x = mesh.p.T
+        n, d = x.shape
+        ids = (
+            np.zeros(n, np.int64)
+            if material is None
+            else _index_array("material", material, n)
+        )
+        if ids.size and ids.max() >= len(mats):
+            raise ParameterError(
+                "material",
+                int(ids.max()),
+                f"indices into the {len(mats)} material(s) given (0..{len(mats) - 1})",
+            )
+        cells = (
+            axisymmetric_integration(mesh) if axisymmetric else nodal_integration(mesh)
+        )
+        mass = rho[ids] * cells.volumes
+        if fixed is not None:
+            fixed = _bool_array("fixed", fixed, f"shape ({n}, {d}) or ({n},)")
+            if fixed.shape == (n,):
+                fixed = np.repeat(fixed[:, None], d, axis=1)
+        return cls.create(
+            x,
+            mass,
+            stress=stress,
+            material=ids,
+            fixed=fixed,
+            v=v,
+            n_walls=n_walls,
+        )
 
     @property
     def n(self) -> int:

@@ -25,11 +25,11 @@ from skfem import (
 )
 
 from skfem_npfem import (
+    ConeInput,
     Contacts,
     FixedMesh,
     Model,
     SolverOptions,
-    StepData,
     advance,
     solve_step,
 )
@@ -316,7 +316,7 @@ def pressure_load(mesh, a, p):
 
 def static_step(mesh, mat, fixed, force, du=None, sigma_n=None, options=None):
     n = mesh.p.shape[1]
-    data = StepData(
+    data = ConeInput(
         operator=axisymmetric_integration(mesh),
         materials=[mat],
         material=np.zeros(n, int),

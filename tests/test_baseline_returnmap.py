@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from skfem import MeshTet, MeshTri
 
-from skfem_npfem import Contacts, SolverOptions, StepData, solve_step
+from skfem_npfem import ConeInput, Contacts, SolverOptions, solve_step
 from skfem_npfem.baseline.returnmap import elastic_trial, project_invariants, return_map
 from skfem_npfem.materials import DruckerPrager, MohrCoulomb, Tresca, VonMises
 from skfem_npfem.mesh.smoothing import nodal_integration
@@ -50,7 +50,7 @@ def socp_step(mat, comps, grad, sig_n):
     d, n = mesh.dim(), mesh.p.shape[1]
     fixed = np.zeros((n, d), bool)
     fixed[mesh.boundary_nodes()] = True
-    data = StepData(
+    data = ConeInput(
         operator=nodal_integration(mesh, comps),
         materials=[mat],
         material=np.zeros(n, int),

@@ -14,6 +14,7 @@ import pytest
 from skfem import MeshTet, MeshTri
 
 from skfem_npfem import (
+    ConeInput,
     Contacts,
     DruckerPrager,
     LinearElastic,
@@ -23,7 +24,6 @@ from skfem_npfem import (
     Particles,
     SolverError,
     SolverOptions,
-    StepData,
     Tresca,
     VonMises,
     solve_step,
@@ -54,7 +54,7 @@ def jittered_block(dim: int, n: int = 5, size=(2.0, 1.0, 1.0), seed: int = 0):
 def step_data(mesh, mat, comps, *, fixed, du=None, force=None, sigma_n=None, **kw):
     d, n = mesh.dim(), mesh.p.shape[1]
     nfull = 4 if d == 2 else 6
-    return StepData(
+    return ConeInput(
         operator=nodal_integration(mesh, comps),
         materials=[mat],
         material=np.zeros(n, int),

@@ -28,6 +28,7 @@ import pytest
 from skfem import MeshTet, MeshTri
 
 from skfem_npfem import (
+    ConeInput,
     Contacts,
     FixedMesh,
     LinearElastic,
@@ -36,7 +37,6 @@ from skfem_npfem import (
     Particles,
     RigidWall,
     Simulation,
-    StepData,
     advance,
     floor,
     nodal_integration,
@@ -202,7 +202,7 @@ def _sliding_step(dim, v0, mu=0.5):
     )
     force = np.zeros((n_nodes, dim))
     force[:, -1] = -mass * G
-    data = StepData(
+    data = ConeInput(
         operator=ni,
         materials=[LinearElastic(1e7, 0.3, RHO)],
         material=np.zeros(n_nodes, int),

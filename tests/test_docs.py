@@ -80,5 +80,12 @@ def test_readme_first_script_runs_as_written(tmp_path):
     ).groups()
     assert status == "Solved" and int(iterations) == 0
     assert float(err) / 100 < 1e-2
+    # The step back in scikit-fem: the mean of sigma_yy over the column is
+    # -rho g H / 2 (its integral of the linear exact field, within 1 %).
+    mean, exact = re.search(
+        r"^mean sigma_yy (-?\d+) Pa, exact (-?\d+) Pa$", out, re.M
+    ).groups()
+    assert float(exact) == -2000.0 * 9.81 * 2.0
+    assert abs(float(mean) / float(exact) - 1) < 1e-2
     q = float(re.search(r"^Prandtl q/c = ([\d.]+) vs 2\+pi$", out, re.M).group(1))
     assert abs(q / (2 + math.pi) - 1) < 1e-2

@@ -247,7 +247,7 @@ def test_resume_repeats_the_uninterrupted_run(tmp_path):
 
 def test_a_run_keeps_scalars_only_per_step():
     # The run keeps one scalar StepRecord per step; the step's arrays reach the
-    # callbacks in a StepResult and are dropped.  Reference: the solution
+    # callbacks in a Step and are dropped.  Reference: the solution
     # arrays of one step (du, sigma, deps_p, reaction: 12 floats = 96 bytes per
     # particle); what the run keeps per step stays below a quarter of that
     # (measured 2-2.7 kB per step, 6 bytes per particle here: the record and a
@@ -256,7 +256,7 @@ def test_a_run_keeps_scalars_only_per_step():
     import tracemalloc
 
     from skfem_npfem.scenes import get_scene
-    from skfem_npfem.step.stages import StepResult
+    from skfem_npfem.step.stages import Step
 
     scene = get_scene("column-collapse")
     values = scene.resolve({"spacing": 0.2 / 14, "linear_solver": "qdldl"})
@@ -271,7 +271,7 @@ def test_a_run_keeps_scalars_only_per_step():
     gc.collect()
     kept = (tracemalloc.get_traced_memory()[0] - before) / 10
     tracemalloc.stop()
-    assert seen == [StepResult] * 17
+    assert seen == [Step] * 17
     assert kept < 0.25 * 96 * sim.particles.n, kept
     for rec in sim.records:
         values = [v for k, v in vars(rec).items() if k not in ("timings", "extra")]

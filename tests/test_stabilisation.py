@@ -16,11 +16,11 @@ import pytest
 from skfem import MeshTet, MeshTri
 
 from skfem_npfem import (
+    ConeInput,
     Contacts,
     LinearElastic,
     Model,
     ParameterError,
-    StepData,
     get_scene,
     run_scene,
     solve_step,
@@ -78,7 +78,7 @@ def geostatic(dim: int, n: int, beta: float, perturb: float = 0.0):
     fixed[np.isclose(x[:, -1], 0.0)] = True
     for k in range(dim - 1):  # rollers on the sides
         fixed[np.isclose(x[:, k], 0.0) | np.isclose(x[:, k], 1.0), k] = True
-    return StepData(
+    return ConeInput(
         operator=ni,
         materials=[LinearElastic(E, NU, RHO)],
         material=np.zeros(x.shape[0], int),
@@ -99,7 +99,7 @@ def test_the_geostatic_state_is_an_exact_solution_with_the_stabilisation(dim):
     assert_exact_geostatic_step(geostatic(dim, 3, beta=30.0))
 
 
-def assert_exact_geostatic_step(data: StepData) -> None:
+def assert_exact_geostatic_step(data: ConeInput) -> None:
     """Zero element residual (1e-9 rho g) and a step that keeps the state.
 
     ``du`` below 1e-8 of the settlement scale rho g H^2 / E = 2e-3 m (H = 1),

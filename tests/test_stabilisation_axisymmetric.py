@@ -19,7 +19,7 @@ from skfem import MeshTri
 from test_axisymmetric import jittered_section
 from test_stabilisation import RHO, assert_exact_geostatic_step
 
-from skfem_npfem import Contacts, LinearElastic, StepData, solve_step
+from skfem_npfem import ConeInput, Contacts, LinearElastic, solve_step
 from skfem_npfem.mesh.axisymmetric import axisymmetric_integration
 from skfem_npfem.step.conic import build_program
 from skfem_npfem.step.stabilisation import element_residual, hoop_matrix
@@ -34,7 +34,7 @@ def section(r0, r1, h, nr, nz, seed=0):
 
 def step_data(mesh, sigma, force, fixed, beta, du=None, nu=NU):
     n = mesh.p.shape[1]
-    return StepData(
+    return ConeInput(
         operator=axisymmetric_integration(mesh),
         materials=[LinearElastic(E, nu, RHO)],
         material=np.zeros(n, int),

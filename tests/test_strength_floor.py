@@ -15,11 +15,11 @@ import pytest
 from skfem import MeshTri
 
 from skfem_npfem import (
+    ConeInput,
     Contacts,
     DruckerPrager,
     ParameterError,
     SolverOptions,
-    StepData,
     nodal_integration,
     solve_step,
 )
@@ -28,7 +28,7 @@ from skfem_npfem.step.program import Program
 
 def uniform_step(mesh, mat, sigma_n, du):
     n = mesh.p.shape[1]
-    return StepData(
+    return ConeInput(
         operator=nodal_integration(mesh, (0, 1, 2, 3)),
         materials=[mat],
         material=np.zeros(n, int),

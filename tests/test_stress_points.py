@@ -25,7 +25,7 @@ from skfem_npfem.boundary import Contacts
 from skfem_npfem.materials import MohrCoulomb
 from skfem_npfem.mesh.smoothing import NodalIntegration, nodal_integration
 from skfem_npfem.step.conic import build_program, cell_size, solve_step
-from skfem_npfem.step.program import StepData
+from skfem_npfem.step.program import ConeInput
 from skfem_npfem.step.solver import SolverOptions
 
 
@@ -68,7 +68,7 @@ class SplitPoints:
         self.base.check()
 
 
-def block_step(operator, repeat: int) -> StepData:
+def block_step(operator, repeat: int) -> ConeInput:
     m = MeshTri.init_tensor(np.linspace(0, 1, 7), np.linspace(0, 2, 13))
     x, n = m.p.T, m.p.shape[1]
     ni = nodal_integration(m, (0, 1, 3))
@@ -89,7 +89,7 @@ def block_step(operator, repeat: int) -> StepData:
     force = np.zeros((n, 2))
     force[:, 1] = -1.5 * 2000 * 9.81 * ni.volumes
     v = 0.01 * np.random.default_rng(5).normal(size=(n, 2))
-    return StepData(
+    return ConeInput(
         operator=operator(ni),
         materials=[mat],
         material=np.zeros(repeat * n, int),

@@ -51,7 +51,7 @@ from skfem import (
 )
 from skfem.helpers import ddot, div, sym_grad
 
-from skfem_npfem import Contacts, StepData, solve_step
+from skfem_npfem import ConeInput, Contacts, solve_step
 from skfem_npfem.baseline import gauss_mesh
 from skfem_npfem.baseline.reporting import save_png, write_result
 from skfem_npfem.materials import LinearElastic
@@ -95,7 +95,7 @@ def npfem(n: int, nu: float) -> float:
     N = x.shape[0]
     force = np.zeros((N, 2))
     force[:, 1] = edge_load(mesh, ElementTriP1())
-    data = StepData(
+    data = ConeInput(
         operator=nodal_integration(mesh, COMPS),
         materials=[LinearElastic(E, nu)],
         material=np.zeros(N, int),
@@ -115,7 +115,7 @@ def fem(n: int, nu: float, element: str) -> float:
     N = gm.node_x.shape[0]
     force = np.zeros((N, 2))
     force[:, 1] = edge_load(mesh, ElementTriP1() if element == "p1" else ElementTriP2())
-    data = StepData(
+    data = ConeInput(
         operator=gm.points,
         materials=[LinearElastic(E, nu)],
         material=np.zeros(gm.points.n_points, int),

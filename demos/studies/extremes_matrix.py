@@ -49,7 +49,7 @@ def fmt_iters(its: list[int]) -> str:
 
 
 def case_row(c) -> dict:
-    """Run one case of ``skfem_npfem.cases.extremes``; its row of extremes.json."""
+    """Run one case of ``cases.extremes``; its row of extremes.json."""
     t0 = time.perf_counter()
     try:
         o = tx.result(c.name)

@@ -20,6 +20,7 @@ import re
 from pathlib import Path
 
 import skfem_npfem
+from skfem_npfem._deprecated import RENAMED
 
 #: Names documented on the index only (no autodoc entry of their own).
 SKIP = {"__version__"}
@@ -121,6 +122,21 @@ def pages() -> dict[str, str]:
         "Bad input raises {py:class}`~skfem_npfem.ParameterError` (a "
         "`ValueError` naming the parameter, the value and what is allowed); a "
         "failed solve raises {py:class}`~skfem_npfem.SolverError`.",
+        "",
+        "The groups follow what a user does: run a ready scene; build particles "
+        "and meshes (a scikit-fem `MeshTri`/`MeshTet` goes in through "
+        "{py:meth}`~skfem_npfem.Particles.from_mesh` and as the mesh source of "
+        "{py:func}`~skfem_npfem.advance`); materials; boundaries; one step; "
+        "sweeps; post-processing ({py:meth}`~skfem_npfem.Step.to_skfem` gives "
+        "a step back as a scikit-fem mesh with P1 fields); errors.",
+        "",
+        "Renamed step types (the old names still work for one release, with a "
+        "`DeprecationWarning`): "
+        + ", ".join(
+            f"`{old}` is {{py:class}}`~skfem_npfem.{new}`"
+            for old, new in RENAMED.items()
+        )
+        + ".",
         "",
     ]
     for title, names in groups():

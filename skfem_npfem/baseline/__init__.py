@@ -2,7 +2,7 @@
 
 Both advance the same particles as :func:`skfem_npfem.advance`, on the
 same meshes (``mesh_source``), with the same walls and materials, and return
-the same ``(particles, StepResult)``, so :class:`~skfem_npfem.Simulation`
+the same ``(particles, Step)``, so :class:`~skfem_npfem.Simulation`
 runs them as its ``stepper`` (the scenes' ``--set method=``):
 
 * :class:`FemRemap` - the classical PFEM: stress and plastic strain at the

@@ -38,11 +38,11 @@ from ..boundary import node_contacts
 from ..errors import ParameterError
 from ..mesh.sources import MeshSource
 from ..particles import Particles
-from ..step.conic import StepSolution, solve_step
+from ..step.conic import ConeSolution, solve_step
 from ..step.kinematics import equivalent_strain, rotate_stress
 from ..step.model import Model
-from ..step.program import StepData
-from ..step.stages import StepRecord, StepResult, move_particles
+from ..step.program import ConeInput
+from ..step.stages import Step, StepRecord, move_particles
 from .fem_nodes import element_material, gauss_points, node_data, to_particles
 from .operators import ELEMENTS, GaussMesh, gauss_mesh, quadrature
 from .returnmap import return_map
@@ -227,12 +227,12 @@ class FemRemap:
         dt: float,
         mesh_source: MeshSource,
         step: int | None = None,
-    ) -> tuple[GaussState, StepResult]:
+    ) -> tuple[GaussState, Step]:
         """Advance one step (the counterpart of :func:`skfem_npfem.advance`).
 
         Returns
         -------
-        GaussState, StepResult
+        GaussState, Step
             ``result.record.extra`` holds ``remapped``, ``yield_violations``
             and ``outside_old_mesh``; ``result.solution`` is on the particles
             (recovered nodal stresses, mid-edge reactions split to the ends);
@@ -263,7 +263,7 @@ class FemRemap:
         rec = StepRecord.of_step(
             step, dt, new, model.gravity, active, gm.points, sol, timings, **info
         )
-        return new, StepResult(rec, out, active, local_t, gm.points)
+        return new, Step(rec, out, active, local_t, gm.points, new)
 
     def _step_data(self, state, model, dt, gm: GaussMesh, active, cells, sig_gp):
         """The cone step's data on the Gauss points, and each contact's wall."""
@@ -281,7 +281,7 @@ class FemRemap:
             h,
             model.gravity,
         )
-        data = StepData(
+        data = ConeInput(
             operator=gm.points,
             materials=model.materials,
             material=np.repeat(element_material(state.material, cells), gm.nq),
@@ -325,7 +325,7 @@ class FemRemap:
             gp_stress=sig,
             gp_eps_p=eps,
         )
-        out = StepSolution(
+        out = ConeSolution(
             du=sol.du[:nv],
             sigma=nodal[:, :-1],
             deps_p=np.zeros_like(nodal[:, :-1]),

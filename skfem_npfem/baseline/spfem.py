@@ -58,10 +58,10 @@ from ..mesh.delaunay import p1_mesh
 from ..mesh.smoothing import NodalIntegration, nodal_integration
 from ..mesh.sources import MeshSource
 from ..particles import Particles
-from ..step.conic import StepSolution
+from ..step.conic import ConeSolution
 from ..step.kinematics import equivalent_strain, rotate_stress
 from ..step.model import Model
-from ..step.stages import StepRecord, StepResult
+from ..step.stages import Step, StepRecord
 from .returnmap import elastic_trial, return_map
 
 __all__ = ["MID_RUN_MARGIN", "SAFETY", "SPFEM", "stable_time_step"]
@@ -177,7 +177,7 @@ class SPFEM:
         dt: float,
         mesh_source: MeshSource,
         step: int | None = None,
-    ) -> tuple[Particles, StepResult]:
+    ) -> tuple[Particles, Step]:
         """Advance by ``dt`` in explicit substeps on one mesh.
 
         Same signature and result as :func:`skfem_npfem.advance`;
@@ -225,7 +225,7 @@ class SPFEM:
             cfl=h / stable,
         )
         rec.n_contacts = int(np.count_nonzero(np.any(wall_force > 0, axis=1)))
-        return q, StepResult(rec, sol, active, local_t, ni)
+        return q, Step(rec, sol, active, local_t, ni, q)
 
     def _substeps(self, dt: float, stable: float, step: int | None) -> int:
         """Number of substeps of a step of ``dt`` on a mesh of this stable step."""
@@ -289,8 +289,8 @@ class SPFEM:
         return new, impulse
 
     @staticmethod
-    def _solution(p, q, model: Model, active, ni) -> StepSolution:
-        """The step as a :class:`StepSolution` on the active particles.
+    def _solution(p, q, model: Model, active, ni) -> ConeSolution:
+        """The step as a :class:`ConeSolution` on the active particles.
 
         ``reaction`` is the support force ``G s - m g`` on prescribed dofs at the
         end of the step; there are no contact multipliers (kinematic contact).
@@ -301,7 +301,7 @@ class SPFEM:
         )
         weight = q.mass[active][:, None] * model.gravity_vector[None, :]
         reaction = np.where(q.fixed[active], f_int - weight, 0.0)
-        return StepSolution(
+        return ConeSolution(
             du=(q.u - p.u)[active],
             sigma=q.stress[active],
             deps_p=np.zeros_like(q.stress[active]),

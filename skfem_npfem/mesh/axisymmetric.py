@@ -40,7 +40,7 @@ import scipy.sparse as sp
 from skfem import CellBasis, ElementTriP1, Mesh
 
 from ..materials import ConeRows, MohrCoulomb
-from .smoothing import FULL_VOIGT, NodalIntegration, connectivity
+from .smoothing import FULL_VOIGT, NodalIntegration, check_p1_mesh, connectivity
 
 __all__ = [
     "MASS_BASIS",
@@ -127,6 +127,7 @@ def axisymmetric_integration(
     >>> round(float(ni.volumes.sum() / np.pi), 12)  # pi r^2 h with r = h = 1
     1.0
     """
+    check_p1_mesh(mesh)
     if mesh.dim() != 2:
         raise ValueError("an axisymmetric mesh is the 2D (r, z) half-section")
     components = tuple(range(4)) if components is None else tuple(components)

@@ -40,6 +40,7 @@ from ..errors import ParameterError
 __all__ = [
     "FULL_VOIGT",
     "NodalIntegration",
+    "check_p1_mesh",
     "nodal_integration",
     "p1_gradients",
 ]
@@ -72,6 +73,44 @@ _B_PATTERN: dict[int, tuple[tuple[int, int, int], ...]] = {
         (5, 0, 2),
     ),
 }
+
+
+def check_p1_mesh(mesh: Mesh, name: str = "mesh") -> Mesh:
+    """Return ``mesh`` if it is a scikit-fem P1 simplex mesh, else raise.
+
+    The particles of N-PFEM are the vertices of linear triangles (2D) or
+    tetrahedra (3D): ``MeshTri1`` (``MeshTri``) or ``MeshTet1`` (``MeshTet``).
+
+    Raises
+    ------
+    ParameterError
+        For any other mesh type (quadrilaterals, hexahedra, quadratic or
+        discontinuous meshes, lines), naming the conversion where scikit-fem
+        has one.
+
+    Examples
+    --------
+    >>> from skfem import MeshQuad, MeshTri
+    >>> type(check_p1_mesh(MeshTri())).__name__
+    'MeshTri1'
+    >>> try:
+    ...     check_p1_mesh(MeshQuad())
+    ... except ParameterError as err:
+    ...     print(err.value, "->", err.allowed.split("; ")[1])
+    MeshQuad1 -> split it with mesh.to_meshtri()
+    """
+    elem = getattr(type(mesh), "elem", None)
+    if elem in (ElementTriP1, ElementTetP1):
+        return mesh
+    hint = {
+        "MeshQuad1": "; split it with mesh.to_meshtri()",
+        "MeshHex1": "; split it with mesh.to_meshtet()",
+    }.get(type(mesh).__name__, "")
+    raise ParameterError(
+        name,
+        type(mesh).__name__,
+        f"a scikit-fem P1 simplex mesh, MeshTri (MeshTri1) or MeshTet (MeshTet1){hint}",
+    )
 
 
 def p1_gradients(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
@@ -281,9 +320,8 @@ def nodal_integration(
     >>> round(float(ni.volumes.sum()), 12)
     1.0
     """
+    check_p1_mesh(mesh)
     dim = mesh.dim()
-    if dim not in (2, 3):
-        raise ValueError(f"mesh dimension {dim} is not supported (2 or 3)")
     nfull = len(FULL_VOIGT[dim])
     if components is None:
         components = tuple(range(nfull))

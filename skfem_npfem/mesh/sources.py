@@ -23,13 +23,22 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
+from skfem import Mesh
 
 from ..boundary import RigidWall
 from ..errors import NpfemError, ParameterError
 from .delaunay import Triangulation, alpha_shape
+from .smoothing import check_p1_mesh
 from .surface import free_surface
 
-__all__ = ["AlphaShapeMesher", "FixedMesh", "MeshSource", "folded_facets", "main_body"]
+__all__ = [
+    "AlphaShapeMesher",
+    "FixedMesh",
+    "MeshSource",
+    "as_mesh_source",
+    "folded_facets",
+    "main_body",
+]
 
 
 class MeshSource(Protocol):
@@ -46,22 +55,41 @@ class FixedMesh:
 
     Parameters
     ----------
-    t : ndarray (d+1, ne)
-        Connectivity over all particles (every particle in an element).
+    t : skfem.Mesh or ndarray (d+1, ne)
+        The mesh the particles were made from (a ``MeshTri``/``MeshTet``, as
+        for :meth:`~skfem_npfem.Particles.from_mesh`: particle ``i`` is node
+        ``i``), or its connectivity over all particles (every particle in an
+        element).  ``FixedMesh(mesh)`` and ``FixedMesh(mesh.t)`` are the same
+        mesh source.
 
     Raises
     ------
     ParameterError
-        When called, if ``t`` indexes particles that do not exist or the mesh
-        is tangled (two elements on the same side of a shared side).
+        If ``t`` is a scikit-fem mesh other than P1 triangles/tetrahedra; when
+        called, if ``t`` indexes particles that do not exist, a mesh has
+        another number of nodes than there are particles, or the mesh is
+        tangled (two elements on the same side of a shared side).
     NpfemError
         When called, if an element has turned inside out: the deformation is
         too large for a fixed connectivity (use smaller steps).
+
+    Examples
+    --------
+    >>> from skfem import MeshTri
+    >>> mesh = MeshTri().refined(1)
+    >>> active, t = FixedMesh(mesh)(mesh.p.T)
+    >>> active.size, t.shape
+    (9, (3, 8))
     """
 
     t: np.ndarray
 
     def __post_init__(self) -> None:
+        self._n_nodes: int | None = None
+        if isinstance(self.t, Mesh):
+            mesh = check_p1_mesh(self.t, "t")
+            self._n_nodes = int(mesh.p.shape[1])
+            self.t = mesh.t
         self.t = np.asarray(self.t, dtype=np.int64)
         self._active = np.unique(self.t)
         self._signs: np.ndarray | None = None
@@ -98,6 +126,13 @@ class FixedMesh:
 
     def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # noqa: D102
         n = x.shape[0]
+        if self._n_nodes is not None and self._n_nodes != n:
+            raise ParameterError(
+                "particles",
+                f"{n} particles",
+                f"one particle per node of the mesh ({self._n_nodes} nodes; "
+                "build them with Particles.from_mesh(mesh, ...))",
+            )
         if self.t.size and (self.t.min() < 0 or self.t.max() >= n):
             raise ParameterError(
                 "t",
@@ -109,6 +144,36 @@ class FixedMesh:
             local = np.searchsorted(self._active, self.t)
             return self._active, local
         return self._active, self.t
+
+
+def as_mesh_source(source: MeshSource | Mesh | np.ndarray) -> MeshSource:
+    """A mesh source from a mesh source, a scikit-fem mesh or a connectivity.
+
+    A ``MeshTri``/``MeshTet`` or a connectivity array ``(d+1, ne)`` becomes a
+    :class:`FixedMesh`; a callable (:class:`FixedMesh`,
+    :class:`AlphaShapeMesher` or your own) is returned as it is.
+
+    Raises
+    ------
+    ParameterError
+        For anything else, or a scikit-fem mesh that is not P1 simplices.
+
+    Examples
+    --------
+    >>> from skfem import MeshTri
+    >>> type(as_mesh_source(MeshTri())).__name__
+    'FixedMesh'
+    """
+    if isinstance(source, Mesh | np.ndarray):
+        return FixedMesh(source)
+    if callable(source):
+        return source
+    raise ParameterError(
+        "mesh_source",
+        type(source).__name__,
+        "a scikit-fem MeshTri/MeshTet, a connectivity array (d+1, ne), or a "
+        "mesh source such as FixedMesh or AlphaShapeMesher",
+    )
 
 
 class AlphaShapeMesher:

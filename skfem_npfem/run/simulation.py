@@ -5,7 +5,7 @@ time step (halve and retry when the solver fails, grow back after successes),
 an end time or a stopping rule (:class:`AtRest`), callbacks, progress
 reporting, VTU output as steps finish, and checkpoints to resume from (the
 files themselves are :mod:`skfem_npfem.io`'s).  Each step's arrays reach the
-callbacks and the writer in a :class:`~skfem_npfem.step.stages.StepResult` and are
+callbacks and the writer in a :class:`~skfem_npfem.step.stages.Step` and are
 dropped after them; the run keeps one scalar
 :class:`~skfem_npfem.step.stages.StepRecord` per step.
 """
@@ -22,14 +22,15 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from skfem import Mesh
 
 from ..errors import ParameterError, RunInterrupted, SolverError
 from ..io import read_checkpoint, write_checkpoint
-from ..mesh.sources import MeshSource
+from ..mesh.sources import MeshSource, as_mesh_source
 from ..particles import Particles
 from ..step.kinematics import energies
 from ..step.model import Model
-from ..step.stages import StepRecord, StepResult, advance
+from ..step.stages import Step, StepRecord, advance
 from .control import INTERVAL, AbandonStep, Progress, SignalGuard
 
 __all__ = ["AtRest", "Simulation", "peak_memory_mb"]
@@ -44,8 +45,9 @@ class Simulation:
         Initial state.
     model : Model
         Physics and solver settings.
-    mesh_source : callable
-        See :func:`advance`.
+    mesh_source : callable, skfem.Mesh or ndarray (d+1, ne)
+        See :func:`advance` (a mesh or a connectivity is one
+        :class:`~skfem_npfem.FixedMesh` for the whole run).
     dt : float
         Initial (and maximum) time step, s.
     adaptive : bool
@@ -70,7 +72,7 @@ class Simulation:
         Steps between checkpoints.
     callbacks : list of callables
         ``f(sim, particles, result)`` after every step, with the new particles
-        and the :class:`~skfem_npfem.step.stages.StepResult` (``result.record`` is
+        and the :class:`~skfem_npfem.step.stages.Step` (``result.record`` is
         the kept :class:`~skfem_npfem.step.stages.StepRecord`: store scene values in
         ``result.record.extra``); return True to stop.
     progress : bool or None
@@ -83,8 +85,8 @@ class Simulation:
         ``f(particles) -> dict`` of more point data for the VTU files.
     stepper : callable or None
         The step, ``stepper(particles, model, dt, mesh_source, step=k) ->
-        (particles, StepResult)``; None: N-PFEM's
-        :func:`~skfem_npfem.advance`.  Another method (FEM with remapping,
+        (particles, Step)``; None: N-PFEM's
+        :func:`~skfem_npfem.step.stages.advance`.  Another method (FEM with remapping,
         explicit SPFEM: :mod:`skfem_npfem.baseline`) plugs in here and may keep
         more state in a subclass of :class:`Particles`; checkpoints keep it.
 
@@ -102,7 +104,7 @@ class Simulation:
         self,
         particles: Particles,
         model: Model,
-        mesh_source: MeshSource,
+        mesh_source: MeshSource | Mesh | np.ndarray,
         dt: float,
         *,
         adaptive: bool = False,
@@ -117,13 +119,13 @@ class Simulation:
         progress: bool | None = None,
         meta: dict | None = None,
         extra_point_data: Callable[[Particles], dict[str, np.ndarray]] | None = None,
-        stepper: Callable[..., tuple[Particles, StepResult]] | None = None,
+        stepper: Callable[..., tuple[Particles, Step]] | None = None,
     ) -> None:
         if not (isinstance(dt, int | float) and math.isfinite(dt) and dt > 0):
             raise ParameterError("dt", dt, "a finite time step > 0 (s)")
         self.particles = particles
         self.model = model
-        self.mesh_source = mesh_source
+        self.mesh_source = as_mesh_source(mesh_source)
         self.dt_max = float(dt)
         self.dt = float(dt)
         self.adaptive = adaptive
@@ -316,7 +318,7 @@ class Simulation:
     ) -> bool:
         """One step with its output, callbacks and checkpoint; True: stop now.
 
-        The step's :class:`~skfem_npfem.step.stages.StepResult` lives only here: the
+        The step's :class:`~skfem_npfem.step.stages.Step` lives only here: the
         run keeps its record.
         """
         if guard is not None:
@@ -349,7 +351,7 @@ class Simulation:
         rec.timings["output"] = time.perf_counter() - t_out
         return stop_now
 
-    def _try_step(self, dt: float) -> tuple[Particles, StepResult]:
+    def _try_step(self, dt: float) -> tuple[Particles, Step]:
         retries = 0
         while True:
             try:
@@ -402,7 +404,7 @@ class Simulation:
         elif du > 0:
             self.dt = min(self.dt_max, 2 * dt, 0.9 * dt * limit / du)
 
-    def _advance(self, dt: float) -> tuple[Particles, StepResult]:
+    def _advance(self, dt: float) -> tuple[Particles, Step]:
         args = (self.particles, self.model, dt, self.mesh_source)
         if self.stepper is not None:
             return self.stepper(*args, step=self.step + 1)

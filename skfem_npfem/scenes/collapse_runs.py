@@ -28,7 +28,7 @@ from ..laws import lube2004_runout
 from ..laws import lube2005_runout as lube_runout
 from ..mesh.sources import main_body
 from ..run.simulation import AtRest, Simulation
-from ..step.stages import StepResult
+from ..step.stages import Step
 from .base import Scene, SceneRun
 from .box_column import box_column
 from .collapse_geometry import (
@@ -122,7 +122,7 @@ def _recorder(values: dict[str, Any], h: float):
     """
     geo, symmetric = values["geometry"], values["symmetric"]
 
-    def record(sim_: Simulation, p, step: StepResult) -> bool:
+    def record(sim_: Simulation, p, step: Step) -> bool:
         body = np.zeros(p.n, bool)
         body[step.active[main_body(p.x[step.active], 3.0 * h)]] = True
         extra = step.record.extra

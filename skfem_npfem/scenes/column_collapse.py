@@ -57,7 +57,7 @@ from ..mesh.sources import AlphaShapeMesher, main_body
 from ..particles import Particles
 from ..run.simulation import AtRest, Simulation
 from ..step.model import Model
-from ..step.stages import StepResult
+from ..step.stages import Step
 from .base import Param, Scene, SceneRun
 from .common import (
     check_size,
@@ -450,7 +450,7 @@ def _model(values: dict[str, Any]) -> Model:
 def _front_recorder(h: float, symmetric: bool):
     """Callback storing the run-out measures on each step record."""
 
-    def record_front(sim_: Simulation, p: Particles, step: StepResult) -> bool:
+    def record_front(sim_: Simulation, p: Particles, step: Step) -> bool:
         body = np.zeros(p.n, bool)
         body[step.active[main_body(p.x[step.active], 3.0 * h)]] = True
         edge, top = front(p.x, body, symmetric)

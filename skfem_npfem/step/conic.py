@@ -46,14 +46,15 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
+from .._deprecated import renamed
 from ..errors import ParameterError, SolverError
 from .families import OBJECTIVE_TERMS, ROW_FAMILIES
-from .program import Assembled, Program, StepData, assemble
+from .program import Assembled, ConeInput, Program, assemble
 from .solver import ACCEPTED, SolverOptions, hint, solve_clarabel
 
 __all__ = [
+    "ConeSolution",
     "Scaled",
-    "StepSolution",
     "build_program",
     "cell_size",
     "check_step_data",
@@ -66,8 +67,13 @@ __all__ = [
 
 
 @dataclass
-class StepSolution:
-    """Result of :func:`solve_step`.
+class ConeSolution:
+    """The solver's raw solution of one cone program (:func:`solve_step`).
+
+    Arrays on the program's nodes and stress points, not yet on the particles
+    (stresses not yet rotated); :func:`~skfem_npfem.advance` turns it into new
+    particles and keeps it as ``step.solution``.  Formerly ``StepSolution``
+    (that name still works, with a deprecation warning).
 
     Attributes
     ----------
@@ -106,13 +112,13 @@ class StepSolution:
 
 
 def solve_step(
-    data: StepData, options: SolverOptions | None = None, step: int | None = None
-) -> StepSolution:
+    data: ConeInput, options: SolverOptions | None = None, step: int | None = None
+) -> ConeSolution:
     """Assemble and solve one N-PFEM step.
 
     Parameters
     ----------
-    data : StepData
+    data : ConeInput
         Operators, state and loads of the step.
     options : SolverOptions, optional
         Clarabel settings.
@@ -121,7 +127,7 @@ def solve_step(
 
     Returns
     -------
-    StepSolution
+    ConeSolution
 
     Raises
     ------
@@ -170,7 +176,7 @@ def solve_step(
 
 
 def build_program(
-    data: StepData, strength_floor: float = 0.0
+    data: ConeInput, strength_floor: float = 0.0
 ) -> tuple[Program, Assembled]:
     """Stage 1: the objective terms and row families of the step, stacked.
 
@@ -246,7 +252,7 @@ def cell_size(prog: Program) -> float:
 
 def recover(
     prog: Program, x: np.ndarray, z: np.ndarray, status: str, iterations: int
-) -> StepSolution:
+) -> ConeSolution:
     """Stage 4: du, stresses, plastic strains, reactions and contact forces.
 
     ``x`` and ``z`` are the unscaled primal and dual solutions; the equilibrium
@@ -283,7 +289,7 @@ def recover(
         reaction[prog.pres] = gs + r_p - prog.ftilde[prog.pres]
     lam_t = np.zeros((prog.size("lambda_n"), d - 1))
     lam_t[prog.fric] = x[prog.slice("lambda_t")].reshape(-1, d - 1)
-    return StepSolution(
+    return ConeSolution(
         du=du,
         sigma=sigma,
         deps_p=deps_p,
@@ -295,7 +301,7 @@ def recover(
     )
 
 
-def check_step_data(data: StepData) -> None:
+def check_step_data(data: ConeInput) -> None:
     """Refuse inputs that would otherwise give NaN or silent garbage.
 
     Raises
@@ -407,3 +413,8 @@ def displacement_scale(prog: Program, F_star: float, h: float) -> float:
     if data.dynamic and prog.mt.size:
         k_in = float(np.mean(prog.mt)) / data.dt**2
     return F_star / (k_el + k_in)
+
+
+def __getattr__(name: str) -> object:
+    """Old names (``StepSolution``), with a ``DeprecationWarning``."""
+    return renamed(__name__, name, {"StepSolution": ConeSolution})

@@ -1,6 +1,6 @@
 """The data of one step's cone program: inputs, variable layout and blocks.
 
-:class:`StepData` is everything one cone step needs; :class:`Program` derives
+:class:`ConeInput` is everything one cone step needs; :class:`Program` derives
 from it what the row families and objective terms of
 :mod:`skfem_npfem.step.families` share (free and prescribed dofs, the generalised
 force ``f~``, compliances, yield cones, the variable layout), and
@@ -26,7 +26,7 @@ operator ``data.operator`` only through this interface (:class:`StrainOperator`)
 ``check()``
     Raise :class:`~skfem_npfem.errors.ParameterError` for a degenerate mesh.
 
-Per-point arrays of :class:`StepData` (``material``, ``sigma_n``) have ``n_p``
+Per-point arrays of :class:`ConeInput` (``material``, ``sigma_n``) have ``n_p``
 rows; nodal ones (``force``, ``fixed``, ``du_prescribed``, ``mass``, ``v_n``,
 ``contacts``) have ``N``.  :class:`~skfem_npfem.mesh.smoothing.NodalIntegration`
 (N-PFEM: one stress point per node, ``n_p = N``) is one implementation; an
@@ -52,15 +52,16 @@ import clarabel
 import numpy as np
 import scipy.sparse as sp
 
+from .._deprecated import renamed
 from ..boundary import Contacts
 from ..materials import ConeRows, Material
 
 __all__ = [
     "Assembled",
     "Block",
+    "ConeInput",
     "Layout",
     "Program",
-    "StepData",
     "StrainOperator",
     "Term",
     "assemble",
@@ -94,8 +95,12 @@ class StrainOperator(Protocol):
 
 
 @dataclass
-class StepData:
-    """Everything one cone step needs, on the active nodes of one mesh.
+class ConeInput:
+    """The input of one step's cone program, on the active nodes of one mesh.
+
+    What :func:`~skfem_npfem.solve_step` solves; :func:`~skfem_npfem.advance`
+    builds it from the particles (fill it by hand only to study one program).
+    Formerly ``StepData`` (that name still works, with a deprecation warning).
 
     Attributes
     ----------
@@ -224,7 +229,7 @@ class Program:
 
     Attributes
     ----------
-    data : StepData
+    data : ConeInput
     dim, n_nodes, n_points, comp, ns
         Dimension, nodes, stress points, stress components and their number.
     free, pres : ndarray
@@ -247,7 +252,7 @@ class Program:
         raised to it (:class:`~skfem_npfem.step.solver.SolverOptions`).
     """
 
-    def __init__(self, data: StepData, strength_floor: float = 0.0) -> None:
+    def __init__(self, data: ConeInput, strength_floor: float = 0.0) -> None:
         op = data.operator
         self.data = data
         self.dim = d = op.dim
@@ -369,3 +374,8 @@ def _rank(block: Block) -> int:
         return 1
     kinds = {clarabel.ZeroConeT: 0, clarabel.NonnegativeConeT: 1}
     return kinds.get(type(block.cones[0]), 2)
+
+
+def __getattr__(name: str) -> object:
+    """Old names (``StepData``), with a ``DeprecationWarning``."""
+    return renamed(__name__, name, {"StepData": ConeInput})

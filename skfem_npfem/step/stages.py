@@ -5,14 +5,20 @@
 1. :func:`build_operators` -- the mesh of this step (from the mesh source), the
    nodal integration on it (:mod:`skfem_npfem.mesh.smoothing`; axisymmetric models:
    :mod:`skfem_npfem.mesh.axisymmetric`), the wall contacts
-   (:mod:`skfem_npfem.boundary`) and the :class:`~skfem_npfem.step.program.StepData`;
+   (:mod:`skfem_npfem.boundary`) and the :class:`~skfem_npfem.step.program.ConeInput`;
 2. :func:`~skfem_npfem.step.conic.solve_step` -- the cone program;
 3. :func:`update_particles` -- *new* particles from the solution (stress
    rotation, plastic strain, velocities, ballistic particles, walls).
 
 The mesh is then forgotten: nothing is mapped between meshes.  The step's
-arrays (solution, mesh, operator) travel in a :class:`StepResult` that the
+arrays (solution, mesh, operator) travel in a :class:`Step` that the
 caller uses and drops; only the scalar :class:`StepRecord` is kept for the run.
+
+The step's types, from the inside out:
+:class:`~skfem_npfem.step.program.ConeInput` (the cone program's input) ->
+:class:`~skfem_npfem.step.conic.ConeSolution` (the solver's raw solution) ->
+:class:`Step` (what :func:`advance` returns: mesh, fields, solution) ->
+:class:`StepRecord` (its scalars, kept in the run's history).
 """
 
 from __future__ import annotations
@@ -24,27 +30,30 @@ from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
+from skfem import Mesh, MeshTet, MeshTri
 
+from .._deprecated import renamed
 from ..boundary import Contacts, project_to_walls, wall_contacts
 from ..errors import ParameterError
 from ..mesh.axisymmetric import axisymmetric_integration
 from ..mesh.delaunay import p1_mesh
-from ..mesh.smoothing import NodalIntegration, nodal_integration
-from ..mesh.sources import MeshSource
+from ..mesh.smoothing import FULL_VOIGT, NodalIntegration, nodal_integration
+from ..mesh.sources import MeshSource, as_mesh_source
 from ..particles import Particles
-from .conic import StepSolution, solve_step
+from .conic import ConeSolution, solve_step
 from .kinematics import energies, equivalent_strain, rotate_stress
 from .model import Model
-from .program import StepData, StrainOperator
+from .program import ConeInput, StrainOperator
 from .volume import volume_eigenstrain, volume_strains
 
 __all__ = [
+    "Step",
     "StepOperators",
     "StepRecord",
-    "StepResult",
     "advance",
     "build_operators",
     "move_particles",
+    "skfem_fields",
     "strain_operator",
     "update_particles",
 ]
@@ -52,7 +61,10 @@ __all__ = [
 
 @dataclass
 class StepRecord:
-    """Diagnostics of one step: scalars only (also written to the JSON summary).
+    """The record of one step kept in a run's history: scalars only.
+
+    :attr:`Step.record` of each step; ``Simulation.records`` and the JSON
+    summary's ``history`` hold one per step.
 
     Attributes
     ----------
@@ -117,7 +129,7 @@ class StepRecord:
         gravity: float,
         active: np.ndarray,
         operator: StrainOperator,
-        sol: StepSolution,
+        sol: ConeSolution,
         timings: dict[str, float],
         **extra: Any,
     ) -> StepRecord:
@@ -172,7 +184,7 @@ class StepOperators:
         Smoothing cells of the mesh.
     wall_ids : ndarray (nc,) int
         Wall of each contact candidate of ``data.contacts``.
-    data : StepData
+    data : ConeInput
         The cone step's input.
     volume_strains : ndarray (n_materials,) or None
         Volumetric eigenstrain of the volume correction per material
@@ -183,7 +195,7 @@ class StepOperators:
     local_t: np.ndarray
     operator: NodalIntegration
     wall_ids: np.ndarray
-    data: StepData
+    data: ConeInput
     volume_strains: np.ndarray | None = None
 
     @property
@@ -193,35 +205,149 @@ class StepOperators:
 
 
 @dataclass
-class StepResult:
-    """One finished step, handed to callbacks and the writer, then dropped.
+class Step:
+    """One finished step: its mesh, its fields, the cone solution and its record.
+
+    :func:`advance` returns it beside the new particles; a
+    :class:`~skfem_npfem.Simulation` hands it to the callbacks and the writer
+    and keeps only :attr:`record`.  :meth:`to_skfem` gives the step's mesh as
+    a scikit-fem mesh with the particle fields as P1 degrees of freedom.
+    Formerly ``StepResult`` (that name still works, with a deprecation
+    warning).
 
     Attributes
     ----------
     record : StepRecord
         The scalar diagnostics (kept by :class:`~skfem_npfem.Simulation`).
-    solution : StepSolution
+    solution : ConeSolution
         The cone solution on the active particles (``du``, ``sigma``,
         ``reaction``, contact forces, sizes).
     active : ndarray (N_a,) int
-        Particles of the step's mesh.
+        Particles of the step's mesh: node ``i`` is particle ``active[i]``.
     local_t : ndarray (d+1, ne) int
         Its connectivity in positions of ``active``.
     operator : StrainOperator
         Its strain operator (N-PFEM: the smoothing cells; FEM-remap: the
         Gauss points of its elements).
+    particles : Particles or None
+        The particles at the end of the step (the first value :func:`advance`
+        returns); needed by :attr:`mesh` and :meth:`to_skfem`.
     """
 
     record: StepRecord
-    solution: StepSolution
+    solution: ConeSolution
     active: np.ndarray
     local_t: np.ndarray
     operator: StrainOperator
+    particles: Particles | None = None
 
     @property
     def cells(self) -> np.ndarray:
         """Global connectivity (ne, d+1) of the step's mesh."""
         return self.active[self.local_t].T
+
+    @property
+    def mesh(self) -> MeshTri | MeshTet:
+        """The step's mesh as a scikit-fem ``MeshTri``/``MeshTet``.
+
+        Its nodes are the active particles at their end-of-step positions
+        (node ``i`` is particle ``active[i]``; particles outside the mesh are
+        not in it), its elements those the step was solved on.
+        """
+        if self.particles is None:
+            raise ParameterError(
+                "step.particles",
+                None,
+                "the particles at the end of the step (advance sets them)",
+            )
+        return p1_mesh(self.particles.x[self.active], self.local_t)
+
+    def to_skfem(self) -> tuple[MeshTri | MeshTet, dict[str, np.ndarray]]:
+        """The step's mesh and the particle fields as scikit-fem P1 DOFs.
+
+        Returns
+        -------
+        mesh : skfem.MeshTri or skfem.MeshTet
+            :attr:`mesh`.
+        fields : dict of str to ndarray
+            End-of-step particle values on the mesh nodes, ready for
+            ``Basis(mesh, ElementTriP1()).interpolate(fields[name])``
+            (:func:`skfem_fields` lists them): ``stress_xx``, ``stress_yy``,
+            ... (Pa, tension positive), ``plastic_strain_eq``,
+            ``displacement_x``, ... (m), ``velocity_x``, ... (m/s), each of
+            shape (N_a,); ``displacement`` and ``velocity`` of shape
+            (d N_a,) for ``ElementVector(ElementTriP1())``.
+
+        Examples
+        --------
+        The integral of the vertical stress over a soil column of height
+        ``H = 2`` and width ``W = 1`` (exact: ``-rho g H^2 W / 2``):
+
+        >>> import numpy as np
+        >>> from skfem import Basis, ElementTriP1, Functional, MeshTri
+        >>> import skfem_npfem as npfem
+        >>> soil = npfem.LinearElastic(E=1e7, nu=0.3, rho=2000.0)
+        >>> column = MeshTri.init_tensor(np.linspace(0, 1, 3), np.linspace(0, 2, 5))
+        >>> x = column.p.T
+        >>> fixed = np.zeros(x.shape, bool)
+        >>> fixed[x[:, 1] == 0.0] = True  # fixed base
+        >>> fixed[(x[:, 0] == 0.0) | (x[:, 0] == 1.0), 0] = True  # smooth sides
+        >>> p = npfem.Particles.from_mesh(column, soil, fixed=fixed)
+        >>> model = npfem.Model(dim=2, materials=[soil], mode="static")
+        >>> p, step = npfem.advance(p, model, dt=1.0, mesh_source=column)
+        >>> mesh, fields = step.to_skfem()
+        >>> basis = Basis(mesh, ElementTriP1())
+        >>> integral = Functional(lambda w: w["s"])
+        >>> s = integral.assemble(basis, s=basis.interpolate(fields["stress_yy"]))
+        >>> round(float(s) / (-2000.0 * 9.81 * 2.0**2 * 1.0 / 2), 3)
+        0.998
+        """
+        mesh = self.mesh  # refuses a step without its particles
+        return mesh, skfem_fields(self.particles, self.active)
+
+
+def skfem_fields(particles: Particles, nodes: np.ndarray) -> dict[str, np.ndarray]:
+    """Particle fields as scikit-fem P1 DOF arrays on a mesh of ``nodes``.
+
+    Node ``i`` of the mesh is particle ``nodes[i]``, so the P1 DOF ``i`` of a
+    scalar field is that particle's value; a vector field is node-major
+    (``u_0x, u_0y, u_1x, ...``), the DOF order of
+    ``ElementVector(ElementTriP1())``.
+
+    Parameters
+    ----------
+    particles : Particles
+        The particles (positions are not used).
+    nodes : ndarray (N_a,) int
+        The particles that are the mesh's nodes, in node order.
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``stress_<c>`` for each full-Voigt component ``c`` (``xx, yy, zz,
+        xy`` in 2D; also ``yz, zx`` in 3D), ``plastic_strain_eq``,
+        ``displacement_<k>`` and ``velocity_<k>`` for ``k`` in ``x, y(, z)``,
+        all (N_a,); ``displacement`` and ``velocity`` (d N_a,).
+
+    Examples
+    --------
+    >>> import skfem_npfem as npfem
+    >>> p = npfem.Particles.create([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], 1.0)
+    >>> sorted(skfem_fields(p, np.array([2, 0, 1])))[:4]
+    ['displacement', 'displacement_x', 'displacement_y', 'plastic_strain_eq']
+    """
+    nodes = np.asarray(nodes, dtype=np.int64)
+    d = particles.dim
+    out = {
+        f"stress_{c}": particles.stress[nodes, k].copy()
+        for k, c in enumerate(FULL_VOIGT[d])
+    }
+    out["plastic_strain_eq"] = particles.eps_p[nodes].copy()
+    for name, arr in (("displacement", particles.u), ("velocity", particles.v)):
+        vec = arr[nodes]
+        out.update({f"{name}_{'xyz'[k]}": vec[:, k].copy() for k in range(d)})
+        out[name] = vec.reshape(-1).copy()
+    return out
 
 
 def build_operators(
@@ -249,7 +375,7 @@ def build_operators(
         volume_state,
     )
     contacts, wall_ids = wall_contacts(model.walls, p, active, dt, h, model.gravity)
-    data = StepData(
+    data = ConeInput(
         operator=op,
         materials=model.materials,
         material=p.material[active],
@@ -293,7 +419,7 @@ def strain_operator(mesh, model: Model) -> tuple[NodalIntegration, float]:
 
 
 def update_particles(
-    p: Particles, model: Model, dt: float, ops: StepOperators, sol: StepSolution
+    p: Particles, model: Model, dt: float, ops: StepOperators, sol: ConeSolution
 ) -> Particles:
     """Stage 3: new particles from the solution of the step.
 
@@ -374,10 +500,10 @@ def advance(
     p: Particles,
     model: Model,
     dt: float,
-    mesh_source: MeshSource,
+    mesh_source: MeshSource | Mesh | np.ndarray,
     step: int | None = None,
     volume_state: Sequence[float] | None = None,
-) -> tuple[Particles, StepResult]:
+) -> tuple[Particles, Step]:
     """Advance the particles by one step.
 
     Parameters
@@ -388,10 +514,13 @@ def advance(
         Materials, loads, walls and solver settings.
     dt : float
         Time step, s (pseudo-time in static mode).
-    mesh_source : callable
+    mesh_source : callable, skfem.Mesh or ndarray (d+1, ne)
         ``x -> (active_index, local_t)`` (for example
         :class:`~skfem_npfem.mesh.sources.FixedMesh` or
-        :class:`~skfem_npfem.mesh.sources.AlphaShapeMesher`).
+        :class:`~skfem_npfem.mesh.sources.AlphaShapeMesher`); a scikit-fem
+        ``MeshTri``/``MeshTet`` whose nodes are the particles (as made by
+        :meth:`~skfem_npfem.Particles.from_mesh`), or its connectivity, is
+        ``FixedMesh(mesh)``.
     step : int, optional
         Step index (used in error messages).
     volume_state : sequence of float, optional
@@ -403,9 +532,10 @@ def advance(
 
     Returns
     -------
-    Particles, StepResult
+    Particles, Step
         New particles, and the step (its :class:`StepRecord` as ``.record``,
-        the solution and the mesh).  With the volume correction on, the
+        the solution and the mesh; ``step.to_skfem()`` gives the mesh and the
+        fields for scikit-fem).  With the volume correction on, the
         record's ``extra["volume_correction_strain"]`` holds this step's
         volumetric eigenstrain per material.
 
@@ -413,6 +543,24 @@ def advance(
     ------
     SolverError
         If the cone program fails; ``p`` is untouched.
+    ParameterError
+        For a bad ``dt``, particles of another dimension than the model, or a
+        mesh source that is none of the above.
+
+    Examples
+    --------
+    A soil column under gravity, one quasi-static step on a scikit-fem mesh:
+
+    >>> import numpy as np
+    >>> from skfem import MeshTri
+    >>> import skfem_npfem as npfem
+    >>> soil = npfem.LinearElastic(E=1e7, nu=0.3, rho=2000.0)
+    >>> mesh = MeshTri.init_tensor(np.linspace(0, 1, 3), np.linspace(0, 2, 5))
+    >>> p = npfem.Particles.from_mesh(mesh, soil, fixed=mesh.p[1] == 0.0)
+    >>> model = npfem.Model(dim=2, materials=[soil], mode="static")
+    >>> p, step = npfem.advance(p, model, dt=1.0, mesh_source=mesh)
+    >>> step.record.status, step.record.n_active
+    ('Solved', 15)
     """
     if not (math.isfinite(dt) and dt > 0):
         raise ParameterError("dt", dt, "a finite time step > 0 (s)")
@@ -422,6 +570,7 @@ def advance(
             f"{p.dim}D positions",
             f"{model.dim}D positions for a {model.dim}D model",
         )
+    mesh_source = as_mesh_source(mesh_source)
     t0 = time.perf_counter()
     ops = build_operators(p, model, dt, mesh_source, volume_state)
     t1 = time.perf_counter()
@@ -435,4 +584,9 @@ def advance(
     rec.n_contacts = ops.contacts.size
     if ops.volume_strains is not None:
         rec.extra["volume_correction_strain"] = [float(x) for x in ops.volume_strains]
-    return new, StepResult(rec, sol, ops.active, ops.local_t, ops.operator)
+    return new, Step(rec, sol, ops.active, ops.local_t, ops.operator, new)
+
+
+def __getattr__(name: str) -> object:
+    """Old names (``StepResult``), with a ``DeprecationWarning``."""
+    return renamed(__name__, name, {"StepResult": Step})
