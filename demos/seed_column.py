@@ -1,6 +1,6 @@
 """The reference paper's seed column in 3D, in axisymmetry and in plane strain.
 
-The seed case (issue 12): a cylindrical column r0 = 3.9 cm, h0 = 7.8 cm
+The seed case: a cylindrical column r0 = 3.9 cm, h0 = 7.8 cm
 (a = 2), rho = 1800 kg/m^3, E = 10 MPa, nu = 0.3, phi = 30 deg, psi = 0, c = 0,
 floor friction phi, dt = 2 ms, theta1 = theta2 = 1, released at t = 0 and run
 to t_bar = t / sqrt(h0/g) = 3 and on to rest (the scene's at-rest rule).  The
@@ -86,7 +86,7 @@ CASES: dict[str, dict] = {
         "spacing": R0 / 18,
         "dt": 2e-3,
     },
-    # The speed levers of issue 12 (solver preset accuracy=fast, tolerances
+    # The two speed levers (solver preset accuracy=fast, tolerances
     # 1e-6 instead of 1e-8, and a 4 ms time step instead of the paper's 2 ms),
     # and their price at r0/12 in 3D and in axisymmetry.
     "3d-18-fast-dt4": {"geometry": "quarter-cylinder", "spacing": R0 / 18,
@@ -100,7 +100,7 @@ CASES: dict[str, dict] = {
                         "accuracy": "fast", "dt": 4e-3},
     "axi-18-fast-dt4": {"geometry": "axisymmetric", "spacing": R0 / 18,
                         "accuracy": "fast", "dt": 4e-3},
-    # Axisymmetric with the stress stabilisation of issue 10 (beta = 30, the
+    # Axisymmetric with the stress stabilisation (beta = 30, the
     # plane-strain default; the cylindrical geometries default to 0).
     "axi-12-stab": {"geometry": "axisymmetric", "spacing": R0 / 12,
                     "stabilisation": 30.0},
@@ -112,7 +112,7 @@ CASES: dict[str, dict] = {
     "3d-12-stab-fast-dt4": {"geometry": "quarter-cylinder", "spacing": R0 / 12,
                             "stabilisation": 30.0, "accuracy": "fast",
                             "dt": 4e-3},
-    # With the opt-in volume correction of issue 10 (kappa = 0.1), without and
+    # With the opt-in volume correction (kappa = 0.1), without and
     # with the stabilisation, at the speed levers.
     "3d-12-fast-dt4-vc": {"geometry": "quarter-cylinder", "spacing": R0 / 12,
                           "accuracy": "fast", "dt": 4e-3,
@@ -299,6 +299,29 @@ def analyse(name: str, summ: dict, work: Path) -> dict:
         "profile": deposit_profile(last, p["spacing"]),
         "r0": r0,
         "h0": h0,
+        "measured_on": measured_on(),
+    }
+
+
+def measured_on() -> dict:
+    """Date, CPU and load of this measurement (shown beside the wall times)."""
+    import datetime
+    import os
+    import platform
+
+    cpu = platform.processor() or "unknown"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    load = os.getloadavg()[0] / (os.cpu_count() or 1)
+    return {
+        "date": datetime.date.today().isoformat(),
+        "cpu": f"{cpu}, {os.cpu_count()} cores",
+        "load": "idle" if load < 0.6 else "shared",
     }
 
 
@@ -411,6 +434,12 @@ def plot_profiles(results: dict, out: Path) -> Path | None:
 
 
 # --------------------------------------------------------------- tables ----
+def _on(res: dict) -> str:
+    """The "measured on" cell: date, CPU and load of the run."""
+    on = res.get("measured_on")
+    return f"{on['date']}, {on['cpu']}, {on['load']}" if on else "-"
+
+
 def tables(results: dict) -> str:
     """The Markdown tables of docs/seed_column.md (a page of their own, too)."""
     lines = [
@@ -431,9 +460,13 @@ def tables(results: dict) -> str:
     ref = lube2004(H0 / R0)
     lines += ["", f"Lube et al. (2004): (r_inf - r0)/r0 = {ref:.3f} at a = 2.", ""]
     lines += [
+        "Wall times compare only between runs measured on the same CPU under the "
+        "same load (last column); compare IPM iterations otherwise.",
+        "",
         "| case | wall time (s) | to t_bar = 3 (s) | s/step (median) | IPM it. "
-        "(mean, max) | peak memory (MB) | stress roughness (end, max) | statuses |",
-        "|---|---|---|---|---|---|---|---|",
+        "(mean, max) | peak memory (MB) | stress roughness (end, max) | statuses "
+        "| measured on |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for res in results.values():
         sr, srm = res["stress_roughness"], res["stress_roughness_max"]
@@ -444,7 +477,7 @@ def tables(results: dict) -> str:
             f"{res['peak_memory_mb']:.0f} | "
             f"{'-' if sr is None else f'{sr:.3f}'}, "
             f"{'-' if srm is None else f'{srm:.3f}'} | "
-            f"{', '.join(res['statuses'])} |"
+            f"{', '.join(res['statuses'])} | {_on(res)} |"
         )
     phases = sorted({k for res in results.values() for k in res.get("phases_s", {})})
     if phases:
