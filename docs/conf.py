@@ -4,11 +4,12 @@ Build (from the repository root, with the ``docs`` extra installed)::
 
     python -m sphinx -W -b html docs docs/_build/html
 
-The build needs no network (no intersphinx) and runs nothing heavy: the
-tutorials and the short gallery examples of ``demos/*.py`` execute (a few
-seconds each; the examples' results are cached under ``gallery/_run/``), the
-studies of ``demos/studies/`` and the benchmarks are shown from the results
-those scripts committed.  Pages
+The build needs no network (no intersphinx), and neither do the built pages
+(MathJax is copied into the site by ``sphinx-mathjax-offline``).  It runs
+nothing heavy: the tutorials and the short gallery examples of ``demos/*.py``
+execute (a few seconds each; the examples' results are cached under
+``gallery/_run/``), the studies of ``demos/studies/`` and the benchmarks are
+shown from the results those scripts committed.  Pages
 generated at build time (``api/``, ``gallery/``) are written by the local
 extension ``_ext/npfem_docs`` and are not committed.
 """
@@ -42,6 +43,10 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
+    # MathJax 3 served from the site itself (_static/mathjax/), not from a
+    # CDN: formulas render offline and the built pages load nothing from
+    # another host (tests/test_docs_build.py checks it).
+    "sphinx-mathjax-offline",
     "npfem_docs",
 ]
 

@@ -24,7 +24,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 pytestmark = pytest.mark.docs
 
-for module in ("sphinx", "myst_nb", "furo", "ipykernel"):
+for module in ("sphinx", "myst_nb", "furo", "ipykernel", "sphinx-mathjax-offline"):
     pytest.importorskip(module, reason="needs the docs extra: pip install '.[docs]'")
 
 
@@ -58,6 +58,37 @@ def page_text(site: Path, name: str) -> str:
     raw = (site / name).read_text(encoding="utf-8")
     raw = re.sub(r"<(script|style)\b.*?</\1>", "", raw, flags=re.S)
     return html.unescape(re.sub(r"<[^>]+>", "", raw))
+
+
+#: Attributes through which a page loads something (a hyperlink in the text,
+#: ``<a href>``, loads nothing and may point anywhere).
+LOADING = re.compile(
+    r"<(script|link|img|iframe|source|video|audio|embed|object)\b[^>]*?"
+    r"\b(src|href|data|srcset)\s*=\s*[\"']([^\"']*)[\"']",
+    re.I | re.S,
+)
+
+
+def test_pages_load_nothing_from_another_host(site):
+    # Offline, a page must render whole: scripts (MathJax), styles, fonts and
+    # images come from the site itself, never from a CDN.
+    foreign = []
+    pages = [p for p in site.rglob("*.html") if "_static" not in p.parts]
+    assert len(pages) > 20
+    for page in pages:
+        raw = page.read_text(encoding="utf-8")
+        for tag, attr, url in LOADING.findall(raw):
+            if re.match(r"(https?:)?//", url.strip(), re.I):
+                foreign.append(f"{page.relative_to(site)}: <{tag} {attr}={url}>")
+    assert not foreign, "\n".join(foreign[:20])
+
+
+def test_formulas_render_with_the_sites_own_mathjax(site):
+    raw = (site / "theory.html").read_text(encoding="utf-8")
+    src = re.search(r"<script[^>]*src=\"([^\"]*tex-chtml\.js)\"", raw)
+    assert src, "theory.html loads no MathJax"
+    assert (site / src.group(1)).is_file()
+    assert (site / "_static/mathjax/output/chtml/fonts/woff-v2").is_dir()
 
 
 def test_every_public_name_is_in_the_api_reference(site):

@@ -169,14 +169,17 @@ def replace_rows(
 
 
 def write_results(path: Path, text: str | None, page: str) -> None:
-    """The JSON ``text`` at ``path`` (None: keep it), ``page`` beside it as .md.
+    """The JSON ``text`` at ``path`` (None: keep it), ``page`` beside it as .inc.
+
+    The ``.inc`` fragment is included by ``docs/validation/stabilisation.md``
+    (not a page of its own).
 
     The page is printed too.
     """
     path.parent.mkdir(parents=True, exist_ok=True)
     if text is not None:
         path.write_text(text)
-    path.with_suffix(".md").write_text(page)
+    path.with_suffix(".inc").write_text(page)
     print(page)
 
 

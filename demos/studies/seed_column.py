@@ -88,7 +88,7 @@ CASES: dict[str, dict] = {
         "spacing": R0 / 18,
         "dt": 2e-3,
     },
-    # The speed levers (solver preset accuracy=fast, tolerances
+    # The two speed levers (solver preset accuracy=fast, tolerances
     # 1e-6 instead of 1e-8, and a 4 ms time step instead of the paper's 2 ms),
     # and their price at r0/12 in 3D and in axisymmetry.
     "3d-18-fast-dt4": {"geometry": "quarter-cylinder", "spacing": R0 / 18,
@@ -301,6 +301,29 @@ def analyse(name: str, summ: dict, work: Path) -> dict:
         "profile": deposit_profile(last, p["spacing"]),
         "r0": r0,
         "h0": h0,
+        "measured_on": measured_on(),
+    }
+
+
+def measured_on() -> dict:
+    """Date, CPU and load of this measurement (shown beside the wall times)."""
+    import datetime
+    import os
+    import platform
+
+    cpu = platform.processor() or "unknown"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    load = os.getloadavg()[0] / (os.cpu_count() or 1)
+    return {
+        "date": datetime.date.today().isoformat(),
+        "cpu": f"{cpu}, {os.cpu_count()} cores",
+        "load": "idle" if load < 0.6 else "shared",
     }
 
 
@@ -411,6 +434,12 @@ def plot_profiles(results: dict, out: Path) -> Path | None:
 
 
 # --------------------------------------------------------------- tables ----
+def _on(res: dict) -> str:
+    """The "measured on" cell: date, CPU and load of the run."""
+    on = res.get("measured_on")
+    return f"{on['date']}, {on['cpu']}, {on['load']}" if on else "-"
+
+
 def tables(results: dict) -> str:
     """The Markdown tables of docs/seed_column.md (a page of their own, too)."""
     lines = [
@@ -431,9 +460,13 @@ def tables(results: dict) -> str:
     ref = lube2004(H0 / R0)
     lines += ["", f"Lube et al. (2004): (r_inf - r0)/r0 = {ref:.3f} at a = 2.", ""]
     lines += [
+        "Wall times compare only between runs measured on the same CPU under the "
+        "same load (last column); compare IPM iterations otherwise.",
+        "",
         "| case | wall time (s) | to t_bar = 3 (s) | s/step (median) | IPM it. "
-        "(mean, max) | peak memory (MB) | stress roughness (end, max) | statuses |",
-        "|---|---|---|---|---|---|---|---|",
+        "(mean, max) | peak memory (MB) | stress roughness (end, max) | statuses "
+        "| measured on |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for res in results.values():
         sr, srm = res["stress_roughness"], res["stress_roughness_max"]
@@ -444,7 +477,7 @@ def tables(results: dict) -> str:
             f"{res['peak_memory_mb']:.0f} | "
             f"{'-' if sr is None else f'{sr:.3f}'}, "
             f"{'-' if srm is None else f'{srm:.3f}'} | "
-            f"{', '.join(res['statuses'])} |"
+            f"{', '.join(res['statuses'])} | {_on(res)} |"
         )
     phases = sorted({k for res in results.values() for k in res.get("phases_s", {})})
     if phases:

@@ -135,7 +135,7 @@ def footing_plateau() -> str:
             "N = q/c (block 5 b, default)",
             "N_c exact",
             "error",
-            "old (0.01 m)",
+            "at 0.01 m",
             "N/N_rp − 1",
             "steps",
             "settlement (m)",
@@ -219,7 +219,7 @@ def prandtl() -> str:
 #: The record before the stabilisation (particle masses, beta = 0), compact:
 #: the summary rows of the study, without its per-case records.
 COLLAPSE = "docs/validation/collapse_validation_before.json"
-#: The study with the defaults of 2026-12-02 (stabilisation beta = 30, volume
+#: The study with today's defaults (stabilisation beta = 30, volume
 #: correction kappa = 0.05), as the study writes it.
 COLLAPSE_NOW = "docs/validation/collapse_validation.json"
 
@@ -970,6 +970,254 @@ def full_runs() -> str:
             "H∞/L0",
         ],
         out,
+    )
+
+
+# ---------------------------------------------------------------------------
+# Verification and validation summary: every check against an independent
+# reference, in one table (docs/verification.md opens with it).
+
+#: The committed result files the summary reads, by role (paths from the
+#: repository root).  When results are moved or consolidated, adjust them here.
+VV_SOURCES: dict[str, str] = {
+    "verification": "docs/validation/verification.json",
+    "footing_plateau": "docs/validation/footing_plateau.json",
+    "collapse": "docs/validation/collapse_validation.json",
+    "seed_column": "docs/seed_column/seed_column.json",
+    "locking": "docs/validation/comparison/locking.json",
+}
+
+
+def _measured_on(data: dict) -> str:
+    """The date (and machine, if recorded) of a result file, for the table."""
+    meta = data.get("meta") or data.get("machine") or {}
+    date = str(meta.get("date", ""))[:10]
+    return date or "—"
+
+
+def _vv_row(
+    check: str,
+    reference: str,
+    ref_value: float,
+    value: float,
+    tol: float | None,
+    shows: str,
+    measured: str,
+    digits: int = 4,
+    error: float | None = None,
+) -> list[str]:
+    """One row: reference value, library value, relative error, tolerance, verdict."""
+    err = value / ref_value - 1 if error is None else error
+    if tol is None:
+        verdict = "reported"
+    else:
+        verdict = "pass" if abs(err) <= tol else "**fails**"
+    return [
+        check,
+        reference,
+        sig(ref_value, digits),
+        sig(value, digits),
+        pct(err, 2).replace(" ", NNBSP),
+        "—" if tol is None else f"±{100 * tol:g}{NNBSP}%",
+        verdict,
+        shows,
+        measured,
+    ]
+
+
+@table(*VV_SOURCES.values())
+def vv_summary() -> str:
+    """Every check of the library against an independent reference, one row each."""
+    rows: list[list[str]] = []
+    ver = load(VV_SOURCES["verification"])
+    when = _measured_on(ver)
+    # Elastic column at the scene's default spacing (0.125 m in 2D and 3D).
+    for c in ver["columns"]:
+        o = c["overrides"]
+        if o["spacing"] != 0.125:
+            continue
+        tol = 0.005 if o["dim"] == 2 else 0.01
+        name = f"elastic column {o['dim']}D, σ_v (rel. L2)"
+        row = _vv_row(
+            name,
+            "σ_v = −ρg(H − z) (analytic)",
+            1.0,
+            1.0,
+            tol,
+            "`tests/test_scenes.py`",
+            when,
+            error=c["sigma_v_rel_l2"],
+        )
+        row[2:4] = ["exact", "—"]
+        rows.append(row)
+        rows.append(
+            _vv_row(
+                f"elastic column {o['dim']}D, settlement",
+                "ρgH²/(2M) (analytic)",
+                c["settlement_exact"],
+                c["settlement"],
+                0.005,
+                "`tests/test_scenes.py`",
+                when,
+            )
+        )
+    per = ver["period"]
+    rows.append(
+        _vv_row(
+            "sudden gravity, period of the top",
+            "4H/c_p (analytic)",
+            per["period_exact"],
+            per["period"],
+            0.03,
+            "`tests/test_scenes.py`",
+            when,
+        )
+    )
+    for f in ver["footings"]:
+        o = f["overrides"]
+        rough = o.get("footing") == "rough"
+        dp = o.get("material") == "drucker-prager"
+        mat = "Drucker–Prager φ = 0" if dp else "Tresca"
+        name = (
+            f"Prandtl footing, {mat}, {'rough' if rough else 'smooth'}, "
+            f"{f['elements_across']} el."
+        )
+        tol = 0.002 if f["elements_across"] == 32 else (None if rough else 0.01)
+        rows.append(
+            _vv_row(
+                name,
+                "2 + π (Prandtl)",
+                f["reference"],
+                f["bearing_factor"],
+                tol,
+                "`tests/test_scenes.py`",
+                when,
+            )
+        )
+    plateau = load(VV_SOURCES["footing_plateau"])
+    when = _measured_on(plateau)
+    gates = {
+        (0.0, "smooth"): 0.03,
+        (20.0, "smooth"): 0.03,
+        (30.0, "smooth"): 0.05,
+        (30.0, "rough"): 0.05,
+    }
+    for r in plateau["rows"]:
+        if r["domain"] != 5:
+            continue
+        tol = gates.get((r["phi"], r["footing"]))
+        if tol is None and r["phi"] < 40:
+            continue  # the full table: docs/validation/footing_plateau.md
+        rows.append(
+            _vv_row(
+                f"footing at its plateau, φ = {r['phi']:g}°, {r['footing']}",
+                "N_c (Prandtl–Reissner)",
+                r["reference"],
+                r["bearing_factor"],
+                tol,
+                (
+                    "`tests/test_footing.py`"
+                    if tol
+                    else "`demos/studies/footing_plateau.py`"
+                ),
+                when,
+            )
+        )
+    lock = load(VV_SOURCES["locking"])
+    for case in lock["cases"]:
+        ref = case["reference"]["value"]
+        npfem = case["methods"]["N-PFEM"]
+        n = lock["meshes"][-1]
+        rows.append(
+            _vv_row(
+                f"Cook's membrane, ν = {case['nu']:g}, N-PFEM {n}×{n}",
+                "u_C, P2 extrapolated (Richardson)",
+                ref,
+                npfem["u_C"][-1],
+                None,
+                "`demos/studies/compare_locking.py`",
+                "—",
+            )
+        )
+    col = load(VV_SOURCES["collapse"])
+    small, large = col["fits"]["small_a"], col["fits"]["large_a"]
+    lo, hi = small["gate"]
+    rows.append(
+        _vv_row(
+            "column collapse, small-a slope k (N = 12)",
+            "1.2 (Lube 2005) – 1.8 (Lajeunesse 2005)",
+            1.5,
+            small["slope_through_origin"],
+            None,
+            "`demos/studies/collapse_validation.py`",
+            "—",
+            digits=3,
+        )
+    )
+    rows[-1][5] = f"{sig(lo, 3)}–{sig(hi, 3)}"
+    rows[-1][6] = "pass" if small["pass"] else "**fails**"
+    rows.append(
+        _vv_row(
+            "column collapse, large-a exponent (N = 12)",
+            "2/3 (Lube 2005)",
+            2 / 3,
+            large["exponent"],
+            None,
+            "`demos/studies/collapse_validation.py`",
+            "—",
+            digits=3,
+        )
+    )
+    lo, hi = large["gate"]
+    rows[-1][5] = f"{sig(lo, 3)}–{sig(hi, 3)}"
+    rows[-1][6] = "pass" if large["pass"] else "**fails**"
+    finest = max(col["refinement"], key=lambda r: r["N"])
+    a2 = finest["normalised_runout"]
+    rows.append(
+        _vv_row(
+            f"column collapse a = 2, run-out (N = {finest['N']})",
+            "2.4 (Lube) – 3.6 (Lajeunesse)",
+            3.0,
+            a2,
+            None,
+            "`demos/studies/collapse_validation.py`",
+            "—",
+            digits=3,
+        )
+    )
+    rows[-1][5] = "2.4–3.6"
+    rows[-1][6] = "pass" if 2.4 <= a2 <= 3.6 else "**fails**"
+    seed = load(VV_SOURCES["seed_column"])["cases"]
+    for key in ("axi-18", "3d-18"):
+        if key not in seed:
+            continue
+        c = seed[key]
+        on = c.get("measured_on", {}).get("date", "—")
+        rows.append(
+            _vv_row(
+                f"seed column, {c['label']}, run-out",
+                "Lube et al. (2004) fit",
+                c["reference_runout_lube2004"],
+                c["normalised_runout"],
+                None,
+                "`demos/studies/seed_column.py`",
+                on,
+                digits=4,
+            )
+        )
+    return md(
+        [
+            "check",
+            "reference",
+            "reference value",
+            "library",
+            "error",
+            "tolerance",
+            "verdict",
+            "shown by",
+            "measured on",
+        ],
+        rows,
     )
 
 
