@@ -27,9 +27,11 @@ from .checkpoints import (
     write_checkpoint,
 )
 from .files import (
+    LOCK_NAME,
     atomic_path,
     check_writable_dir,
     dumps,
+    folder_lock,
     to_jsonable,
     write_bytes,
     write_json,
@@ -38,6 +40,7 @@ from .results import ResultWriter, read_pvd, read_step, step_time
 
 __all__ = [
     "CHECKPOINT_FORMAT",
+    "LOCK_NAME",
     "ResultWriter",
     "atomic_path",
     "check_writable_dir",
@@ -45,6 +48,7 @@ __all__ = [
     "checkpoint_step",
     "clear_run_files",
     "dumps",
+    "folder_lock",
     "latest_checkpoint",
     "load_checkpoint",
     "read_checkpoint",

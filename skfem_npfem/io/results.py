@@ -76,6 +76,11 @@ class ResultWriter:
         If given, keep the existing steps ``<= resume_after_step`` listed in the
         ``.pvd`` and delete the VTU files of later steps. If None, remove stale
         ``<basename>_*.vtu`` files and start an empty collection.
+    defer : bool, default False
+        True: only check the folder now and leave its files alone until
+        :meth:`open` (called by the first :meth:`write` or :attr:`entries` at
+        the latest), so that a run can finish every check before it touches
+        the folder.
 
     Raises
     ------
@@ -90,28 +95,49 @@ class ResultWriter:
         out_dir: str | os.PathLike,
         basename: str = "result",
         resume_after_step: int | None = None,
+        *,
+        defer: bool = False,
     ) -> None:
         self.out_dir = Path(out_dir)
         if not basename or _BAD_NAME.search(basename) or "/" in basename:
             raise ParameterError("basename", basename, "a plain file-name prefix")
         self.basename = basename
-        check_writable_dir("out", self.out_dir)
+        check_writable_dir("out", self.out_dir, create=not defer)
         self.pvd_path = self.out_dir / f"{basename}.pvd"
         self.series_path = self.out_dir / f"{basename}.vtu.series"
         self._pattern = re.compile(rf"{re.escape(basename)}_(\d+)\.vtu")
         self._entries: dict[int, tuple[float, str]] = {}
+        if resume_after_step is not None:
+            resume_after_step = step_number("resume_after_step", resume_after_step)
+        self._resume_after_step = resume_after_step
+        self._opened = False
+        if not defer:
+            self.open()
+
+    def open(self) -> None:
+        """Prepare the folder: remove stray temporaries and stale steps, index.
+
+        Temporaries a killed writer left (``.tmp_<basename>...``) are removed;
+        then either the steps after ``resume_after_step`` or all earlier steps
+        are deleted, and the ``.pvd`` and ``.vtu.series`` indexes are written.
+        Runs once; later calls do nothing.
+        """
+        if self._opened:
+            return
+        self._opened = True
+        basename, last = self.basename, self._resume_after_step
+        self.out_dir.mkdir(parents=True, exist_ok=True)
         stray = re.compile(
             rf"\.tmp_{re.escape(basename)}(_\d+\.vtu|\.pvd|\.vtu\.series)"
         )
         for f in self.out_dir.iterdir():
             if stray.fullmatch(f.name):
                 f.unlink(missing_ok=True)
-        if resume_after_step is not None:
-            resume_after_step = step_number("resume_after_step", resume_after_step)
-            self._entries = self._kept_steps(resume_after_step)
+        if last is not None:
+            self._entries = self._kept_steps(last)
         for f in self.out_dir.glob(f"{basename}_*.vtu"):
             m = self._pattern.fullmatch(f.name)
-            if m and (resume_after_step is None or int(m[1]) > resume_after_step):
+            if m and (last is None or int(m[1]) > last):
                 f.unlink()
         self._write_index()
 
@@ -161,6 +187,7 @@ class ResultWriter:
     @property
     def entries(self) -> list[tuple[int, float, str]]:
         """List of ``(step, time, filename)`` written so far, sorted by step."""
+        self.open()
         return [(s, t, f) for s, (t, f) in sorted(self._entries.items())]
 
     def write(
@@ -204,6 +231,7 @@ class ResultWriter:
         ParameterError
             If an argument is malformed or a point-data array is not finite.
         """
+        self.open()
         step, time = step_number("step", step), float(time)
         if not np.isfinite(time):
             raise ParameterError("time", time, "a finite number")

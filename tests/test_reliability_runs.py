@@ -1,0 +1,140 @@
+"""A run's folder, its interruption and its messages, as a new user meets them.
+
+Each test starts from the command that went wrong (scaled down to the coarse
+collapse of ``COARSE``: 72 particles, qdldl, a few hundredths of a second per
+step) and checks what the user must see instead.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import signal
+import subprocess
+import sys
+from contextlib import redirect_stderr, redirect_stdout
+from pathlib import Path
+
+import pytest
+
+import skfem_npfem.io as npio
+from skfem_npfem import ParameterError
+from skfem_npfem.cli import main
+
+COARSE = [
+    "spacing=0.03333333333333333",
+    "rest_fraction=0",
+    "linear_solver=qdldl",
+]
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def cli(argv: list[str]) -> tuple[int, str, str]:
+    """Run the CLI in-process; return (exit code, stdout, stderr)."""
+    out, err = io.StringIO(), io.StringIO()
+    with redirect_stderr(err), redirect_stdout(out):
+        code = main(argv)
+    return code, out.getvalue(), err.getvalue()
+
+
+def sets(*items: str) -> list[str]:
+    return [arg for item in items for arg in ("--set", item)]
+
+
+def snapshot(folder: Path) -> dict[str, bytes]:
+    """Every file of a folder (recursively) with its bytes."""
+    return {
+        str(p.relative_to(folder)): p.read_bytes()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file()
+    }
+
+
+# --------------------------------------------- a refused run touches nothing --
+@pytest.mark.parametrize(
+    ("item", "says"),
+    [
+        ("psi=40", "invalid psi=40.0: at most phi = 30 degrees"),
+        ("spacing=1.0", "invalid spacing=1.0"),
+        ("dt=1e-8", "invalid dt=1e-08"),  # the step-count check, after the build
+    ],
+)
+def test_a_refused_run_leaves_the_previous_results_intact(tmp_path, item, says):
+    # Reproducer: a run with --summary into out/k, then a run into out/k that
+    # a scene check refuses: exit 2 with the right error, but every VTU, the
+    # .pvd and the checkpoints were gone and scene.json said psi = 40.
+    d = tmp_path / "k"
+    base = ["run", "column-collapse", "--out", str(d), "--quiet"]
+    argv = [*base, *sets(*COARSE, "t_end=0.02"), "--summary", str(d / "s.json")]
+    assert cli(argv)[0] == 0
+    before = snapshot(d)
+    assert {"result.pvd", "checkpoint_000004.npz", "scene.json"} <= set(before)
+    code, _, err = cli([*base, *sets(item)])
+    assert code == 2 and err.startswith(f"error: {says}"), err
+    assert snapshot(d) == before
+
+
+def test_a_refused_run_into_a_new_folder_creates_nothing(tmp_path):
+    d, s = tmp_path / "new" / "k", tmp_path / "other" / "s.json"
+    argv = ["run", "column-collapse", *sets("psi=40"), "--out", str(d)]
+    code, _, err = cli([*argv, "--summary", str(s)])
+    assert code == 2 and "psi" in err
+    assert sorted(tmp_path.iterdir()) == []
+
+
+def test_a_refused_resume_leaves_the_results_intact(tmp_path):
+    d = tmp_path / "k"
+    base = ["run", "column-collapse", "--out", str(d), "--quiet"]
+    assert cli([*base, *sets(*COARSE, "t_end=0.02")])[0] == 0
+    before = snapshot(d)
+    code, _, err = cli([*base, *sets(*COARSE, "t_end=0.01"), "--resume"])
+    assert code == 2 and "invalid t_end=0.01" in err
+    assert snapshot(d) == before
+
+
+# ------------------------------------------ two runs into one folder at once --
+HOLDER = """
+import sys, time
+from skfem_npfem.io import folder_lock
+with folder_lock(sys.argv[1]):
+    print("locked", flush=True)
+    time.sleep(120)
+"""
+
+
+def test_a_second_run_into_a_busy_folder_is_refused_and_kill_9_frees_it(tmp_path):
+    # Reproducer: two runs into one --out at the same time both succeeded and
+    # left a mixture of their steps and checkpoints.  Here the first run is a
+    # process holding the folder the way a run does; then it is killed with
+    # SIGKILL, which must not leave the folder locked.
+    d = tmp_path / "k"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    holder = subprocess.Popen(
+        [sys.executable, "-c", HOLDER, str(d)],
+        stdout=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    try:
+        assert holder.stdout.readline().strip() == "locked"
+        argv = ["run", "column-collapse", *sets(*COARSE, "t_end=0.01")]
+        code, _, err = cli([*argv, "--out", str(d), "--quiet"])
+        lines = err.strip().splitlines()
+        assert code == 2 and len(lines) == 1, err
+        assert lines[0].startswith(f"error: invalid out='{d}': a folder no other run")
+        assert f"process {holder.pid}" in lines[0]
+        assert not list(d.glob("result*")) and not (d / "scene.json").exists()
+    finally:
+        holder.send_signal(signal.SIGKILL)
+        holder.wait()
+    assert cli([*argv, "--out", str(d), "--quiet"])[0] == 0
+    assert (d / "result.pvd").is_file()
+
+
+def test_the_lock_refuses_a_second_holder_in_the_same_process(tmp_path):
+    with npio.folder_lock(tmp_path), pytest.raises(ParameterError):
+        with npio.folder_lock(tmp_path):
+            pass
+    with npio.folder_lock(tmp_path):  # released after the block
+        pass
+    assert [p.name for p in tmp_path.iterdir()] == [npio.LOCK_NAME]
