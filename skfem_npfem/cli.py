@@ -22,6 +22,7 @@ cap before the plateau) are printed as one ``warning: ...`` line each.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
 
@@ -312,12 +313,28 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _silence_stdout() -> None:
+    """Point stdout at the null device (after the reader closed the pipe)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):  # not a real file (tests)
+        pass
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
         return int(args.func(args))
+    except BrokenPipeError:
+        # The reader of stdout went away (`skfem-npfem scenes | head -1`): stop
+        # quietly, as other command-line tools do, and keep Python's final
+        # flush of stdout from failing again on the closed pipe.
+        _silence_stdout()
+        return 128 + 13  # the shell's code of a process ended by SIGPIPE
     except (NpfemError, OSError) as err:
         if args.debug:
             raise

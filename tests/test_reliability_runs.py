@@ -138,3 +138,34 @@ def test_the_lock_refuses_a_second_holder_in_the_same_process(tmp_path):
     with npio.folder_lock(tmp_path):  # released after the block
         pass
     assert [p.name for p in tmp_path.iterdir()] == [npio.LOCK_NAME]
+
+
+# ------------------------------------------------------------ CLI messages --
+@pytest.mark.parametrize("argv", [["scenes"], ["scenes", "--json"]])
+def test_a_closed_pipe_ends_the_cli_quietly(argv):
+    # Reproducer: `skfem-npfem scenes | head -1` printed
+    # "error: [Errno 32] Broken pipe" and exited 2.  Here the reader closes
+    # the pipe before the CLI writes, so every write meets the closed pipe.
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "skfem_npfem", *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=env,
+    )
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    code = proc.wait(timeout=60)
+    assert err == ""
+    assert code in (0, 141)  # 141 = 128 + SIGPIPE, as a shell reports `cat`
+
+
+def test_sweep_without_a_grid_asks_for_one():
+    # Reproducer: `skfem-npfem sweep SCENE --out DIR` said "invalid --grid=None".
+    code, _, err = cli(["sweep", "elastic-column", "--out", "unused"])
+    assert code == 2
+    assert err == (
+        "error: missing --grid: a sweep needs at least one --grid name=v1,v2,... "
+        "(a parameter to vary and its values, e.g. --grid spacing=0.02,0.01)\n"
+    )
+    assert not Path("unused").exists()
