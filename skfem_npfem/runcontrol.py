@@ -75,17 +75,32 @@ class Progress:
         self.lines = 0
         self.pending: str | None = None
 
-    def text(self, rec: Any, t: float, start_step: int, start_time: float) -> str:
-        """One report: step, t, dt, status, iterations, done, wall and ETA."""
-        done = math.nan
+    def share(self, step: int, t: float) -> float:
+        """Share of the whole run done at ``step``/``t``, in [0, 1] (NaN: unknown).
+
+        Counted from step 0 and t = 0, so a resumed run continues where the
+        interrupted one stopped.
+        """
         if self.n_target:
-            span = self.n_target - start_step
-            done = (rec.step - start_step) / span if span > 0 else 1.0
+            done = step / self.n_target
         elif self.t_end:
-            span = self.t_end - start_time
-            done = (t - start_time) / span if span > 0 else 1.0
+            done = t / self.t_end
+        else:
+            return math.nan
+        return min(max(done, 0.0), 1.0)
+
+    def text(self, rec: Any, t: float, start_step: int, start_time: float) -> str:
+        """One report: step, t, dt, status, iterations, done, wall and ETA.
+
+        The share done counts the whole run (a resumed run continues from the
+        share it was resumed at); the estimate of the time left extrapolates
+        the progress made since this call of ``run`` started (never < 0).
+        """
+        done = self.share(rec.step, t)
+        begun = self.share(start_step, start_time)
         wall = time.perf_counter() - self.start
-        left = wall * (1 - done) / done if done > 0 else math.nan
+        made = done - begun
+        left = max(wall * (1 - done) / made, 0.0) if made > 0 else math.nan
         share = f"{100 * done:5.1f}%" if math.isfinite(done) else "   ? %"
         eta = f"{left:7.1f} s" if math.isfinite(left) else "      ?  "
         return (

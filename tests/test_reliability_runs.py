@@ -8,7 +8,9 @@ step) and checks what the user must see instead.
 from __future__ import annotations
 
 import io
+import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -17,9 +19,11 @@ from pathlib import Path
 
 import pytest
 
+import skfem_npfem as npfem
 import skfem_npfem.io as npio
 from skfem_npfem import ParameterError
 from skfem_npfem.cli import main
+from skfem_npfem.runcontrol import Progress
 
 COARSE = [
     "spacing=0.03333333333333333",
@@ -169,3 +173,71 @@ def test_sweep_without_a_grid_asks_for_one():
         "(a parameter to vary and its values, e.g. --grid spacing=0.02,0.01)\n"
     )
     assert not Path("unused").exists()
+
+
+# ------------------------------------------------- progress and step times --
+REC = type("R", (), {"dt": 0.1, "status": "Solved", "iterations": 9})
+
+
+def _record(step: int):
+    rec = REC()
+    rec.step = step
+    return rec
+
+
+def test_progress_at_the_end_shows_100_percent_and_no_negative_eta():
+    # Reproducer: `eta -0.0 s` at 100 %: the summed time ends a hair past
+    # t_end (0.1 + 0.1 + 0.1 = 0.30000000000000004 > 0.3).
+    p = Progress(True, n_target=None, t_end=0.3)
+    p.start -= 3.0
+    text = p.text(_record(3), 0.1 + 0.1 + 0.1, 0, 0.0)
+    assert "100.0%" in text and text.endswith("eta     0.0 s"), text
+    assert "-" not in text
+
+
+def test_progress_after_a_resume_continues_from_the_resumed_share():
+    # Reproducer: a run resumed at t = 0.5 of t_end = 1 started again at 0 %.
+    # 4 s of wall time from 0.5 to 0.6: 60 % done, 0.4 left at 0.1 per 4 s.
+    p = Progress(True, n_target=None, t_end=1.0)
+    p.start -= 4.0
+    text = p.text(_record(60), 0.6, 50, 0.5)
+    assert " 60.0%" in text, text
+    assert float(text.split("eta")[1].split()[0]) == pytest.approx(16.0, abs=0.05)
+    # By steps (a step target) the same.
+    p = Progress(True, n_target=100, t_end=None)
+    p.start -= 4.0
+    text = p.text(_record(60), 0.6, 50, 0.5)
+    assert " 60.0%" in text and "eta    16.0 s" in text, text
+
+
+def test_a_resumed_run_reports_its_share_of_the_whole_run(tmp_path):
+    scene = npfem.get_scene("column-collapse")
+    values = scene.resolve({**dict(s.split("=") for s in COARSE), "t_end": 0.04})
+    srun = scene.build(values, out=None, progress=False)
+    sim = srun.simulation
+    sim.checkpoint_dir, sim.checkpoint_every = tmp_path, 4
+    sim.run(t_end=0.02)
+    again = scene.build(values, out=None, progress=True).simulation
+    again.restore(tmp_path / "checkpoint_000004.npz")
+    again.progress_interval = 0.0
+    buf = io.StringIO()
+    with redirect_stderr(buf):
+        again.run(t_end=0.04)
+    shares = [
+        float(ln.split("%")[0].split()[-1]) for ln in buf.getvalue().split("\n") if ln
+    ]
+    assert shares == [62.5, 75.0, 87.5, 100.0]
+
+
+def test_step_times_in_the_index_are_clean(tmp_path):
+    # Reproducer: the .pvd listed 0.30000000000000016 for t = 0.3 (the sum of
+    # 60 steps of 0.005 s).  Output every 5 steps: t = 0.025 k exactly.
+    d = tmp_path / "k"
+    argv = ["run", "column-collapse", *sets(*COARSE, "t_end=0.3"), "--out", str(d)]
+    assert cli([*argv, "--quiet"])[0] == 0
+    stamps = re.findall(r'timestep="([^"]*)"', (d / "result.pvd").read_text())
+    assert stamps == [repr(k * 25 / 1000) for k in range(13)]
+    series = json.loads((d / "result.vtu.series").read_text())
+    assert [f["time"] for f in series["files"]] == [k * 25 / 1000 for k in range(13)]
+    last = npio.read_step(d / "result_000060.vtu")
+    assert last.field_data["TimeValue"][0] == 0.3

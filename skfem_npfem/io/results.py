@@ -27,7 +27,15 @@ import numpy as np
 from ..errors import CheckpointError, ParameterError
 from .files import atomic_path, check_writable_dir, write_bytes, write_json
 
-__all__ = ["ResultWriter", "read_pvd", "read_step", "step_number", "step_time"]
+__all__ = [
+    "TIME_DIGITS",
+    "ResultWriter",
+    "clean_time",
+    "read_pvd",
+    "read_step",
+    "step_number",
+    "step_time",
+]
 
 _BAD_NAME = re.compile(r"[<>&\"']")
 
@@ -41,6 +49,25 @@ def step_number(name: str, value: Any) -> int:
     if step < 0:
         raise ParameterError(name, value, "an integer >= 0")
     return step
+
+
+#: Significant digits of the step times written to the files.
+TIME_DIGITS = 12
+
+
+def clean_time(time: float) -> float:
+    """A step time as written to the files: rounded to :data:`TIME_DIGITS` digits.
+
+    A run's time is the sum of its step lengths, which carries round-off in
+    its last digits (``0.1 + 0.1 + 0.1 = 0.30000000000000004``); the files
+    show the time those digits stand for.
+
+    Examples
+    --------
+    >>> clean_time(0.1 + 0.1 + 0.1), clean_time(60 * 0.005), clean_time(1.5e-11)
+    (0.3, 0.3, 1.5e-11)
+    """
+    return float(f"{time:.{TIME_DIGITS}g}")
 
 
 def _field_data_xml(field_data: Mapping[str, Any]) -> bytes:
@@ -206,7 +233,8 @@ class ResultWriter:
         step : int
             Step number (>= 0); an existing step with this number is replaced.
         time : float
-            Physical time of the step.
+            Physical time of the step (written rounded to :data:`TIME_DIGITS`
+            significant digits, :func:`clean_time`).
         points : numpy.ndarray
             Particle positions, shape (N, d) with d in {2, 3}.
         cells : numpy.ndarray or None
@@ -235,6 +263,7 @@ class ResultWriter:
         step, time = step_number("step", step), float(time)
         if not np.isfinite(time):
             raise ParameterError("time", time, "a finite number")
+        time = clean_time(time)
         p = np.asarray(points, dtype=float)
         if p.ndim != 2 or p.shape[1] not in (2, 3) or not np.isfinite(p).all():
             raise ParameterError("points", p.shape, "a finite (N, 2) or (N, 3) array")
