@@ -24,6 +24,7 @@ from ..io import (
     check_writable_dir,
     checkpoint_step,
     clear_run_files,
+    clear_temporaries,
     folder_lock,
     load_checkpoint,
     to_jsonable,
@@ -266,6 +267,7 @@ class Scene:
         _check_step_count(sim, run_kwargs, values)
         with folder_lock(out) if out is not None else nullcontext():
             if out is not None:
+                clear_temporaries(out)  # what a killed run may have left
                 if checkpoint is None:
                     clear_run_files(out)
                 # lets `skfem-npfem plot DIR` find the scene and its scales
