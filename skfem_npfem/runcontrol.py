@@ -149,6 +149,12 @@ class SignalGuard:
     each step.  While :attr:`in_step` is True, a second signal raises
     :class:`AbandonStep` (the step in progress is dropped; the state of the
     last finished step is intact).
+
+    A signal that is ignored when the guard is entered stays ignored: a run
+    started under ``nohup`` or as a background job of a script (``cmd &``,
+    which start it with SIGINT ignored) is not stopped by SIGINT, and still
+    by SIGTERM.  On exit every handler the guard replaced is put back as it
+    was found.
     """
 
     SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -169,6 +175,8 @@ class SignalGuard:
         if threading.current_thread() is threading.main_thread():
             for sig in self.SIGNALS:
                 try:
+                    if signal.getsignal(sig) is signal.SIG_IGN:
+                        continue  # ignored by whoever started us: keep it so
                     self._previous[sig] = signal.signal(sig, self._handler)
                 except (ValueError, OSError):  # pragma: no cover - exotic hosts
                     pass
@@ -176,5 +184,7 @@ class SignalGuard:
 
     def __exit__(self, *exc: object) -> None:
         for sig, old in self._previous.items():
-            signal.signal(sig, old)
+            # None: a handler installed outside Python, which cannot be put
+            # back from here; the default is the closest.
+            signal.signal(sig, signal.SIG_DFL if old is None else old)
         self._previous.clear()
