@@ -273,3 +273,64 @@ def test_temporaries_left_by_kill_9_are_removed_by_the_next_run(tmp_path, resume
     assert (d / "notes.tmp").read_text() == "mine"
     times = [t for t, _ in npio.read_pvd(d / "result.pvd")]
     assert times[-1] == 0.03 and (d / "checkpoint_000006.npz").is_file()
+
+
+# ---------------------------------------------- a run that ended before rest --
+def test_a_collapse_stopped_by_t_end_before_rest_says_so(tmp_path):
+    # Reproducer: a collapse that reached t_end while still flowing reported
+    # its run-out as final (only `at_rest: false`, easy to miss), silently.
+    s = tmp_path / "s.json"
+    base = ["run", "column-collapse", *sets(COARSE[0], COARSE[2]), "--quiet"]
+    code, _, err = cli([*base, *sets("t_end=0.6"), "--summary", str(s)])
+    assert code == 0
+    m = json.loads(s.read_text())["metrics"]
+    assert m["at_rest"] is False and len(m["warnings"]) == 1
+    assert m["warnings"][0].startswith(
+        "column-collapse: the run ended at t_end = 0.6 s while the kinetic energy "
+        "was still "
+    )
+    assert "not at rest, so the run-out and height are not final" in m["warnings"][0]
+    assert err.splitlines() == [f"warning: {m['warnings'][0]}"]
+    # Ended before the earliest stop at rest (min_time = 2 sqrt(H0/g)).
+    code, _, err = cli([*base, *sets("t_end=0.1")])
+    assert code == 0
+    assert "before the earliest stop at rest, min_time = 0.4039 s" in err
+    # With the rule off (rest_fraction = 0) the user chose t_end: no warning.
+    code, _, err = cli([*base, *sets("t_end=0.1", "rest_fraction=0")])
+    assert code == 0 and err == ""
+
+
+def test_sweep_plot_marks_the_runs_that_were_not_at_rest(tmp_path, monkeypatch):
+    pytest.importorskip("pandas", reason="needs the sweep extra")
+    plt = pytest.importorskip("matplotlib.pyplot", reason="needs the viz extra")
+    from skfem_npfem.sweeps.plot import NOT_AT_REST
+    from skfem_npfem.sweeps.table import write_table
+
+    rows = [
+        {
+            "run": f"a{a}",
+            "status": "ok",
+            "error": "",
+            "resumed": False,
+            "aspect": a,
+            "normalised_runout": r,
+            "at_rest": rest,
+        }
+        for a, r, rest in [(0.5, 0.6, True), (1.0, 1.3, True), (2.0, 2.1, False)]
+    ]
+    write_table(rows, tmp_path)
+    spec = {"scene": "column-collapse", "grid": {"aspect": [0.5, 1.0, 2.0]}}
+    (tmp_path / "sweep.json").write_text(json.dumps(spec))
+    figures = []
+    monkeypatch.setattr(plt, "close", figures.append)
+    code, out, err = cli(["sweep-plot", str(tmp_path), "normalised_runout", "aspect"])
+    assert code == 0 and out.strip().endswith("normalised_runout_vs_aspect.png")
+    assert err == (
+        "warning: 1 of 3 runs ended at t_end before the material came to rest "
+        "(at_rest = false): their normalised_runout is not final; open markers "
+        "in the plot\n"
+    )
+    ax = figures[0].axes[0]
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == [NOT_AT_REST]
+    hollow = [ln for ln in ax.lines if ln.get_markerfacecolor() == "white"]
+    assert [list(ln.get_xdata()) for ln in hollow] == [[2.0], []]

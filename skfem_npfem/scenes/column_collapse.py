@@ -263,7 +263,10 @@ METRICS = {
     "collapse_time": "time the front stops (stays within one spacing of its final "
     "position), s; null when the run ended before rest (t_end)",
     "collapse_time_normalised": "collapse_time / sqrt(H0 / g)",
-    "at_rest": "the run ended by the at-rest rule (not t_end)",
+    "at_rest": "the run ended by the at-rest rule (not t_end); false: the run-out "
+    "and height are not final (see warnings)",
+    "warnings": "list of one-line warnings (the run reached t_end before the "
+    "at-rest rule stopped it); the CLI prints each on stderr",
     "volume_change": "relative mesh-volume (area) change, end vs t = 0",
     "mass_change": "relative change of the total particle mass (0: exact)",
     "max_kinetic_energy": "largest kinetic energy, J (per metre of depth)",
@@ -478,6 +481,34 @@ def _front_recorder(h: float, symmetric: bool):
     return record_front
 
 
+def rest_warnings(sim_: Simulation, values: dict[str, Any], stop: AtRest | None):
+    """One warning if the run reached ``t_end`` before the at-rest rule stopped it.
+
+    Also issued as a :class:`UserWarning` (the CLI prints it on stderr).  None
+    without the rule (``rest_fraction = 0``) or before ``t_end`` (an
+    interrupted run).
+    """
+    t_end, recs = values["t_end"], sim_.records
+    if stop is None or not recs or sim_.time < t_end * (1 - 1e-12) or stop(sim_):
+        return []
+    if sim_.time < stop.min_time * (1 - 1e-12):
+        why = f"before the earliest stop at rest, min_time = {stop.min_time:.4g} s"
+    else:
+        peak = max(r.kinetic_energy for r in recs)
+        share = recs[-1].kinetic_energy / peak if peak > 0 else math.nan
+        why = (
+            f"while the kinetic energy was still {share:.3g} of its maximum "
+            f"(rest: below rest_fraction = {stop.fraction:g})"
+        )
+    msg = (
+        f"column-collapse: the run ended at t_end = {t_end:g} s {why}; the material "
+        "is not at rest, so the run-out and height are not final (at_rest = "
+        "false): raise t_end"
+    )
+    warnings.warn(msg, stacklevel=3)
+    return [msg]
+
+
 def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
     """The summary metrics of a finished run (see METRICS)."""
     L0, a = values["length"], values["aspect"]
@@ -506,6 +537,7 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
             "collapse_time": t_c,
             "collapse_time_normalised": t_c / t_scale,
             "at_rest": at_rest,
+            "warnings": rest_warnings(sim_, values, stop),
             "volume_change": summ["volume_change"],
             "mass_change": summ["mass_change"],
             "max_kinetic_energy": summ["max_kinetic_energy"],
