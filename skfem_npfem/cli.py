@@ -196,9 +196,17 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
-def interrupted_message(err: KeyboardInterrupt) -> str:
-    """The one line printed when a run is stopped by a signal."""
+def interrupted_message(err: KeyboardInterrupt, command: str = "run") -> str:
+    """The one line printed when ``command`` is stopped by a signal."""
+    if command == "sweep":
+        return (
+            "interrupted; finished runs are kept, and running the same sweep "
+            "command again skips them and continues the interrupted runs from "
+            "their latest checkpoints"
+        )
     if not isinstance(err, RunInterrupted):
+        if command != "run":
+            return "interrupted; every file written so far is complete"
         return (
             "interrupted; every file written so far is complete, and --resume "
             "continues from the latest checkpoint in --out, if there is one"
@@ -342,5 +350,5 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt as err:
         end_line()
-        print(interrupted_message(err), file=sys.stderr)
+        print(interrupted_message(err, args.command), file=sys.stderr)
         return err.exit_code if isinstance(err, RunInterrupted) else 130
