@@ -24,6 +24,7 @@ from .simulation import AtRest, Simulation
 
 # isort: split
 # Building blocks: particles, meshes, materials, smoothing, boundaries, the step.
+from .baseline.roughness import stress_roughness
 from .boundary import Contacts, RigidWall, floor, wall_x
 from .conic import StepSolution, solve_step
 from .materials import (
@@ -91,6 +92,8 @@ __all__ += [
     "solve_step",
     "sweep",
 ]
+#: Measures of a result.
+__all__ += ["stress_roughness"]
 #: Errors.
 __all__ += [
     "CheckpointError",
