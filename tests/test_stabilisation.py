@@ -1,10 +1,10 @@
-"""The element-residual stabilisation and the mesh node masses (issue 10).
+"""The element-residual stabilisation and the mesh node masses.
 
 References: exact divergences of linear stress fields; the geostatic state of
 an elastic block (an exact solution of the step: nothing may move); the
 ``O(h^2)`` scaling of the penalty stated in skfem_npfem/stabilisation.py; mass
 conservation of the node-mass rule; and the reference stress-roughness measure
-(``shared/tools/stress_roughness.py``) on a remeshed elastic column at rest.
+(:func:`skfem_npfem.stress_roughness`) on a remeshed elastic column at rest.
 """
 
 from __future__ import annotations
@@ -232,6 +232,7 @@ def test_the_study_demo_writes_its_json_and_page(tmp_path):
     # from the JSON, and the maximum roughness bounds the final one.
     import runpy
 
+    pytest.importorskip("distributed", reason="needs the sweep extra (Dask)")
     demo = runpy.run_path(str(ROOT / "demos" / "stabilisation_study.py"))
     out = tmp_path / "stabilisation.json"
     result = demo["main"](["--quick", "--workers", "1", "--out", str(out)])
