@@ -10,8 +10,9 @@ The particles start on a regular lattice of the given spacing (the remesher
 breaks the lattice ties), with masses ``rho V_i`` from the initial mesh (kept
 fixed: mass is conserved exactly), a geostatic stress ``s_yy = -rho g (H0 - y)``,
 ``s_xx = s_zz = K0 s_yy``, and floor contact forces equal to the weight of the
-column over each base particle's tributary width (otherwise the first step is
-frictionless, formulation.md pitfall 8).  Every step the particles are
+column over each base particle's tributary width (otherwise the floor's
+friction, which is lagged by one step, would be zero in the first step and the
+base would slide freely).  Every step the particles are
 re-triangulated (Delaunay plus alpha shape); the floor is a rigid wall with
 lagged Coulomb friction, the symmetry wall is frictionless.  The material is
 Mohr-Coulomb (exact in plane strain) or Drucker-Prager (plane-strain match),
@@ -34,8 +35,8 @@ Lube et al. (2005) found ``(L_inf - L0) / L0 = 1.2 a`` for ``a <~ 1.8`` and
 
 Time integration: keep ``theta2 = 1``.  ``theta2`` sets the restitution of
 impacts, ``e = 1/theta2 - 1``: ``theta2 = 1/2`` makes the impact on the floor
-perfectly elastic and the collapse gains volume and then blows up
-(formulation.md pitfall 3).
+perfectly elastic and the collapse gains volume and then blows up (the
+contact impulse is returned in full by the next step; tests/test_contact.py).
 """
 
 from __future__ import annotations
@@ -417,7 +418,7 @@ def _check(values: dict[str, Any]) -> float:
         warnings.warn(
             f"theta2={values['theta2']:g}: impacts on the floor have restitution "
             f"{1 / values['theta2'] - 1:.2f}; theta2 = 1/2 makes them elastic and the "
-            "collapse unstable (formulation.md pitfall 3)",
+            "collapse unstable (keep theta2 = 1)",
             stacklevel=3,
         )
     return h
