@@ -32,6 +32,7 @@ from ._deprecated import RENAMED as _RENAMED
 from ._deprecated import renamed as _renamed
 
 # isort: split
+from .baseline.roughness import stress_roughness
 from .boundary import Contacts, RigidWall, floor, wall_x
 from .errors import (
     CheckpointError,
@@ -111,7 +112,7 @@ __all__ += [
 #: Sweeps.
 __all__ += ["sweep"]
 #: Post-processing.
-__all__ += ["read_pvd", "read_step", "skfem_fields"]
+__all__ += ["read_pvd", "read_step", "skfem_fields", "stress_roughness"]
 #: Errors.
 __all__ += [
     "CheckpointError",

@@ -22,6 +22,7 @@ cap before the plateau) are printed as one ``warning: ...`` line each.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
 
@@ -195,9 +196,17 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
-def interrupted_message(err: KeyboardInterrupt) -> str:
-    """The one line printed when a run is stopped by a signal."""
+def interrupted_message(err: KeyboardInterrupt, command: str = "run") -> str:
+    """The one line printed when ``command`` is stopped by a signal."""
+    if command == "sweep":
+        return (
+            "interrupted; finished runs are kept, and running the same sweep "
+            "command again skips them and continues the interrupted runs from "
+            "their latest checkpoints"
+        )
     if not isinstance(err, RunInterrupted):
+        if command != "run":
+            return "interrupted; every file written so far is complete"
         return (
             "interrupted; every file written so far is complete, and --resume "
             "continues from the latest checkpoint in --out, if there is one"
@@ -312,12 +321,28 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _silence_stdout() -> None:
+    """Point stdout at the null device (after the reader closed the pipe)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):  # not a real file (tests)
+        pass
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
         return int(args.func(args))
+    except BrokenPipeError:
+        # The reader of stdout went away (`skfem-npfem scenes | head -1`): stop
+        # quietly, as other command-line tools do, and keep Python's final
+        # flush of stdout from failing again on the closed pipe.
+        _silence_stdout()
+        return 128 + 13  # the shell's code of a process ended by SIGPIPE
     except (NpfemError, OSError) as err:
         if args.debug:
             raise
@@ -325,5 +350,5 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt as err:
         end_line()
-        print(interrupted_message(err), file=sys.stderr)
+        print(interrupted_message(err, args.command), file=sys.stderr)
         return err.exit_code if isinstance(err, RunInterrupted) else 130

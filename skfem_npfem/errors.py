@@ -34,6 +34,19 @@ class ParameterError(NpfemError, ValueError):
         self.allowed = allowed
         super().__init__(f"invalid {name}={value!r}: {allowed}")
 
+    @classmethod
+    def missing(cls, name: str, allowed: str) -> ParameterError:
+        """A required parameter was not given: ``missing NAME: allowed``.
+
+        Examples
+        --------
+        >>> str(ParameterError.missing("--grid", "give at least one --grid a=1,2"))
+        'missing --grid: give at least one --grid a=1,2'
+        """
+        err = cls(name, None, allowed)
+        err.args = (f"missing {name}: {allowed}",)
+        return err
+
 
 class SolverError(NpfemError):
     """The cone solver did not return an acceptable solution.

@@ -210,8 +210,8 @@ class Particles:
         >>> p.n, float(p.mass.sum()), int(p.fixed.sum())
         (15, 4000.0, 6)
         """
-        from .axisymmetric import axisymmetric_integration
-        from .smoothing import check_p1_mesh, nodal_integration
+        from .mesh.axisymmetric import axisymmetric_integration
+        from .mesh.smoothing import check_p1_mesh, nodal_integration
 
         if not isinstance(mesh, Mesh):
             raise ParameterError(

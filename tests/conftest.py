@@ -1,5 +1,6 @@
 """Shared pytest set-up: headless rendering, no time limit for slow studies."""
 
+import importlib.util
 import os
 import sys
 from pathlib import Path
@@ -18,8 +19,20 @@ os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 
 
+#: Docstring examples that start a Dask cluster (the ``sweep`` extra).
+NEEDS_SWEEP_EXTRA = {"skfem_npfem.sweeps.engine.run_tasks"}
+
+
+def _sweep_extra_missing() -> bool:
+    return any(importlib.util.find_spec(m) is None for m in ("distributed", "pandas"))
+
+
 def pytest_collection_modifyitems(config, items):
-    """Lift the per-test time limit (``timeout`` in pyproject) for slow studies."""
+    """Lift the per-test time limit (``timeout`` in pyproject) for slow studies;
+    skip the docstring examples that need the sweep extra when it is missing."""
+    missing = _sweep_extra_missing()
     for item in items:
         if item.get_closest_marker("slow") is not None:
             item.add_marker(pytest.mark.timeout(0))
+        if missing and item.name in NEEDS_SWEEP_EXTRA:
+            item.add_marker(pytest.mark.skip(reason="needs the sweep extra (Dask)"))

@@ -152,6 +152,7 @@ def test_speed_accuracy_quick(tmp_path):
 
 @pytest.mark.slow
 def test_comparison_demos_full(tmp_path):
+    pytest.importorskip("distributed", reason="needs the sweep extra (Dask)")
     osc = load("compare_oscillation").main(
         ["--work", str(tmp_path), "--out", str(tmp_path), "--workers", "2"]
     )

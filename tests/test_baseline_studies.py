@@ -14,6 +14,8 @@ import pytest
 from skfem_npfem.baseline.study import run_cases
 from skfem_npfem.scenes import run_scene
 
+pytest.importorskip("distributed", reason="needs the sweep extra (Dask)")
+
 
 def test_each_case_in_its_own_process_on_dask(tmp_path):
     params = {"spacing": 0.5, "method": "fem-remap", "element": "p2", "nu": 0.25}

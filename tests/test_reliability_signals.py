@@ -1,4 +1,4 @@
-"""Issue 13, defect 6: SIGINT/SIGTERM stop a run cleanly; progress everywhere.
+"""SIGINT/SIGTERM stop a run cleanly; progress everywhere.
 
 The reproducer: Ctrl-C exited 130 with a message glued to the progress line,
 wrote no checkpoint (nothing to resume before the first one) and no summary;
@@ -49,11 +49,22 @@ def _argv(out: Path, summary: Path, t_end: float) -> list[str]:
     return [*argv, "--out", str(out), "--summary", str(summary)]
 
 
+def _as_from_a_terminal() -> None:
+    """In the child: SIGINT at its default, as for a command typed in a shell
+    (the tests may run under nohup or as a background job, which ignore it)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _interrupt(argv: list[str], out: Path, sig: int, tty: bool) -> tuple[int, str]:
     """Start the run, send ``sig`` once step 5 is on disk; return (rc, stderr)."""
     if tty:
         master, slave = pty.openpty()
-        proc = subprocess.Popen(argv, stderr=slave, stdout=subprocess.DEVNULL)
+        proc = subprocess.Popen(
+            argv,
+            stderr=slave,
+            stdout=subprocess.DEVNULL,
+            preexec_fn=_as_from_a_terminal,
+        )
         os.close(slave)
         chunks: list[bytes] = []
 
@@ -71,7 +82,11 @@ def _interrupt(argv: list[str], out: Path, sig: int, tty: bool) -> tuple[int, st
         reader.start()
     else:
         proc = subprocess.Popen(
-            argv, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True
+            argv,
+            stderr=subprocess.PIPE,
+            stdout=subprocess.DEVNULL,
+            text=True,
+            preexec_fn=_as_from_a_terminal,
         )
     try:
         deadline = time.monotonic() + 120
@@ -165,9 +180,19 @@ def _sim(tmp_path, t_end=1.0):
     return sim
 
 
+@pytest.fixture
+def sigint_handled():
+    """SIGINT raises KeyboardInterrupt during the test (as in an interactive
+    shell), whatever the test process was started with; put back after."""
+    found = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, found)
+
+
 @pytest.mark.parametrize("second", [False, True])
-def test_second_signal_abandons_the_step_in_progress(tmp_path, second):
+def test_second_signal_abandons_the_step_in_progress(tmp_path, second, sigint_handled):
     sim = _sim(tmp_path)
+    before = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
     original = sim._advance
 
     def signalling(dt):
@@ -187,8 +212,35 @@ def test_second_signal_abandons_the_step_in_progress(tmp_path, second):
     assert err.checkpoint == tmp_path / f"checkpoint_{finished:06d}.npz"
     _, meta = npio.load_checkpoint(err.checkpoint)
     assert meta["step"] == finished and err.exit_code == 130
-    # The handlers are put back after the run.
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    # The handlers found before the run are put back after it.
+    assert {sig: signal.getsignal(sig) for sig in before} == before
+
+
+def test_a_run_started_with_sigint_ignored_stays_deaf_to_it(tmp_path):
+    # Under nohup, or as a background job of a script (`cmd &`), a process
+    # starts with SIGINT ignored.  The run must keep it ignored (not become
+    # interruptible by it), still stop on SIGTERM, and put back both handlers.
+    found = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        sim = _sim(tmp_path)
+        original = sim._advance
+
+        def signalling(dt):
+            if sim.step + 1 == 2:
+                os.kill(os.getpid(), signal.SIGINT)  # ignored
+            if sim.step + 1 == 4:
+                os.kill(os.getpid(), signal.SIGTERM)  # stops after step 4
+            return original(dt)
+
+        sim._advance = signalling
+        term = signal.getsignal(signal.SIGTERM)
+        with pytest.raises(RunInterrupted) as info:
+            sim.run(t_end=1.0)
+        assert info.value.signal_name == "SIGTERM" and info.value.step == 4
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        assert signal.getsignal(signal.SIGTERM) is term
+    finally:
+        signal.signal(signal.SIGINT, found)
 
 
 def test_progress_without_a_terminal_prints_lines(monkeypatch):

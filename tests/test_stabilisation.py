@@ -1,10 +1,10 @@
-"""The element-residual stabilisation and the mesh node masses (issue 10).
+"""The element-residual stabilisation and the mesh node masses.
 
 References: exact divergences of linear stress fields; the geostatic state of
 an elastic block (an exact solution of the step: nothing may move); the
 ``O(h^2)`` scaling of the penalty stated in skfem_npfem/stabilisation.py; mass
 conservation of the node-mass rule; and the reference stress-roughness measure
-(``shared/tools/stress_roughness.py``) on a remeshed elastic column at rest.
+(:func:`skfem_npfem.stress_roughness`) on a remeshed elastic column at rest.
 """
 
 from __future__ import annotations
@@ -230,6 +230,7 @@ def test_mesh_masses_keep_a_remeshed_column_at_rest_smooth():
 def test_the_study_demo_writes_its_json_and_page(tmp_path):
     # Reduced study (coarse, 20 steps): every case ran, the page is generated
     # from the JSON, and the maximum roughness bounds the final one.
+    pytest.importorskip("distributed", reason="needs the sweep extra (Dask)")
     import stabilisation_study as demo  # demos/studies, on sys.path (conftest)
 
     out = tmp_path / "stabilisation.json"

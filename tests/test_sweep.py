@@ -1,4 +1,4 @@
-"""Parameter sweeps on Dask (issue 14): tables, resume, failures, a real scheduler.
+"""Parameter sweeps on Dask: tables, resume, failures, a real scheduler.
 
 The reference of every sweep result is the same case run by hand through
 :func:`skfem_npfem.run_scene` (and, for the static column, the analytic
@@ -489,3 +489,58 @@ def test_run_names_are_the_same_from_the_command_line_and_python():
         plan_runs(scene, {"E": ["1e7", 1e7]})
     with pytest.raises(ParameterError, match="not both"):
         plan_runs(scene, {"E": [1e7]}, cases=[{"nu": 0.2}])
+
+
+def _sigint_default() -> None:
+    """In the child: SIGINT at its default, as for a command typed in a shell."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def test_ctrl_c_stops_a_sweep_quietly_and_names_the_way_to_continue(tmp_path):
+    # Reproducer: Ctrl-C during `skfem-npfem sweep` sometimes printed a Dask
+    # worker traceback, and the closing line advised `--resume`, which sweep
+    # does not have.  Ctrl-C goes to the whole process group (the sweep and
+    # its local workers); sent here once the first run has finished.
+    out = tmp_path / "sw"
+    argv = [
+        sys.executable, "-m", "skfem_npfem", "sweep", "column-collapse",
+        "--grid", "aspect=0.5,1,2,3", "--workers", "2", "--out", str(out),
+        "--set", "spacing=0.03333333333333333", "--set", "linear_solver=qdldl",
+        "--set", "rest_fraction=0",
+    ]  # fmt: skip
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.Popen(
+        argv,
+        stderr=subprocess.PIPE,
+        stdout=subprocess.DEVNULL,
+        text=True,
+        env=env,
+        start_new_session=True,
+        preexec_fn=_sigint_default,
+    )
+    lines = []
+    try:
+        for line in proc.stderr:
+            lines.append(line)
+            if line.startswith("[1/4]"):
+                break
+        os.killpg(proc.pid, signal.SIGINT)
+        lines += proc.stderr.readlines()
+        code = proc.wait(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    err = "".join(lines)
+    assert code == 130, err
+    assert "Traceback" not in err and "ERROR" not in err and "--resume" not in err
+    assert lines[-1] == (
+        "interrupted; finished runs are kept, and running the same sweep command "
+        "again skips them and continues the interrupted runs from their latest "
+        "checkpoints\n"
+    )
+    # The advice holds: the same command finishes the sweep.
+    done = subprocess.run(argv, capture_output=True, text=True, env=env, check=False)
+    assert done.returncode == 0, done.stderr
+    assert re.search(r"4 runs, [1-3] finished before", done.stderr), done.stderr
+    assert len(pd.read_csv(out / "table.csv")) == 4

@@ -1,7 +1,8 @@
 """Stress roughness: how far each particle's stress departs from its neighbours'.
 
-The index of ``/work/shared/tools/stress_roughness.py`` (the project's
-reference measure of stress oscillation), computed on a mesh in memory:
+The project's reference measure of stress oscillation (public as
+:func:`skfem_npfem.stress_roughness`; the scenes' ``stress_roughness`` metric is
+this function on each step's mesh):
 
     R = rms_i(s_i - mean_{j ~ i} s_j) / rms_i(s_i)
 
@@ -13,8 +14,9 @@ linear field on a regular lattice gives ``R ~ 0``, a checkerboard ``R`` of
 order one.  Fewer than 10 interior particles give NaN.
 
 The scenes report the index of the last step as ``stress_roughness`` and the
-largest over the run as ``stress_roughness_max`` (same numbers as the tool's
-``last`` and ``max`` on the run's VTU files; tested).
+largest over the run as ``stress_roughness_max``; the same function on a run's
+VTU files (their cells and ``stress``) gives the same numbers (tested, also
+against an independent implementation of the definition).
 
 The index is not zero for a smooth field on an irregular mesh: a linear field
 gives ``s_i - mean_j s_j = grad s . (x_i - mean_j x_j)``, which vanishes only
@@ -150,9 +152,39 @@ def roughness_floor(
 
 
 def stress_roughness(cells: np.ndarray, stress: np.ndarray) -> float:
-    """``R`` of the vertical normal stress of particles (full Voigt ``stress``).
+    """The stress roughness ``R`` of the vertical normal stress of particles.
 
-    ``cells`` (ne, d+1) index the particles, as the cells of a result file.
+    The reference measure of stress oscillation (see the module notes):
+    ``rms(s_i - mean of its mesh neighbours) / rms(s_i)`` over the interior
+    particles, with ``s`` the vertical normal stress.  The scenes'
+    ``stress_roughness`` metric is this function on each step's mesh.
+
+    Parameters
+    ----------
+    cells : ndarray (ne, d+1) int
+        Triangles (2D) or tetrahedra (3D) indexing the particles, as the step's
+        mesh or the cells of a result file.
+    stress : ndarray (n, m)
+        Voigt stress per particle as stored by the package (``xx, yy, zz, xy``
+        in 2D, ``xx, yy, zz, xy, yz, zx`` in 3D); the vertical component
+        ``d - 1`` (``yy`` in 2D, ``zz`` in 3D) is measured.
+
+    Returns
+    -------
+    float
+        ``R`` (about 0 for a smooth field, of order 1 for a checkerboard; NaN
+        with fewer than :data:`MIN_INTERIOR` interior particles).
+
+    Examples
+    --------
+    >>> from skfem import MeshTri
+    >>> m = MeshTri.init_tensor(*[np.linspace(0, 1, 13)] * 2)
+    >>> i = np.rint(12 * m.p).astype(int)
+    >>> stress = np.zeros((m.p.shape[1], 4))
+    >>> stress[:, 1] = (-1.0) ** (i[0] + i[1])  # a checkerboard: R = 4/3
+    >>> round(stress_roughness(m.t.T, stress), 12)
+    1.333333333333
     """
+    cells = np.asarray(cells)
     dim = cells.shape[1] - 1
     return roughness_index(cells, np.asarray(stress)[:, dim - 1])[0]

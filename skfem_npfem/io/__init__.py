@@ -20,6 +20,7 @@ from .checkpoints import (
     checkpoint_path,
     checkpoint_step,
     clear_run_files,
+    clear_temporaries,
     latest_checkpoint,
     load_checkpoint,
     read_checkpoint,
@@ -27,9 +28,11 @@ from .checkpoints import (
     write_checkpoint,
 )
 from .files import (
+    LOCK_NAME,
     atomic_path,
     check_writable_dir,
     dumps,
+    folder_lock,
     to_jsonable,
     write_bytes,
     write_json,
@@ -38,13 +41,16 @@ from .results import ResultWriter, read_pvd, read_step, step_time
 
 __all__ = [
     "CHECKPOINT_FORMAT",
+    "LOCK_NAME",
     "ResultWriter",
     "atomic_path",
     "check_writable_dir",
     "checkpoint_path",
     "checkpoint_step",
     "clear_run_files",
+    "clear_temporaries",
     "dumps",
+    "folder_lock",
     "latest_checkpoint",
     "load_checkpoint",
     "read_checkpoint",

@@ -50,6 +50,7 @@ __all__ = [
     "checkpoint_path",
     "checkpoint_step",
     "clear_run_files",
+    "clear_temporaries",
     "latest_checkpoint",
     "load_checkpoint",
     "read_checkpoint",
@@ -238,6 +239,29 @@ RUN_FILES = re.compile(
     r"|result\.vtu\.series|scene\.json)"
 )
 PLOT_FILES = re.compile(r"[\w.+-]+\.(?:png|gif|mp4)")
+#: Temporaries of the atomic writer (:func:`~skfem_npfem.io.files.atomic_path`)
+#: that a killed run can leave beside its files.
+TEMPORARY_FILES = re.compile(r"\.tmp_[\w.+-]+")
+
+
+def clear_temporaries(folder: str | os.PathLike) -> list[Path]:
+    """Remove the atomic writer's temporaries (``.tmp_<name>``) in ``folder``.
+
+    A write that fails removes its own temporary, but a process killed hard
+    (SIGKILL, a power cut) can leave one, possibly empty; nothing ever reads
+    it.  A run, fresh or resumed, calls this when it takes the folder (also
+    in ``plots/``).  Returns the files removed.
+    """
+    folder = Path(folder)
+    removed = []
+    for sub in (folder, folder / "plots"):
+        if not sub.is_dir():
+            continue
+        for f in sorted(sub.iterdir()):
+            if TEMPORARY_FILES.fullmatch(f.name) and f.is_file():
+                f.unlink(missing_ok=True)
+                removed.append(f)
+    return removed
 
 
 def clear_run_files(folder: str | os.PathLike) -> list[Path]:

@@ -34,9 +34,11 @@ import numpy as np
 from ..errors import ParameterError
 
 __all__ = [
+    "LOCK_NAME",
     "atomic_path",
     "check_writable_dir",
     "dumps",
+    "folder_lock",
     "to_jsonable",
     "write_bytes",
     "write_json",
@@ -65,6 +67,68 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)
+
+
+#: Name of the lock file a run holds in its output folder.
+LOCK_NAME = ".skfem-npfem.lock"
+
+
+@contextmanager
+def folder_lock(folder: str | os.PathLike, name: str = "out") -> Iterator[Path]:
+    """Hold the output folder for one run; refuse if another run holds it.
+
+    Creates ``folder`` if needed and takes an exclusive ``flock`` on
+    ``folder/.skfem-npfem.lock`` (the lock file holds the process id).  The
+    operating system releases the lock when the process ends in any way, so a
+    run killed with SIGKILL never leaves the folder locked; the empty lock
+    file itself stays.  Where ``fcntl`` is not available (Windows) or the file
+    system cannot lock, the folder is used without a lock.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``name``, the folder and the process that holds it.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> with folder_lock(folder):
+    ...     with folder_lock(folder):  # a second run into the same folder
+    ...         pass
+    Traceback (most recent call last):
+    ...
+    skfem_npfem.errors.ParameterError: invalid out=...
+    """
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - Windows
+        fcntl = None
+    folder = Path(folder)
+    path = folder / LOCK_NAME
+    folder.mkdir(parents=True, exist_ok=True)
+    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        if fcntl is not None:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = os.pread(fd, 64, 0).decode(errors="replace").strip()
+                who = f"process {holder}" if holder.isdigit() else "another process"
+                raise ParameterError(
+                    name,
+                    str(folder),
+                    f"a folder no other run is writing to ({who} is running "
+                    f"into it and holds {LOCK_NAME}); wait for it to finish or "
+                    "choose another folder",
+                ) from None
+            except OSError:  # pragma: no cover - a file system without locks
+                pass
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        yield path
+    finally:
+        os.close(fd)
 
 
 def write_bytes(path: str | os.PathLike, data: bytes) -> Path:
@@ -110,13 +174,19 @@ def write_json(path: str | os.PathLike, obj: Any, indent: int | None = 1) -> Pat
 
 
 def check_writable_dir(
-    name: str, folder: str | os.PathLike, target: str | os.PathLike | None = None
+    name: str,
+    folder: str | os.PathLike,
+    target: str | os.PathLike | None = None,
+    *,
+    create: bool = True,
 ) -> Path:
-    """Create ``folder`` if needed and check that files can be written in it.
+    """Check that files can be written in ``folder`` (created if ``create``).
 
     ``target`` is a file to be written there later (it must not be a folder).
     Checked before a run starts, so a long run never ends in an unwritable
-    path.
+    path.  With ``create=False`` a missing folder is not created: its nearest
+    existing parent must be a writable folder (so the folder can be created
+    later), and nothing is left behind.
 
     Raises
     ------
@@ -127,8 +197,14 @@ def check_writable_dir(
     shown = target if target is not None else folder
     kind = "file path" if target is not None else "directory"
     try:
-        folder.mkdir(parents=True, exist_ok=True)
-        probe = folder / ".skfem-npfem-write-test"
+        if create:
+            folder.mkdir(parents=True, exist_ok=True)
+        probe_dir = folder
+        while not create and not probe_dir.exists() and probe_dir != probe_dir.parent:
+            probe_dir = probe_dir.parent
+        if not probe_dir.is_dir():
+            raise NotADirectoryError(20, f"{probe_dir} is not a directory")
+        probe = probe_dir / f".skfem-npfem-write-test-{os.getpid()}"
         probe.write_text("")
         probe.unlink()
     except OSError as err:

@@ -27,7 +27,15 @@ import numpy as np
 from ..errors import CheckpointError, ParameterError
 from .files import atomic_path, check_writable_dir, write_bytes, write_json
 
-__all__ = ["ResultWriter", "read_pvd", "read_step", "step_number", "step_time"]
+__all__ = [
+    "TIME_DIGITS",
+    "ResultWriter",
+    "clean_time",
+    "read_pvd",
+    "read_step",
+    "step_number",
+    "step_time",
+]
 
 _BAD_NAME = re.compile(r"[<>&\"']")
 
@@ -41,6 +49,25 @@ def step_number(name: str, value: Any) -> int:
     if step < 0:
         raise ParameterError(name, value, "an integer >= 0")
     return step
+
+
+#: Significant digits of the step times written to the files.
+TIME_DIGITS = 12
+
+
+def clean_time(time: float) -> float:
+    """A step time as written to the files: rounded to :data:`TIME_DIGITS` digits.
+
+    A run's time is the sum of its step lengths, which carries round-off in
+    its last digits (``0.1 + 0.1 + 0.1 = 0.30000000000000004``); the files
+    show the time those digits stand for.
+
+    Examples
+    --------
+    >>> clean_time(0.1 + 0.1 + 0.1), clean_time(60 * 0.005), clean_time(1.5e-11)
+    (0.3, 0.3, 1.5e-11)
+    """
+    return float(f"{time:.{TIME_DIGITS}g}")
 
 
 def _field_data_xml(field_data: Mapping[str, Any]) -> bytes:
@@ -76,6 +103,11 @@ class ResultWriter:
         If given, keep the existing steps ``<= resume_after_step`` listed in the
         ``.pvd`` and delete the VTU files of later steps. If None, remove stale
         ``<basename>_*.vtu`` files and start an empty collection.
+    defer : bool, default False
+        True: only check the folder now and leave its files alone until
+        :meth:`open` (called by the first :meth:`write` or :attr:`entries` at
+        the latest), so that a run can finish every check before it touches
+        the folder.
 
     Raises
     ------
@@ -90,28 +122,49 @@ class ResultWriter:
         out_dir: str | os.PathLike,
         basename: str = "result",
         resume_after_step: int | None = None,
+        *,
+        defer: bool = False,
     ) -> None:
         self.out_dir = Path(out_dir)
         if not basename or _BAD_NAME.search(basename) or "/" in basename:
             raise ParameterError("basename", basename, "a plain file-name prefix")
         self.basename = basename
-        check_writable_dir("out", self.out_dir)
+        check_writable_dir("out", self.out_dir, create=not defer)
         self.pvd_path = self.out_dir / f"{basename}.pvd"
         self.series_path = self.out_dir / f"{basename}.vtu.series"
         self._pattern = re.compile(rf"{re.escape(basename)}_(\d+)\.vtu")
         self._entries: dict[int, tuple[float, str]] = {}
+        if resume_after_step is not None:
+            resume_after_step = step_number("resume_after_step", resume_after_step)
+        self._resume_after_step = resume_after_step
+        self._opened = False
+        if not defer:
+            self.open()
+
+    def open(self) -> None:
+        """Prepare the folder: remove stray temporaries and stale steps, index.
+
+        Temporaries a killed writer left (``.tmp_<basename>...``) are removed;
+        then either the steps after ``resume_after_step`` or all earlier steps
+        are deleted, and the ``.pvd`` and ``.vtu.series`` indexes are written.
+        Runs once; later calls do nothing.
+        """
+        if self._opened:
+            return
+        self._opened = True
+        basename, last = self.basename, self._resume_after_step
+        self.out_dir.mkdir(parents=True, exist_ok=True)
         stray = re.compile(
             rf"\.tmp_{re.escape(basename)}(_\d+\.vtu|\.pvd|\.vtu\.series)"
         )
         for f in self.out_dir.iterdir():
             if stray.fullmatch(f.name):
                 f.unlink(missing_ok=True)
-        if resume_after_step is not None:
-            resume_after_step = step_number("resume_after_step", resume_after_step)
-            self._entries = self._kept_steps(resume_after_step)
+        if last is not None:
+            self._entries = self._kept_steps(last)
         for f in self.out_dir.glob(f"{basename}_*.vtu"):
             m = self._pattern.fullmatch(f.name)
-            if m and (resume_after_step is None or int(m[1]) > resume_after_step):
+            if m and (last is None or int(m[1]) > last):
                 f.unlink()
         self._write_index()
 
@@ -161,6 +214,7 @@ class ResultWriter:
     @property
     def entries(self) -> list[tuple[int, float, str]]:
         """List of ``(step, time, filename)`` written so far, sorted by step."""
+        self.open()
         return [(s, t, f) for s, (t, f) in sorted(self._entries.items())]
 
     def write(
@@ -179,7 +233,8 @@ class ResultWriter:
         step : int
             Step number (>= 0); an existing step with this number is replaced.
         time : float
-            Physical time of the step.
+            Physical time of the step (written rounded to :data:`TIME_DIGITS`
+            significant digits, :func:`clean_time`).
         points : numpy.ndarray
             Particle positions, shape (N, d) with d in {2, 3}.
         cells : numpy.ndarray or None
@@ -204,9 +259,11 @@ class ResultWriter:
         ParameterError
             If an argument is malformed or a point-data array is not finite.
         """
+        self.open()
         step, time = step_number("step", step), float(time)
         if not np.isfinite(time):
             raise ParameterError("time", time, "a finite number")
+        time = clean_time(time)
         p = np.asarray(points, dtype=float)
         if p.ndim != 2 or p.shape[1] not in (2, 3) or not np.isfinite(p).all():
             raise ParameterError("points", p.shape, "a finite (N, 2) or (N, 3) array")

@@ -75,17 +75,32 @@ class Progress:
         self.lines = 0
         self.pending: str | None = None
 
-    def text(self, rec: Any, t: float, start_step: int, start_time: float) -> str:
-        """One report: step, t, dt, status, iterations, done, wall and ETA."""
-        done = math.nan
+    def share(self, step: int, t: float) -> float:
+        """Share of the whole run done at ``step``/``t``, in [0, 1] (NaN: unknown).
+
+        Counted from step 0 and t = 0, so a resumed run continues where the
+        interrupted one stopped.
+        """
         if self.n_target:
-            span = self.n_target - start_step
-            done = (rec.step - start_step) / span if span > 0 else 1.0
+            done = step / self.n_target
         elif self.t_end:
-            span = self.t_end - start_time
-            done = (t - start_time) / span if span > 0 else 1.0
+            done = t / self.t_end
+        else:
+            return math.nan
+        return min(max(done, 0.0), 1.0)
+
+    def text(self, rec: Any, t: float, start_step: int, start_time: float) -> str:
+        """One report: step, t, dt, status, iterations, done, wall and ETA.
+
+        The share done counts the whole run (a resumed run continues from the
+        share it was resumed at); the estimate of the time left extrapolates
+        the progress made since this call of ``run`` started (never < 0).
+        """
+        done = self.share(rec.step, t)
+        begun = self.share(start_step, start_time)
         wall = time.perf_counter() - self.start
-        left = wall * (1 - done) / done if done > 0 else math.nan
+        made = done - begun
+        left = max(wall * (1 - done) / made, 0.0) if made > 0 else math.nan
         share = f"{100 * done:5.1f}%" if math.isfinite(done) else "   ? %"
         eta = f"{left:7.1f} s" if math.isfinite(left) else "      ?  "
         return (
@@ -134,6 +149,12 @@ class SignalGuard:
     each step.  While :attr:`in_step` is True, a second signal raises
     :class:`AbandonStep` (the step in progress is dropped; the state of the
     last finished step is intact).
+
+    A signal that is ignored when the guard is entered stays ignored: a run
+    started under ``nohup`` or as a background job of a script (``cmd &``,
+    which start it with SIGINT ignored) is not stopped by SIGINT, and still
+    by SIGTERM.  On exit every handler the guard replaced is put back as it
+    was found.
     """
 
     SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -154,6 +175,8 @@ class SignalGuard:
         if threading.current_thread() is threading.main_thread():
             for sig in self.SIGNALS:
                 try:
+                    if signal.getsignal(sig) is signal.SIG_IGN:
+                        continue  # ignored by whoever started us: keep it so
                     self._previous[sig] = signal.signal(sig, self._handler)
                 except (ValueError, OSError):  # pragma: no cover - exotic hosts
                     pass
@@ -161,5 +184,7 @@ class SignalGuard:
 
     def __exit__(self, *exc: object) -> None:
         for sig, old in self._previous.items():
-            signal.signal(sig, old)
+            # None: a handler installed outside Python, which cannot be put
+            # back from here; the default is the closest.
+            signal.signal(sig, signal.SIG_DFL if old is None else old)
         self._previous.clear()

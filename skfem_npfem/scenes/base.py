@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,6 +24,8 @@ from ..io import (
     check_writable_dir,
     checkpoint_step,
     clear_run_files,
+    clear_temporaries,
+    folder_lock,
     load_checkpoint,
     to_jsonable,
     write_json,
@@ -236,11 +239,16 @@ class Scene:
     ) -> dict[str, Any]:
         """Build and run the scene; return (and optionally write) the summary.
 
-        A fresh run (``resume=False``) owns ``out``: the files of an earlier run
-        there (steps, index, checkpoints, ``scene.json``, ``plots/``) are
-        removed first.  On SIGINT/SIGTERM the run stops after its current step,
-        writes a checkpoint and the partial summary (``"interrupted": true``)
-        and raises :class:`~skfem_npfem.errors.RunInterrupted`.
+        Every check (parameters, paths, the scene's own checks while it is
+        built, the resume point, the step count) runs before a file in ``out``
+        is touched, so a refused run leaves an earlier run's results intact.
+        Then the run holds ``out`` (:func:`~skfem_npfem.io.folder_lock`; a
+        second run into the same folder at the same time is refused) and, if
+        fresh (``resume=False``), owns it: the files of an earlier run there
+        (steps, index, checkpoints, ``scene.json``, ``plots/``) are removed
+        first.  On SIGINT/SIGTERM the run stops after its current step, writes
+        a checkpoint and the partial summary (``"interrupted": true``) and
+        raises :class:`~skfem_npfem.errors.RunInterrupted`.
         """
         values = self.resolve(overrides)
         start = time.perf_counter()
@@ -248,17 +256,10 @@ class Scene:
             if path is not None and not str(path).strip():
                 raise ParameterError(name, str(path), "a path (not empty)")
         if out is not None:
-            check_writable_dir("out", out)
+            check_writable_dir("out", out, create=False)
         if summary is not None:
-            check_writable_dir("--summary", Path(summary).parent, summary)
+            check_writable_dir("--summary", Path(summary).parent, summary, create=False)
         checkpoint = self._resume_point(out, values) if resume else None
-        if out is not None:
-            if checkpoint is None:
-                clear_run_files(out)
-            # lets `skfem-npfem plot DIR` find the scene and its scales
-            write_json(
-                Path(out) / "scene.json", {"scene": self.name, "parameters": values}
-            )
         srun = self.build(values, out=out, progress=progress, resume=resume)
         sim = srun.simulation
         run_kwargs = dict(srun.run_kwargs)
@@ -269,17 +270,30 @@ class Scene:
             if run_kwargs.get("steps") is not None:  # steps counts from step 0
                 run_kwargs["steps"] = run_kwargs["steps"] - sim.step
         _check_step_count(sim, run_kwargs, values)
-        try:
-            sim.run(**run_kwargs)
-        except RunInterrupted as err:
-            err.summary = self._result(srun, values, start, err)
+        with folder_lock(out) if out is not None else nullcontext():
+            if out is not None:
+                clear_temporaries(out)  # what a killed run may have left
+                if checkpoint is None:
+                    clear_run_files(out)
+                # lets `skfem-npfem plot DIR` find the scene and its scales
+                write_json(
+                    Path(out) / "scene.json",
+                    {"scene": self.name, "parameters": values},
+                )
+                opener = getattr(sim.writer, "open", None)
+                if callable(opener):
+                    opener()
+            try:
+                sim.run(**run_kwargs)
+            except RunInterrupted as err:
+                err.summary = self._result(srun, values, start, err)
+                if summary is not None:
+                    write_json(summary, err.summary)
+                    err.summary_path = Path(summary)
+                raise
+            result = self._result(srun, values, start)
             if summary is not None:
-                write_json(summary, err.summary)
-                err.summary_path = Path(summary)
-            raise
-        result = self._result(srun, values, start)
-        if summary is not None:
-            write_json(summary, result)
+                write_json(summary, result)
         return result
 
     def _result(

@@ -42,6 +42,7 @@ from .column_collapse import (
     collapse_scenery,
     collapse_simulation,
     collapse_time,
+    rest_warnings,
     run_control,
 )
 from .common import fidelity_from, solver_from
@@ -176,6 +177,7 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
             "collapse_time": t_c,
             "collapse_time_normalised": t_c / math.sqrt(H0 / values["gravity"]),
             "at_rest": at_rest,
+            "warnings": rest_warnings(sim_, values, stop),
             "volume_change": summ["volume_change"],
             "mass_change": summ["mass_change"],
             "max_kinetic_energy": summ["max_kinetic_energy"],

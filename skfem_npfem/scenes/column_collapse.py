@@ -10,8 +10,9 @@ The particles start on a regular lattice of the given spacing (the remesher
 breaks the lattice ties), with masses ``rho V_i`` from the initial mesh (kept
 fixed: mass is conserved exactly), a geostatic stress ``s_yy = -rho g (H0 - y)``,
 ``s_xx = s_zz = K0 s_yy``, and floor contact forces equal to the weight of the
-column over each base particle's tributary width (otherwise the first step is
-frictionless, formulation.md pitfall 8).  Every step the particles are
+column over each base particle's tributary width (otherwise the floor's
+friction, which is lagged by one step, would be zero in the first step and the
+base would slide freely).  Every step the particles are
 re-triangulated (Delaunay plus alpha shape); the floor is a rigid wall with
 lagged Coulomb friction, the symmetry wall is frictionless.  The material is
 Mohr-Coulomb (exact in plane strain) or Drucker-Prager (plane-strain match),
@@ -34,8 +35,8 @@ Lube et al. (2005) found ``(L_inf - L0) / L0 = 1.2 a`` for ``a <~ 1.8`` and
 
 Time integration: keep ``theta2 = 1``.  ``theta2`` sets the restitution of
 impacts, ``e = 1/theta2 - 1``: ``theta2 = 1/2`` makes the impact on the floor
-perfectly elastic and the collapse gains volume and then blows up
-(formulation.md pitfall 3).
+perfectly elastic and the collapse gains volume and then blows up (the
+contact impulse is returned in full by the next step; tests/test_contact.py).
 """
 
 from __future__ import annotations
@@ -266,7 +267,10 @@ METRICS = {
     "collapse_time": "time the front stops (stays within one spacing of its final "
     "position), s; null when the run ended before rest (t_end)",
     "collapse_time_normalised": "collapse_time / sqrt(H0 / g)",
-    "at_rest": "the run ended by the at-rest rule (not t_end)",
+    "at_rest": "the run ended by the at-rest rule (not t_end); false: the run-out "
+    "and height are not final (see warnings)",
+    "warnings": "list of one-line warnings (the run reached t_end before the "
+    "at-rest rule stopped it); the CLI prints each on stderr",
     "volume_change": "relative mesh-volume (area) change, end vs t = 0",
     "mass_change": "relative change of the total particle mass (0: exact)",
     "max_kinetic_energy": "largest kinetic energy, J (per metre of depth)",
@@ -402,7 +406,7 @@ def _check(values: dict[str, Any]) -> float:
         warnings.warn(
             f"theta2={values['theta2']:g}: impacts on the floor have restitution "
             f"{1 / values['theta2'] - 1:.2f}; theta2 = 1/2 makes them elastic and the "
-            "collapse unstable (formulation.md pitfall 3)",
+            "collapse unstable (keep theta2 = 1)",
             stacklevel=3,
         )
     return h
@@ -466,6 +470,34 @@ def _front_recorder(h: float, symmetric: bool):
     return record_front
 
 
+def rest_warnings(sim_: Simulation, values: dict[str, Any], stop: AtRest | None):
+    """One warning if the run reached ``t_end`` before the at-rest rule stopped it.
+
+    Also issued as a :class:`UserWarning` (the CLI prints it on stderr).  None
+    without the rule (``rest_fraction = 0``) or before ``t_end`` (an
+    interrupted run).
+    """
+    t_end, recs = values["t_end"], sim_.records
+    if stop is None or not recs or sim_.time < t_end * (1 - 1e-12) or stop(sim_):
+        return []
+    if sim_.time < stop.min_time * (1 - 1e-12):
+        why = f"before the earliest stop at rest, min_time = {stop.min_time:.4g} s"
+    else:
+        peak = max(r.kinetic_energy for r in recs)
+        share = recs[-1].kinetic_energy / peak if peak > 0 else math.nan
+        why = (
+            f"while the kinetic energy was still {share:.3g} of its maximum "
+            f"(rest: below rest_fraction = {stop.fraction:g})"
+        )
+    msg = (
+        f"column-collapse: the run ended at t_end = {t_end:g} s {why}; the material "
+        "is not at rest, so the run-out and height are not final (at_rest = "
+        "false): raise t_end"
+    )
+    warnings.warn(msg, stacklevel=3)
+    return [msg]
+
+
 def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
     """The summary metrics of a finished run (see METRICS)."""
     L0, a = values["length"], values["aspect"]
@@ -494,6 +526,7 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
             "collapse_time": t_c,
             "collapse_time_normalised": t_c / t_scale,
             "at_rest": at_rest,
+            "warnings": rest_warnings(sim_, values, stop),
             "volume_change": summ["volume_change"],
             "mass_change": summ["mass_change"],
             "max_kinetic_energy": summ["max_kinetic_energy"],

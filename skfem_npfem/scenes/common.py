@@ -116,13 +116,16 @@ def make_writer(
     """A :class:`~skfem_npfem.io.ResultWriter` for ``out`` (None: no output).
 
     With ``resume`` the steps up to the latest checkpoint in ``out`` are kept
-    (and later ones deleted), so the continued run appends to the series.
+    (and later ones deleted), so the continued run appends to the series.  The
+    writer is deferred: it touches no file in ``out`` before the scene runner
+    has finished its checks and calls :meth:`~skfem_npfem.io.ResultWriter.open`
+    (or the first step is written).
     """
     if out is None:
         return None
     if resume and resume_after_step is None:
         resume_after_step = checkpoint_step(out)[1]
-    return ResultWriter(out, resume_after_step=resume_after_step)
+    return ResultWriter(out, resume_after_step=resume_after_step, defer=True)
 
 
 def fidelity_params(

@@ -267,6 +267,7 @@ def _record(root: Path, run: Run, outcome: Outcome) -> dict[str, Any]:
         "summary": summary,
         "resumed": bool(outcome.value.get("resumed")),
         "note": outcome.value.get("note", ""),
+        "warnings": list(outcome.value.get("warnings", [])),
     }
 
 
@@ -283,6 +284,7 @@ def _detail(rec: dict[str, Any]) -> str:
         parts.append("resumed from its checkpoint")
     if rec.get("note"):
         parts.append(rec["note"])
+    parts += [f"warning: {msg}" for msg in rec.get("warnings", [])]
     return ", ".join(parts)
 
 

@@ -44,9 +44,16 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 def cmd_sweep_plot(args: argparse.Namespace) -> int:
     """Draw one metric of a sweep against one parameter."""
+    import warnings
+
     from .plot import plot_sweep
 
-    print(plot_sweep(args.dir, args.metric, args.param, out=args.png, log=args.log))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        path = plot_sweep(args.dir, args.metric, args.param, out=args.png, log=args.log)
+    for w in caught:
+        print(f"warning: {w.message}", file=sys.stderr)
+    print(path)
     return 0
 
 

@@ -175,6 +175,8 @@ def _local_cluster(n: int) -> Iterator[DaskSession]:
         processes=True,
         dashboard_address=":8787" if with_dashboard and _port_free(8787) else ":0",
         silence_logs=logging.ERROR,
+        # Ctrl-C is for the sweep, not for its workers (see worker_setup).
+        preload=[WORKER_SETUP],
     )
     try:
         client = Client(cluster, set_as_default=False)
@@ -182,10 +184,25 @@ def _local_cluster(n: int) -> Iterator[DaskSession]:
             where = f"{n} local worker{'s' * (n != 1)}"
             link = _dashboard(client) if with_dashboard else ""
             yield DaskSession(client, where, link, True)
+        except KeyboardInterrupt:
+            # Stopping on Ctrl-C: the cluster is shut down below, with tasks
+            # still running; what Dask logs about them is no news to the user.
+            _quiet_dask_logs()
+            raise
         finally:
             client.close()
     finally:
         cluster.close()
+
+
+#: Module the local cluster's workers load at start (they ignore SIGINT).
+WORKER_SETUP = "skfem_npfem.sweeps.worker_setup"
+
+
+def _quiet_dask_logs() -> None:
+    """Silence Dask's loggers for the rest of the process (a shutdown)."""
+    for name in ("distributed", "tornado", "asyncio"):
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
 
 
 def _port_free(port: int) -> bool:

@@ -82,7 +82,11 @@ def parse_grid_args(items: Sequence[str] | None) -> dict[str, list[str]]:
         No grid, a grid without ``=``, an empty name or value, or a name given twice.
     """
     if not items:
-        raise ParameterError("--grid", None, "at least one --grid name=v1,v2,...")
+        raise ParameterError.missing(
+            "--grid",
+            "a sweep needs at least one --grid name=v1,v2,... (a parameter to "
+            "vary and its values, e.g. --grid spacing=0.02,0.01)",
+        )
     grid: dict[str, list[str]] = {}
     for item in items:
         name, sep, text = item.partition("=")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -11,7 +12,10 @@ from ..io import atomic_path
 from .plan import value_label
 from .table import read_spec, read_table
 
-__all__ = ["plot_sweep"]
+__all__ = ["NOT_AT_REST", "not_at_rest", "plot_sweep"]
+
+#: Legend entry of the runs that ended before the material came to rest.
+NOT_AT_REST = "not at rest at t_end (not final)"
 
 
 def plot_sweep(
@@ -25,7 +29,10 @@ def plot_sweep(
     """Draw ``metric`` against ``param`` for the finished runs of a sweep.
 
     One line per combination of the other varied parameters (from
-    ``sweep.json``); failed runs are left out.
+    ``sweep.json``); failed runs are left out.  Runs whose summary says they
+    ended before the material came to rest (``at_rest`` false: a collapse
+    stopped by ``t_end``) are drawn with open markers, named in the legend,
+    and reported in one :class:`UserWarning` (their metrics are not final).
 
     Parameters
     ----------
@@ -68,6 +75,7 @@ def plot_sweep(
     others = [
         k for k in read_spec(folder).get("grid", {}) if k != param and k in ok.columns
     ]
+    moving = not_at_rest(ok)
     fig, ax = plt.subplots(figsize=(6.0, 4.2))
     groups = ok.groupby(others, sort=True, dropna=False) if others else [((), ok)]
     for key, sub in groups:
@@ -76,7 +84,25 @@ def plot_sweep(
         label = ", ".join(
             f"{k}={value_label(v)}" for k, v in zip(others, keys, strict=True)
         )
-        ax.plot(sub[param], sub[metric], "o-", label=label or None)
+        (line,) = ax.plot(sub[param], sub[metric], "o-", label=label or None)
+        still = moving.loc[sub.index]
+        if still.any():
+            ax.plot(
+                sub[param][still],
+                sub[metric][still],
+                "o",
+                mfc="white",
+                mec=line.get_color(),
+                zorder=line.get_zorder() + 0.1,
+            )
+    if moving.any():
+        ax.plot([], [], "o", mfc="white", mec="0.3", label=NOT_AT_REST)
+        warnings.warn(
+            f"{int(moving.sum())} of {len(ok)} runs ended at t_end before the "
+            f"material came to rest (at_rest = false): their {metric} is not "
+            f"final; open markers in the plot",
+            stacklevel=2,
+        )
     ax.set_xlabel(param)
     ax.set_ylabel(metric)
     if "x" in log:
@@ -86,7 +112,7 @@ def plot_sweep(
     failed = len(table) - len(ok)
     title = f"{read_spec(folder).get('scene', 'sweep')}: {metric} against {param}"
     ax.set_title(title + (f" ({failed} failed runs not shown)" if failed else ""))
-    if others:
+    if others or moving.any():
         ax.legend(fontsize="small")
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
@@ -95,6 +121,15 @@ def plot_sweep(
         fig.savefig(tmp, dpi=120, format="png")
     plt.close(fig)
     return path
+
+
+def not_at_rest(rows: Any) -> Any:
+    """Boolean Series: the run's ``at_rest`` is false (False without the column)."""
+    import pandas as pd
+
+    if "at_rest" not in rows.columns:
+        return pd.Series(False, index=rows.index)
+    return rows["at_rest"].map(lambda v: str(v).strip().lower() in ("false", "0"))
 
 
 def _numeric(col: Any) -> bool:

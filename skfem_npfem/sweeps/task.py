@@ -11,6 +11,7 @@ import socket
 import sys
 import time
 import traceback
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -105,12 +106,25 @@ def run_one(
     discarded and the run starts afresh.  On a library error the traceback is
     written to ``error.txt`` in the folder and the error re-raised.
 
+    Warnings of the run are not printed on the worker (its stderr mixes all
+    runs); they are returned, and the sweep prints them with the run's line.
+
     Returns
     -------
     dict
         ``summary`` (as :func:`~skfem_npfem.run_scene` returns it), ``resumed``
-        (continued from a checkpoint) and ``note``.
+        (continued from a checkpoint), ``note`` and ``warnings`` (messages).
     """
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = _run_one(scene, overrides, folder, values)
+    result["warnings"] = list(dict.fromkeys(str(w.message) for w in caught))
+    return result
+
+
+def _run_one(
+    scene: str, overrides: dict[str, Any], folder: str, values: dict[str, Any]
+) -> dict[str, Any]:
     from ..scenes import run_scene
 
     out = Path(folder)
