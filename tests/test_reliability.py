@@ -382,7 +382,7 @@ def test_8_theta2_note_is_one_warning_line():
     assert code == 0
     assert err.splitlines() == [
         "warning: theta2=0.9: impacts on the floor have restitution 0.11; theta2 = "
-        "1/2 makes them elastic and the collapse unstable (formulation.md pitfall 3)"
+        "1/2 makes them elastic and the collapse unstable"
     ]
 
 

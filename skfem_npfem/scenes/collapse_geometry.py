@@ -144,6 +144,9 @@ CYLINDRICAL_MEANING = {
     "collapse_time": "when the 99 % front radius stops",
     "collapse_time_normalised": "collapse_time / sqrt(h0 / g)",
     "volume_change": "full-ring volume (axisymmetric), quarter volume (3D)",
+    "runout_main_body": "not reported",
+    "normalised_runout_main_body": "not reported",
+    "runout_tip": "not reported",
 }
 
 
@@ -299,8 +302,8 @@ def _check_values(values: dict[str, Any]) -> None:
     if values["theta2"] < 1.0:
         warnings.warn(
             f"theta2={values['theta2']:g}: impacts on the floor have restitution "
-            f"{1 / values['theta2'] - 1:.2f}; keep theta2 = 1 (formulation.md "
-            "pitfall 3)",
+            f"{1 / values['theta2'] - 1:.2f}; keep theta2 = 1 (1/2 makes them "
+            "elastic and the collapse unstable)",
             stacklevel=3,
         )
 

@@ -17,6 +17,7 @@ parameters; plane strain runs the plane-strain build unchanged.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -38,6 +39,8 @@ from .column_collapse import SCENE as PLANE_STRAIN
 from .column_collapse import (
     collapse_simulation,
     collapse_time,
+    detached_fraction,
+    detached_warnings,
     lube_runout,
     run_control,
 )
@@ -137,6 +140,7 @@ def _recorder(values: dict[str, Any], h: float):
         body[step.active[main_body(p.x[step.active], 3.0 * h)]] = True
         extra = step.record.extra
         extra["max_height"] = float(p.x[body, -1].max()) if body.any() else math.nan
+        extra["detached_mass_fraction"] = detached_fraction(p.mass, body)
         run = _front(geo, p.x, p.mass, symmetric)
         if geo in CYLINDRICAL:
             extra["runout_radius"] = run
@@ -173,11 +177,17 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
         # Before rest (stopped by t_end) the front may still move: unknown.
         t_c = collapse_time(times, runs, h) if at_rest else math.nan
         summ = sim_.summary()
+        detached = float(last.get("detached_mass_fraction", 0.0))
+        main = None if cyl else float(last.get("runout_main_body", L0))
+        notes = detached_warnings("column-collapse", detached, run, main, L0)
+        for msg in notes:
+            warnings.warn(msg, stacklevel=2)
         out: dict[str, Any] = {key: run, "normalised_runout": (run - L0) / L0}
         if cyl:
             out["reference_runout_lube2004"] = lube2004_runout(H0 / L0)
         else:
-            out["runout_main_body"] = float(last.get("runout_main_body", L0))
+            out["runout_main_body"] = main
+            out["normalised_runout_main_body"] = (main - L0) / L0
             out["runout_tip"] = float(last.get("runout_tip", L0))
             out["reference_runout_lube"] = lube_runout(values["aspect"])
         out |= {
@@ -193,6 +203,8 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
             "n_inactive_final": int(recs[-1].n_inactive) if recs else 0,
             "n_particles": int(sim_.particles.n),
             "mass_basis": MASS_BASIS[geo],
+            "detached_mass_fraction": detached,
+            "warnings": notes,
         }
         return out
 

@@ -83,8 +83,7 @@ METHOD_PARAMS = [
 METHOD_METRICS = {
     "stress_roughness": "stress roughness R of the vertical stress at the last "
     "step: rms over interior particles of (s_i - mean of its mesh neighbours) / "
-    "rms(s_i) (shared/tools/stress_roughness.py; ~0 for a smooth field, ~1 for "
-    "a checkerboard)",
+    "rms(s_i) (~0 for a smooth field, ~1 for a checkerboard)",
     "stress_roughness_max": "largest stress roughness over the steps",
     "yield_violations": "fem-remap: mapped Gauss-point stresses outside the yield "
     "surface, returned to it, summed over the run (null: other methods)",
