@@ -287,7 +287,8 @@ def build_parser() -> argparse.ArgumentParser:
         type=float,
         nargs="*",
         default=None,
-        help="times to render (normalised by sqrt(H0/g) unless --absolute)",
+        help="times to render (normalised by sqrt(H0/g) unless --absolute; "
+        "strip-footing: settlements in m)",
     )
     p_plot.add_argument(
         "--absolute", action="store_true", help="--times are in seconds"
