@@ -1,17 +1,16 @@
 """Pictures of 2D results with matplotlib: what a geotechnician expects to see.
 
-:class:`Frames2D` draws one field of any stored step of a 2D result: the
-particles' mesh coloured by the field (detached grains, outside the mesh, as
-black-edged diamonds in the field's colours, counted in the legend), axes
-in metres with equal scales, the floor, walls and footing of the scene, the
-initial outline of the body, the run-out (99 % mass front) and the reference
-run-out of Lube et al. (2005) for the collapse, and for the strip footing the
-load-settlement curve beside it with the current point marked.  The frame is
-cropped to every particle (detached grains included, so the run-out line the
-legend names is in the picture) and the scenery; the colour bar says when
-values beyond its range were clipped.  :func:`load_settlement_figure` is the footing's main result on its
-own.  Both return matplotlib figures (no pyplot, no display), so tests can look
-at what is drawn; :meth:`Frames2D.image` renders one to pixels.
+:class:`Frames2D` draws one field of any stored step of a 2D result: the particles' mesh
+coloured by the field (detached grains, outside the mesh, as black-edged diamonds in the
+field's colours, counted in the legend), axes in metres with equal scales, the floor,
+walls and footing of the scene, the initial outline of the body, the run-out (99 % mass
+front) and the reference run-out of Lube et al. (2005) for the collapse, and for the
+strip footing the load-settlement curve beside it with the current point marked.  The
+frame is cropped to every particle (detached grains included, so the run-out line the
+legend names is in the picture) and the scenery; the colour bar says when values beyond
+its range were clipped.  :func:`load_settlement_figure` is the footing's main result on
+its own.  Both return matplotlib figures (no pyplot, no display), so tests can look at
+what is drawn; :meth:`Frames2D.image` renders one to pixels.
 """
 
 from __future__ import annotations

@@ -492,29 +492,25 @@ def plot_results(
     NpfemError
         If pyvista is not installed or off-screen rendering is impossible.
 
-    Notes
-    -----
-    2D results (matplotlib, :mod:`skfem_npfem.figures`): axes in metres with
-    equal scales, cells coloured by the field (thin mesh edges up to 4000
-    cells), particles in no cell (``active == 0``: detached grains) as
-    black-edged diamonds in the same colours, counted in the legend,
-    and the scenery of ``scene.json`` (:mod:`skfem_npfem.scenery`): the floor
-    or fixed base, walls, the footing at its current settlement, the symmetry
-    axis, the initial outline; for the collapse the run-out (99 % mass front)
-    of the step and the final run-out of Lube et al. (2005); for the strip
-    footing the load-settlement curve beside the field with the step marked
-    (and ``load_settlement.png`` on its own), and the settlement instead of
-    the pseudo-time in titles.  The frame holds every particle of the drawn
-    steps (detached grains included) and everything the legend names.  3D
-    results are shown in an isometric view (pyvista, surface of the tetrahedra).  The colour
-    range is the same in every picture of a field, over all stored steps: for
-    stresses the 1-99 % range, ``min..0`` (compression only), ``0..max``
-    (tension only) or symmetric, in Pa/kPa/MPa; for magnitudes ``0..max``; for
-    plastic strain ``0`` to the 95th percentile of the plastic values (a thin
-    band of very large strains, e.g. on the floor, does not swamp the body; at
-    least 1e-6, so round-off is not coloured).  Arrows on the colour bar show
-    values beyond its range.  A step file that cannot be read is skipped with
-    a warning naming it.
+    Notes ----- 2D results (matplotlib, :mod:`skfem_npfem.figures`): axes in metres with
+    equal scales, cells coloured by the field (thin mesh edges up to 4000 cells),
+    particles in no cell (``active == 0``: detached grains) as black-edged diamonds in
+    the same colours, counted in the legend, and the scenery of ``scene.json``
+    (:mod:`skfem_npfem.scenery`): the floor or fixed base, walls, the footing at its
+    current settlement, the symmetry axis, the initial outline; for the collapse the
+    run-out (99 % mass front) of the step and the final run-out of Lube et al. (2005);
+    for the strip footing the load-settlement curve beside the field with the step
+    marked (and ``load_settlement.png`` on its own), and the settlement instead of the
+    pseudo-time in titles.  The frame holds every particle of the drawn steps (detached
+    grains included) and everything the legend names.  3D results are shown in an
+    isometric view (pyvista, surface of the tetrahedra).  The colour range is the same
+    in every picture of a field, over all stored steps: for stresses the 1-99 % range,
+    ``min..0`` (compression only), ``0..max`` (tension only) or symmetric, in
+    Pa/kPa/MPa; for magnitudes ``0..max``; for plastic strain ``0`` to the 95th
+    percentile of the plastic values (a thin band of very large strains, e.g. on the
+    floor, does not swamp the body; at least 1e-6, so round-off is not coloured).
+    Arrows on the colour bar show values beyond its range.  A step file that cannot be
+    read is skipped with a warning naming it.
 
     Examples
     --------
