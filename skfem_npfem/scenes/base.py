@@ -55,6 +55,9 @@ class Param:
         Allowed values for str/int parameters.
     lo, hi : float
         Allowed closed range for numbers (``lo_open``/``hi_open`` make it open).
+    note : str
+        Appended in parentheses to the allowed values (in the docs and in the
+        error of a refused value), e.g. why a method is not offered.
     """
 
     name: str
@@ -67,9 +70,15 @@ class Param:
     hi: float = math.inf
     lo_open: bool = False
     hi_open: bool = False
+    note: str = ""
 
     def allowed(self) -> str:
         """Human-readable allowed values."""
+        if self.note:
+            return f"{self._allowed()} ({self.note})"
+        return self._allowed()
+
+    def _allowed(self) -> str:
         if self.choices is not None:
             return "one of " + ", ".join(map(str, self.choices))
         if self.kind is bool:

@@ -32,7 +32,7 @@ from .common import (
     solver_from,
     solver_params,
 )
-from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
+from .methods import METHOD_METRICS, method_params, with_method
 
 PARAMS = [
     Param("dim", 2, "-", "spatial dimension (2: plane strain, 3: 3D)", int, (2, 3)),
@@ -53,7 +53,7 @@ PARAMS = [
     Param(
         "theta2", 1.0, "-", "time-integration parameter theta2", float, lo=0.5, hi=1.0
     ),
-    *METHOD_PARAMS,
+    *method_params(spfem="mode=dynamic only"),
     *fidelity_params(0.0),
     *solver_params(),
 ]

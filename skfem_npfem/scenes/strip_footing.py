@@ -45,7 +45,7 @@ from .common import (
     solver_from,
     solver_params,
 )
-from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
+from .methods import METHOD_METRICS, method_params, with_method
 from .plateau import PlateauRule
 
 MATERIALS = ("tresca", "mohr-coulomb", "drucker-prager")
@@ -169,7 +169,11 @@ PARAMS = [
         "small-strain limit analysis",
         bool,
     ),
-    *METHOD_PARAMS,
+    *method_params(
+        ("npfem", "fem-remap"),
+        missing="spfem is not available in strip-footing: it is explicit "
+        "dynamics and this scene is quasi-static, without inertia",
+    ),
     *fidelity_params(0.0),
     *solver_params(),
 ]
@@ -193,6 +197,11 @@ METRICS = {
     "plateau); the CLI prints each on stderr",
     "n_particles": "number of particles",
     **METHOD_METRICS,
+    # spfem is not offered here: its metrics are always null.
+    **{
+        k: "spfem only: always null here (spfem is not available in this scene)"
+        for k in ("explicit_steps", "stable_dt", "explicit_dt")
+    },
 }
 
 
