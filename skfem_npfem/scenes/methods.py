@@ -38,6 +38,7 @@ __all__ = [
     "with_method",
 ]
 
+
 def method_params(
     methods: tuple[str, ...] = tuple(METHODS), spfem: str = "", missing: str = ""
 ) -> list[Param]:
