@@ -1,10 +1,10 @@
 """``--set method=`` on the scenes: the baselines through the CLI and Python.
 
-References: the elastic column (benchmarks.md E1: ``s_v = -rho g (H - z)``,
+References: the elastic column (``s_v = -rho g (H - z)``,
 top settlement ``rho g H^2 / (2 M)``; P2 elements hold the exact solution,
 so FEM-remap P2 reproduces it to round-off; SPFEM with ``alpha = 2 omega_1``
-settles to it within 1 % / 0.5 %), the Prandtl footing (benchmarks.md P1:
-``2 + pi``; FEM P2 at 8 elements across ``b`` measured +3.1 %, phase 1), mass
+settles to it within 1 % / 0.5 %), the Prandtl footing (``2 + pi``;
+FEM P2 at 8 elements across ``b`` measured +3.1 %), mass
 conservation and the same outputs for every method in the column collapse,
 bit-identical resumes (checkpoints, VTU series and step records), and one
 ``error:`` line before any step for bad input.

@@ -185,8 +185,9 @@ METRICS = {
     "relative_error": "bearing_factor / reference - 1 (weightless soil)",
     "load_curve": "list of [settlement (m), pressure (Pa)] per step",
     "plateau_reached": "true if the run stopped on a detected plateau, false if a "
-    "cap stopped it first (then q_ult is a lower estimate); null when "
-    "plateau_tol = 0",
+    "cap stopped it first (then q_ult is a lower estimate, except for fem-remap "
+    "with P1 elements and isochoric plastic flow, which locks: its load is "
+    "inflated, see warnings); null when plateau_tol = 0",
     "plateau_change": "relative load change over the last doubling of the "
     "settlement (null before the settlement has doubled)",
     "plateau_tolerance": "plateau_tol used (0: detection off)",
@@ -194,7 +195,7 @@ METRICS = {
     "not reached)",
     "stopped_by": "plateau, max_settlement, max_steps or steps (plateau_tol = 0)",
     "warnings": "list of one-line warnings (a cap stopped the run before the "
-    "plateau); the CLI prints each on stderr",
+    "plateau; fem-remap P1 locking); the CLI prints each on stderr",
     "n_particles": "number of particles",
     **METHOD_METRICS,
     # spfem is not offered here: its metrics are always null.
@@ -379,7 +380,7 @@ def build(
         curve = load_curve(sim_)
         q = curve[-1][1] if curve else float("nan")
         factor = q / c if c > 0 else q / (gamma * b)
-        plateau = rule.outcome(curve, "strip-footing")
+        plateau = rule.outcome(curve, "strip-footing", locking_note(values, phi))
         for msg in plateau["warnings"]:
             warnings.warn(msg, stacklevel=2)
         return {
@@ -395,6 +396,27 @@ def build(
     return with_method(
         values, SceneRun(sim, {"steps": rule.step_cap, "stop": finished}, metrics)
     )
+
+
+def locking_note(values: dict[str, Any], phi: float) -> str:
+    """Why the run's load is inflated by volumetric locking ("" if it is not).
+
+    Constant-strain triangles (fem-remap, P1) carry about one incompressibility
+    constraint per element under isochoric plastic flow (Tresca, or a dilation
+    angle psi = 0), about as many as free degrees of freedom: the load keeps
+    rising far above the collapse load (docs/baselines.md).  N-PFEM (nodal
+    integration) and P2 elements do not lock.
+    """
+    if values["method"] != "fem-remap" or (values["element"] or "p1") != "p1":
+        return ""
+    psi = phi if values["psi"] is None else values["psi"]
+    if values["material"] == "tresca":
+        flow = "isochoric plastic flow (tresca)"
+    elif psi == 0.0:
+        flow = "isochoric plastic flow (psi = 0)"
+    else:
+        return ""
+    return f"fem-remap with P1 elements under {flow}"
 
 
 def load_curve(sim: Simulation) -> list[list[float]]:
