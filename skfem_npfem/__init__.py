@@ -26,6 +26,7 @@ from .simulation import AtRest, Simulation
 # Building blocks: particles, meshes, materials, smoothing, boundaries, the step.
 from .boundary import Contacts, RigidWall, floor, wall_x
 from .conic import StepSolution, solve_step
+from .io import ResultWriter
 from .materials import (
     DruckerPrager,
     LinearElastic,
@@ -56,6 +57,8 @@ from .errors import (
 
 #: High level: ready scenes and the time loop.
 __all__ = ["SCENES", "AtRest", "Simulation", "__version__", "get_scene", "run_scene"]
+#: Output: the VTU series of a run (``Simulation(..., writer=ResultWriter(dir))``).
+__all__ += ["ResultWriter"]
 #: Particles and their meshes.
 __all__ += [
     "AlphaShapeMesher",

@@ -123,6 +123,13 @@ def test_tutorial_own_scene_slides_like_a_rigid_block(site):
         ).groups(),
     )
     assert abs(slide / exact - 1) < 1e-3
+    # The level layer with its geostatic stress rests on the floor: the floor
+    # forces (wall_force) carry its weight.
+    force, weight = map(
+        float,
+        re.search(r"floor force ([\d.]+) N/m .*?weight ([\d.]+) N/m", text).groups(),
+    )
+    assert abs(force / weight - 1) < 1e-5
     code = re.search(
         r"import numpy as np.*?records = sim\.run\(t_end=0\.3\)", text, re.S
     )
