@@ -489,3 +489,22 @@ def test_run_names_are_the_same_from_the_command_line_and_python():
         plan_runs(scene, {"E": ["1e7", 1e7]})
     with pytest.raises(ParameterError, match="not both"):
         plan_runs(scene, {"E": [1e7]}, cases=[{"nu": 0.2}])
+
+
+def test_a_metric_named_like_a_parameter_is_renamed_and_documented():
+    # spfem's metric `explicit_dt` (largest substep used) clashes with the
+    # parameter `explicit_dt`; docs/sweep.md said metrics keep their names.
+    from skfem_npfem.sweeps.table import summary_row
+
+    row = summary_row(
+        {
+            "parameters": {"explicit_dt": None, "dt": 0.01},
+            "metrics": {"explicit_dt": 2.5e-5, "runout": 0.5, "warnings": ["a", "b"]},
+        }
+    )
+    assert row["metric.explicit_dt"] == 2.5e-5 and row["runout"] == 0.5
+    assert np.isnan(row["explicit_dt"]) and row["warnings"] == "a+b"
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "sweep.md").read_text()
+    line = next(r for r in doc.splitlines() if r.startswith("| scene metrics |"))
+    assert "`metric.<name>`" in line and "`metric.explicit_dt`" in line
+    assert "joined by `+`" in line
