@@ -37,7 +37,7 @@ from .base import Param, Scene
 from .box_column import DEPTH_SPACINGS
 from .common import check_soil
 from .cylinder import SEED, SEED_DIVISIONS
-from .limits import check_size
+from .limits import LENGTH, check_size
 from .sizing import lattice_particles
 
 __all__ = [
@@ -79,8 +79,7 @@ GEOMETRY_PARAMS = [
         "m",
         "cylindrical geometries: column radius r0 (default 3.9 cm, or height / aspect)",
         float,
-        lo=0,
-        lo_open=True,
+        **LENGTH,
     ),
     Param(
         "height",
@@ -98,8 +97,7 @@ GEOMETRY_PARAMS = [
         f"box: slab depth W between the smooth walls y = 0 and y = W (default "
         f"{DEPTH_SPACINGS} spacings)",
         float,
-        lo=0,
-        lo_open=True,
+        **LENGTH,
     ),
     Param(
         "strength_floor",

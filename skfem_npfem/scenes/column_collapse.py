@@ -66,6 +66,7 @@ from .common import (
     solver_from,
     solver_params,
 )
+from .limits import LENGTH
 from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
 
 MATERIALS = ("mohr-coulomb", "drucker-prager")
@@ -119,8 +120,7 @@ PARAMS = [
         "m",
         "particle (lattice) spacing (default L0/22: 1 035 particles at a = 2)",
         float,
-        lo=0,
-        lo_open=True,
+        **LENGTH,
     ),
     Param("material", "mohr-coulomb", "-", "yield criterion", str, MATERIALS),
     Param("rho", 1800.0, "kg/m^3", "density", float, lo=0, lo_open=True),
@@ -152,7 +152,11 @@ PARAMS = [
         "K0",
         0.5,
         "-",
-        "initial s_xx / s_yy (at-rest coefficient)",
+        "initial s_xx / s_yy (at-rest coefficient). 0.5 is Jaky's 1 - sin phi "
+        "at the default phi = 30; it is not recomputed from phi (unlike "
+        "strip-footing's default 1 - sin phi), so a change of phi changes the "
+        "material, not the initial stresses. For phi < 19.5 it lies outside "
+        "the yield cone and is refused: set K0 too (e.g. 1 - sin phi)",
         float,
         lo=0,
         lo_open=True,

@@ -45,6 +45,7 @@ from .common import (
     solver_from,
     solver_params,
 )
+from .limits import LENGTH
 from .methods import METHOD_METRICS, method_params, with_method
 from .plateau import PlateauRule
 
@@ -95,13 +96,15 @@ PARAMS = [
         "K0",
         None,
         "-",
-        "at-rest earth pressure coefficient (default 1-sin phi)",
+        "at-rest earth pressure coefficient s_xx / s_yy of the initial "
+        "geostatic stress (default Jaky's 1 - sin phi, phi of the soil; no "
+        "effect on a weightless soil)",
         float,
         **_POSITIVE,
     ),
     Param("footing", "smooth", "-", "footing-soil interface", str, ("smooth", "rough")),
     Param("half_width", 1.0, "m", "footing half-width b", float, **_POSITIVE),
-    Param("spacing", 0.125, "m", "element size under the footing", float, **_POSITIVE),
+    Param("spacing", 0.125, "m", "element size under the footing", float, **LENGTH),
     Param(
         "grading",
         1.15,
@@ -129,7 +132,17 @@ PARAMS = [
         float,
         **_POSITIVE,
     ),
-    Param("steps", 8, "-", "number of equal steps up to `settlement`", int, lo=1),
+    Param(
+        "steps",
+        8,
+        "-",
+        "number of equal settlement steps up to `settlement` (the first stage; "
+        "the run then goes on with growing steps until the plateau or a cap, "
+        "max_steps counting all steps; exactly `steps` steps with "
+        "plateau_tol = 0)",
+        int,
+        lo=1,
+    ),
     Param(
         "plateau_tol",
         None,
