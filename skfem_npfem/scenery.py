@@ -165,7 +165,9 @@ def _footing(s: Scenery, p: dict, folder: Path) -> None:
     s.outline = _box(0.0, L, 0.0, L)
     s.footing = (0.0, b, L)
     s.label = s.settlement_label
-    c, gamma, phi = _num(p, "c", 0.0), _num(p, "gamma", 0.0), _num(p, "phi", 0.0)
+    c, phi = _num(p, "c", 0.0), _num(p, "phi", 0.0)
+    # unit weight: rho g (a result of an older version: its parameter gamma)
+    gamma = _num(p, "gamma", 0.0) or _num(p, "rho", 0.0) * _num(p, "gravity", _GRAVITY)
     if p.get("material") == "tresca":
         phi = 0.0
     if gamma == 0 and c and c > 0:

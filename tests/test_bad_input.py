@@ -451,7 +451,7 @@ def test_cli_physical_limits_elastic_column(sets, name):
         (["material=mohr-coulomb", "phi=20", "psi=30"], "psi"),
         (["material=tresca", "c=0"], "c"),
         (["material=mohr-coulomb", "c=0", "phi=0"], "c"),
-        (["material=mohr-coulomb", "c=0", "phi=30", "gamma=0"], "gamma"),
+        (["material=mohr-coulomb", "c=0", "phi=30", "rho=0"], "rho"),
         (["spacing=0.9"], "spacing"),
     ],
 )

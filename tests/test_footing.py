@@ -265,3 +265,32 @@ def test_fem_remap_p1_load_is_called_locking_inflated_not_a_lower_estimate():
     assert not locking_note({**base, "material": "mohr-coulomb"}, 30.0)
     assert not locking_note({**base, "material": "tresca", "element": "p2"}, 0.0)
     assert not locking_note({**base, "material": "tresca", "method": "npfem"}, 0.0)
+
+
+def test_density_is_rho_and_gravity_as_in_the_other_scenes():
+    """strip-footing took a unit weight ``gamma``, the other scenes rho, gravity.
+
+    ``gamma`` still works, with a deprecation message, as rho = gamma / g.
+    """
+    names = {
+        s: {p.name for p in get_scene(s).params}
+        for s in ("strip-footing", "column-collapse", "elastic-column")
+    }
+    for params in names.values():
+        assert {"rho", "gravity"} <= params and "gamma" not in params
+    heavy = {"material": "mohr-coulomb", "c": 0, "phi": 30, "spacing": 0.25}
+    heavy |= {"steps": 2, "plateau_tol": 0}
+    with pytest.warns(FutureWarning, match="parameter gamma is deprecated, use rho"):
+        old = run_scene("strip-footing", {**heavy, "gamma": "18000"})
+    assert old["parameters"]["rho"] == 18000 / 9.81
+    new = run_scene("strip-footing", {**heavy, "rho": 18000 / 9.81})
+    assert new["metrics"]["bearing_factor"] == old["metrics"]["bearing_factor"]
+    # N_gamma = q / (rho g b): the same load on the Moon is 6 times lighter.
+    moon = run_scene("strip-footing", {**heavy, "rho": 18000 / 9.81, "gravity": 1.635})
+    q_ratio = moon["metrics"]["q_ult"] / new["metrics"]["q_ult"]
+    assert q_ratio == pytest.approx(1.635 / 9.81, rel=1e-6)
+    assert moon["metrics"]["bearing_factor"] == pytest.approx(
+        new["metrics"]["bearing_factor"], rel=1e-6
+    )
+    with pytest.raises(ParameterError, match="not together with rho"):
+        get_scene("strip-footing").resolve({"gamma": 1.0, "rho": 2.0})

@@ -395,7 +395,7 @@ def test_8_tresca_cohesion_range_is_stated_and_c_zero_runs_with_friction():
             "material": "mohr-coulomb",
             "c": 0,
             "phi": 30,
-            "gamma": 18e3,
+            "rho": 18e3 / 9.81,
             "spacing": 0.25,
             "steps": 2,
             "plateau_tol": 0,

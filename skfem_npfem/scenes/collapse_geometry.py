@@ -319,6 +319,7 @@ class GeometryScene(Scene):
 
     def resolve(self, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
         """Defaults updated with validated overrides, then the geometry rules."""
+        overrides = self.translate(overrides)
         values = super().resolve(overrides)
         finalize(values, frozenset(overrides or {}), self.plane_names)
         return values

@@ -35,7 +35,7 @@ from ..particles import Particles
 from ..pfem import FixedMesh
 from ..simulation import Simulation
 from ..smoothing import nodal_integration
-from .base import Param, Scene, SceneRun
+from .base import Param, Renamed, Scene, SceneRun
 from .common import (
     check_size,
     elastic_params,
@@ -65,7 +65,7 @@ PARAMS = [
         "c",
         1.0e4,
         "Pa",
-        "cohesion (tresca: > 0; c = 0 needs gamma > 0)",
+        "cohesion (tresca: > 0; c = 0 needs rho > 0)",
         float,
         lo=0,
     ),
@@ -90,7 +90,21 @@ PARAMS = [
         hi_open=True,
     ),
     Param(
-        "gamma", 0.0, "N/m^3", "unit weight of the soil (0: weightless)", float, lo=0
+        "rho",
+        0.0,
+        "kg/m^3",
+        "density of the soil (0: weightless); its unit weight is gamma = rho g",
+        float,
+        lo=0,
+    ),
+    Param(
+        "gravity",
+        9.81,
+        "m/s^2",
+        "gravitational acceleration (acts when rho > 0)",
+        float,
+        lo=0,
+        lo_open=True,
     ),
     Param(
         "K0",
@@ -193,7 +207,8 @@ PARAMS = [
 
 METRICS = {
     "q_ult": "footing pressure at the last step (= collapse load on the plateau), Pa",
-    "bearing_factor": "q_ult / c (c > 0), else q_ult / (gamma b) = N_gamma (B = 2b)",
+    "bearing_factor": "q_ult / c (c > 0), else q_ult / (gamma b) = N_gamma (B = 2b, "
+    "gamma = rho g)",
     "bearing_factor_reference": "Prandtl-Reissner N_c for weightless soil (else null)",
     "relative_error": "bearing_factor / reference - 1 (weightless soil)",
     "load_curve": "list of [settlement (m), pressure (Pa)] per step",
@@ -270,8 +285,7 @@ def soil_material(values: dict[str, Any]) -> tuple[Material, float]:
     name = values["material"]
     c, phi = values["c"], values["phi"]
     psi = phi if values["psi"] is None else values["psi"]
-    gamma = values["gamma"]
-    rho = gamma / 9.81
+    rho = values["rho"]
     E, nu = values["E"], values["nu"]
     if name == "tresca":
         if c <= 0:
@@ -279,15 +293,15 @@ def soil_material(values: dict[str, Any]) -> tuple[Material, float]:
                 "c",
                 c,
                 "material=tresca needs c > 0 (c = 0 is allowed with "
-                "mohr-coulomb or drucker-prager and gamma > 0)",
+                "mohr-coulomb or drucker-prager and rho > 0)",
             )
         mat, phi = Tresca(E, nu, rho, c=c), 0.0
     elif name == "mohr-coulomb":
         mat = MohrCoulomb(E, nu, rho, c=c, phi=phi, psi=psi)
     else:
         mat = DruckerPrager(E, nu, rho, c=c, phi=phi, psi=psi)
-    if c == 0 and gamma == 0:
-        raise ParameterError("gamma", gamma, "must be > 0 when c = 0 (no strength)")
+    if c == 0 and rho == 0:
+        raise ParameterError("rho", rho, "must be > 0 when c = 0 (no strength)")
     return mat, phi
 
 
@@ -299,8 +313,8 @@ def soil_particles(
     The footing particles move down at unit pseudo-speed (1 m per unit of
     pseudo-time), so a step's ``dt`` is its settlement increment.
     """
-    b, gamma = values["half_width"], values["gamma"]
-    L, rho = values["domain"] * b, gamma / 9.81
+    b, rho = values["half_width"], values["rho"]
+    L, gamma = values["domain"] * b, unit_weight(values)
     ni = nodal_integration(mesh)
     x = mesh.p.T.copy()
     fixed = np.zeros_like(x, dtype=bool)
@@ -323,12 +337,23 @@ def soil_particles(
     return particles.replace(v_prescribed=vp), foot
 
 
+def unit_weight(values: dict[str, Any]) -> float:
+    """Unit weight ``gamma = rho g`` of the soil, N/m^3 (0: weightless)."""
+    return values["rho"] * values["gravity"]
+
+
+def _rho_from_gamma(gamma: float, given: dict[str, Any]) -> dict[str, float]:
+    """The old ``gamma`` (N/m^3) as the density at the given or default gravity."""
+    gravity = _GRAVITY.check(given.get("gravity", _GRAVITY.default))
+    return {"rho": gamma / gravity}
+
+
 def plateau_rule(values: dict[str, Any]) -> PlateauRule:
     """The stepping and stop rule from the resolved parameters."""
     b = values["half_width"]
     settlement = values["settlement"]
     if settlement is None:
-        strength = values["c"] + values["gamma"] * b
+        strength = values["c"] + unit_weight(values) * b
         settlement = SETTLEMENT_SCALE * strength * b / values["E"]
     tol = values["plateau_tol"]
     if tol is None:
@@ -352,11 +377,11 @@ def build(
     mat, phi = soil_material(values)
     rule = plateau_rule(values)
     particles, foot = soil_particles(values, mesh, phi)
-    b, c, gamma = values["half_width"], values["c"], values["gamma"]
+    b, c, gamma = values["half_width"], values["c"], unit_weight(values)
     model = Model(
         dim=2,
         materials=[mat],
-        gravity=9.81 if gamma > 0 else 0.0,
+        gravity=values["gravity"] if values["rho"] > 0 else 0.0,
         mode="static",
         objective_rotation=values["large_deformation"],
         update_geometry=values["large_deformation"],
@@ -441,10 +466,21 @@ def load_curve(sim: Simulation) -> list[list[float]]:
     ]
 
 
+_GRAVITY = next(p for p in PARAMS if p.name == "gravity")
+
 SCENE = Scene(
     name="strip-footing",
     description=__doc__.strip().splitlines()[0].split(": ", 1)[1],
     params=PARAMS,
     build=build,
     metrics_doc=METRICS,
+    renamed=(
+        Renamed(
+            "gamma",
+            "rho",
+            "with gravity, as in the other scenes: rho = gamma / gravity",
+            _rho_from_gamma,
+            Param("gamma", 0.0, "N/m^3", "unit weight", float, lo=0),
+        ),
+    ),
 )
