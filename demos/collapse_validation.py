@@ -141,7 +141,7 @@ def case_params(a: float, n: int, args) -> dict:
     t_scale = math.sqrt(H0 / G)
     params = {
         "aspect": a,
-        "length": L0,
+        "half_width": L0,
         "spacing": L0 / n,
         "dt": args.dt,
         "t_end": round(args.t_end_factor * t_scale, 6),
@@ -312,7 +312,7 @@ def row_from_summary(s: dict) -> dict:
     r = float(m["normalised_runout"])
     lube, laj = lube_law(a), lajeunesse_law(a)
     hist = s.get("history", [])
-    L0 = p["length"]
+    L0 = p.get("half_width", p.get("length"))
     late = _late_range(hist, "runout", 0.1 * s["solver"]["time"])
     extra = {}
     if hist and "front_q99" in hist[-1]:
@@ -338,15 +338,15 @@ def row_from_summary(s: dict) -> dict:
         "N": n,
         "variant": s["case"].get("variant"),
         "spacing": p["spacing"],
-        "L0": p["length"],
-        "H0": a * p["length"],
+        "L0": L0,
+        "H0": a * L0,
         "particles": int(m["n_particles"]),
         "steps": int(sol["steps"]),
         "end_time": float(sol["time"]),
         "t_end": p["t_end"],
         "at_rest": bool(m["at_rest"]),
         "normalised_runout": r,
-        "normalised_runout_tip": (m["runout_tip"] - p["length"]) / p["length"],
+        "normalised_runout_tip": (m["runout_tip"] - L0) / L0,
         "final_height_L0": float(m["final_height"]),
         "final_height_H0": float(m["height_ratio"]),
         "collapse_time": m["collapse_time"],

@@ -81,7 +81,7 @@ CASES: dict[str, dict] = {
     "axi-36": {"geometry": "axisymmetric", "spacing": R0 / 36},
     "plane-18": {
         "geometry": "plane-strain",
-        "length": R0,
+        "half_width": R0,
         "aspect": H0 / R0,
         "spacing": R0 / 18,
         "dt": 2e-3,
@@ -247,8 +247,12 @@ def analyse(name: str, summ: dict, work: Path) -> dict:
     p, m, hist = summ["parameters"], summ["metrics"], summ["history"]
     solver = summ["solver"]
     geo = p["geometry"]
-    r0 = p["radius"] if geo != "plane-strain" else p["length"]
-    h0 = p["height"] if geo != "plane-strain" else p["aspect"] * p["length"]
+    r0 = p["radius"] if geo != "plane-strain" else p.get("half_width", p.get("length"))
+    h0 = (
+        p["height"]
+        if geo != "plane-strain"
+        else p["aspect"] * p.get("half_width", p.get("length"))
+    )
     key = "runout_radius" if geo != "plane-strain" else "runout"
     step_s = [sum(h["timings"].values()) for h in hist]
     t3 = at_time(hist, 3.0 * T_SCALE)

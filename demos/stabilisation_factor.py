@@ -102,7 +102,7 @@ def task(spec: tuple[str, float, float | None]) -> dict[str, Any]:
     run = _VC["run"]
     overrides: dict[str, Any] = {"stabilisation": beta}
     if aspect is not None:
-        overrides.update(aspect=aspect, length=LENGTH, spacing=LENGTH / 12)
+        overrides.update(aspect=aspect, half_width=LENGTH, spacing=LENGTH / 12)
     out = run(overrides)
     return {"kind": kind, "beta": beta, "aspect": aspect, **out}
 

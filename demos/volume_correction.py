@@ -49,7 +49,7 @@ def run(overrides: dict[str, Any]) -> dict[str, Any]:
     from skfem_npfem.scenes import get_scene
 
     scene = get_scene("column-collapse")
-    h0 = overrides.get("aspect", 2.0) * overrides.get("length", LENGTH)
+    h0 = overrides.get("aspect", 2.0) * overrides.get("half_width", LENGTH)
     t_end = T_END_FACTOR * math.sqrt(h0 / 9.81)
     # kappa = 0 unless the overrides say otherwise (0.1 became the scene's
     # default after this study).
@@ -159,7 +159,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     sweep = [
         {
             "aspect": a,
-            "length": LENGTH,
+            "half_width": LENGTH,
             "spacing": LENGTH / 12,
             "volume_correction": k,
         }

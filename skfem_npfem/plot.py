@@ -437,7 +437,7 @@ def plot_results(
     times : sequence of float or None, default None
         Snapshot times; each picks the nearest stored step (steps picked twice
         are drawn once). With ``normalised``, times are ``t / sqrt(H0 / g)`` with
-        ``H0 = aspect * length`` and ``g = gravity`` (9.81 m/s² if absent) from
+        ``H0 = aspect * half_width`` and ``g = gravity`` (9.81 m/s² if absent) from
         ``scene.json``; if the folder has no such parameters the times are
         absolute seconds and a ``UserWarning`` says so. For the strip footing
         the times are settlements in m (its pseudo-time), whatever
@@ -527,7 +527,7 @@ def plot_results(
     unit = _time_unit(sc, normalised)
     if normalised and sc.tau is None and sc.footing is None and req:
         warnings.warn(
-            f"{folder}: scene.json has no 'aspect' and 'length' parameters, so "
+            f"{folder}: scene.json has no 'aspect' and 'half_width' parameters, so "
             "times are taken as absolute seconds instead of t/sqrt(H0/g)",
             UserWarning,
             stacklevel=2,

@@ -105,7 +105,8 @@ def _num(params: dict, name: str, default: float | None = None) -> float | None:
 def _collapse(s: Scenery, p: dict) -> None:
     from .scenes.column_collapse import lube_runout
 
-    a, L0 = _num(p, "aspect"), _num(p, "length")
+    # (results of an older version name the half-width "length")
+    a, L0 = _num(p, "aspect"), _num(p, "half_width") or _num(p, "length")
     if p.get("geometry") == "axisymmetric":
         _axisymmetric_collapse(s, p)
         return
@@ -204,6 +205,11 @@ def _load_curve(folder: Path) -> np.ndarray | None:
     return np.array(rows, dtype=float).reshape(-1, 2) if rows else None
 
 
+def _half_width(params: dict) -> float | None:
+    """The collapse's L0: ``half_width`` (``length`` in older results)."""
+    return _num(params, "half_width") or _num(params, "length")
+
+
 def scenery(folder: str | Path) -> Scenery:
     """The scenery of the result in ``folder`` (from its ``scene.json``)."""
     folder = Path(folder)
@@ -220,9 +226,9 @@ def scenery(folder: str | Path) -> Scenery:
         _column(s, params)
     elif name == "strip-footing":
         _footing(s, params, folder)
-    elif _num(params, "aspect") and _num(params, "length"):
+    elif _num(params, "aspect") and _half_width(params):
         # an unknown scene with the collapse's scales: normalised time only
-        H0 = _num(params, "aspect") * _num(params, "length")
+        H0 = _num(params, "aspect") * _half_width(params)
         tau = math.sqrt(H0 / (_num(params, "gravity", _GRAVITY) or _GRAVITY))
         s.tau = tau
         s.label = lambda t: f"t = {t:.3g} s   (t/\u221a(H0/g) = {t / tau:.2f})"

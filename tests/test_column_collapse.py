@@ -91,7 +91,7 @@ def test_detached_grains_are_reported_beside_the_front(capsys):
         warnings.simplefilter("always")
         s = run_scene("column-collapse", dict(a.split("=") for a in args[1::2]))
     m = s["metrics"]
-    L0 = s["parameters"]["length"]
+    L0 = s["parameters"]["half_width"]
     main_body = (m["runout_main_body"] - L0) / L0
     assert m["normalised_runout_main_body"] == pytest.approx(main_body, rel=1e-12)
     # The front is ahead of the main body by more than 3 spacings (0.25 L0).
@@ -295,3 +295,34 @@ def test_mass_front_is_a_mass_quantile():
     x3 = np.vstack([x, [[50.0, 0.0]]])
     m3 = np.append(m, 5.0)
     assert abs(mass_front(x3, m3, True) - mass_front(x, m, True)) < 0.01
+
+
+def test_half_width_is_the_name_and_length_still_works(tmp_path):
+    """One vocabulary: ``width`` is a full width, ``half_width`` a half width.
+
+    The collapse's half-width L0 was ``length``; the old name still runs the
+    same column, with a deprecation message, also when resuming a checkpoint
+    written with it.
+    """
+    params = {p.name for p in SCENE.params}
+    assert "half_width" in params and "length" not in params
+    values = {"spacing": 0.04, "t_end": 0.02, "rest_fraction": 0.0}
+    with pytest.warns(FutureWarning, match="parameter length is deprecated"):
+        old = get_scene("column-collapse").resolve({**values, "length": "0.2"})
+    new = get_scene("column-collapse").resolve({**values, "half_width": 0.2})
+    assert old == new
+    with pytest.warns(FutureWarning):
+        box = get_scene("column-collapse").resolve({"geometry": "box", "length": 0.2})
+    assert box["half_width"] == 0.2
+    with pytest.warns(FutureWarning), pytest.raises(ParameterError) as info:
+        get_scene("column-collapse").resolve({"geometry": "axisymmetric", "length": 1})
+    assert info.value.name == "half_width"
+    # A checkpoint whose saved parameters say "length" resumes.
+    first = run_scene("column-collapse", {**values, "t_end": 0.01}, out=tmp_path)
+    [path] = sorted(tmp_path.glob("checkpoint_*.npz"))
+    p, meta = load_checkpoint(path)
+    saved = dict(meta["parameters"])
+    saved["length"] = saved.pop("half_width")
+    save_checkpoint(path, p, {**meta, "parameters": saved})
+    more = run_scene("column-collapse", values, out=tmp_path, resume=True)
+    assert more["solver"]["steps"] > first["solver"]["steps"]

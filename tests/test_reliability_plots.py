@@ -76,7 +76,7 @@ def collapse_dir(tmp_path_factory) -> Path:
                 "active": active,
             },
         )
-    params = {"aspect": A, "length": L0, "symmetric": True, "gravity": 9.81}
+    params = {"aspect": A, "half_width": L0, "symmetric": True, "gravity": 9.81}
     (folder / "scene.json").write_text(
         json.dumps({"scene": "column-collapse", "parameters": params})
     )

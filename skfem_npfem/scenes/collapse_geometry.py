@@ -19,7 +19,7 @@ Mohr-Coulomb in triaxial compression, spacing ``r0/18``).  Two of ``radius``,
 ``height`` and ``aspect`` fix the third; the defaults fill ``radius`` first,
 then ``aspect``.  A parameter the chosen geometry does not use, given
 explicitly, is refused (``aspect`` with both ``radius`` and ``height``,
-``symmetric`` or ``length`` with a cylindrical geometry, ...), as is a spacing
+``symmetric`` or ``half_width`` with a cylindrical geometry, ...), as is a spacing
 above ``r0/4`` or a run whose estimated memory exceeds the machine's
 (:func:`~.limits.check_size` with the particle count of :mod:`.sizing`).
 :class:`GeometryScene` is a scene whose :meth:`~GeometryScene.resolve` knows
@@ -183,7 +183,9 @@ def used_parameters(
         "accuracy",
     }  # fmt: skip
     if geometry == "box":
-        return common | {"aspect", "length", "symmetric", "depth", "max_displacement"}
+        return common | {
+            "aspect", "half_width", "symmetric", "depth", "max_displacement"
+        }  # fmt: skip
     used = common | {"radius", "height"}
     if not {"radius", "height"} <= given:
         used.add("aspect")
@@ -221,7 +223,7 @@ def finalize(
         if "dt" not in given:
             values["dt"] = SEED_DT
     else:
-        h = values["spacing"] or values["length"] / 22.0
+        h = values["spacing"] or values["half_width"] / 22.0
         values["spacing"] = h
         if values["depth"] is None:
             values["depth"] = DEPTH_SPACINGS * h
@@ -289,8 +291,8 @@ def _check_values(values: dict[str, Any]) -> None:
     check_soil(values)
     if values["geometry"] == "box":
         L0, H0, h = (
-            values["length"],
-            values["aspect"] * values["length"],
+            values["half_width"],
+            values["aspect"] * values["half_width"],
             values["spacing"],
         )
         if h > L0 / 2 or h > H0 / 2:

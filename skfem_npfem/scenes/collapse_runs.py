@@ -105,7 +105,7 @@ def _column_setup(values: dict[str, Any]) -> ColumnSetup:
         return cylinder_column(
             geo, values["spacing"], material=values["material"], **kw, **soil
         )
-    L0 = values["length"]
+    L0 = values["half_width"]
     return box_column(
         soil,
         length=L0,
@@ -162,8 +162,8 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
     """The summary metrics of a finished run (GEOMETRY_METRICS and the shared)."""
     geo = values["geometry"]
     cyl = geo in CYLINDRICAL
-    L0 = values["radius"] if cyl else values["length"]
-    H0 = values["height"] if cyl else values["aspect"] * values["length"]
+    L0 = values["radius"] if cyl else values["half_width"]
+    H0 = values["height"] if cyl else values["aspect"] * values["half_width"]
     key = "runout_radius" if cyl else "runout"
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
@@ -224,7 +224,7 @@ def build_geometry(
     H0 = (
         values["height"]
         if values["geometry"] in CYLINDRICAL
-        else (values["aspect"] * values["length"])
+        else (values["aspect"] * values["half_width"])
     )
     run_kwargs, stop = run_control(values, H0)
     # The method option (npfem only here) adds the stress roughness per step
@@ -236,7 +236,7 @@ def build_geometry(
 #: their help).
 GEOMETRY_NOTES = {
     "aspect": "cylindrical: h0/r0, unless radius and height are both given",
-    "length": "plane-strain and box only",
+    "half_width": "plane-strain and box only",
     "symmetric": "plane-strain and box only",
     "spacing": "cylindrical: default r0/18; box: L0/22",
     "material": "3D: drucker-prager only; cylindrical and box default drucker-prager",
@@ -274,6 +274,7 @@ def with_geometries(plane: Scene) -> GeometryScene:
         build=build,
         metrics_doc=metrics_doc(plane.metrics_doc),
         plane_names=names,
+        renamed=plane.renamed,
     )
 
 

@@ -55,7 +55,7 @@ from ..pfem import AlphaShapeMesher, main_body
 from ..simulation import AtRest, Simulation
 from ..smoothing import nodal_integration
 from ..step import StepResult
-from .base import Param, Scene, SceneRun
+from .base import Param, Renamed, Scene, SceneRun
 from .common import (
     check_size,
     check_soil,
@@ -98,7 +98,7 @@ DETACHED_WARNING = 0.01
 PARAMS = [
     Param("aspect", 2.0, "-", "aspect ratio a = H0/L0", float, lo=0, lo_open=True),
     Param(
-        "length",
+        "half_width",
         0.2,
         "m",
         "column half-width L0 (the width of the half column)",
@@ -416,7 +416,7 @@ def collapse_time(times: np.ndarray, runout: np.ndarray, tol: float) -> float:
 
 def _check(values: dict[str, Any]) -> float:
     """Refuse inconsistent values; return the particle spacing h."""
-    L0, H0 = values["length"], values["aspect"] * values["length"]
+    L0, H0 = values["half_width"], values["aspect"] * values["half_width"]
     h = values["spacing"] if values["spacing"] is not None else L0 / 22.0
     if h > L0 / 2 or h > H0 / 2:
         if values["spacing"] is None:  # the user set aspect, not the spacing
@@ -466,7 +466,7 @@ def _check(values: dict[str, Any]) -> float:
 
 def _volume_correction(values: dict[str, Any]) -> float:
     """The default kappa: COLLAPSE_VOLUME_CORRECTION where its premise holds."""
-    h0 = values["aspect"] * values["length"]
+    h0 = values["aspect"] * values["half_width"]
     strain = values["rho"] * values["gravity"] * h0 / values["E"]
     if values["psi"] == 0.0 and strain <= VOLUME_CORRECTION_STRAIN:
         return COLLAPSE_VOLUME_CORRECTION
@@ -525,7 +525,7 @@ def _front_recorder(h: float, symmetric: bool):
 
 def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
     """The summary metrics of a finished run (see METRICS)."""
-    L0, a = values["length"], values["aspect"]
+    L0, a = values["half_width"], values["aspect"]
     H0 = a * L0
     t_scale = math.sqrt(H0 / values["gravity"])
 
@@ -575,7 +575,7 @@ def build(
 ) -> SceneRun:
     """Build the column-collapse simulation."""
     h = _check(values)
-    L0, H0 = values["length"], values["aspect"] * values["length"]
+    L0, H0 = values["half_width"], values["aspect"] * values["half_width"]
     symmetric = values["symmetric"]
     model = _model(values)
     mesher = AlphaShapeMesher(h, values["alpha"], walls=model.walls)
@@ -635,10 +635,15 @@ def run_control(
     return run_kwargs, stop
 
 
+#: Parameters renamed for one vocabulary across the scenes (``width`` is a
+#: full width, ``half_width`` a half width); the old names still work.
+RENAMED = (Renamed("length", "half_width", "the same value: L0"),)
+
 SCENE = Scene(
     name="column-collapse",
     description=__doc__.strip().splitlines()[0].split(": ", 1)[1],
     params=PARAMS,
     build=build,
     metrics_doc=METRICS,
+    renamed=RENAMED,
 )

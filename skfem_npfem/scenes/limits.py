@@ -77,7 +77,6 @@ MAGNITUDES: dict[str, tuple[float, float]] = {
     "dt": (1e-9, 1e4),
     "t_end": (1e-9, 1e6),
     "min_time": (1e-9, 1e6),
-    "length": (1e-4, 1e4),
     "height": (1e-4, 1e4),
     "width": (1e-4, 1e4),
     "half_width": (1e-4, 1e4),
@@ -90,7 +89,7 @@ MAGNITUDES: dict[str, tuple[float, float]] = {
 
 #: Range of every length parameter that has no range of its own in
 #: :data:`MAGNITUDES` (``spacing``, ``radius``, ``depth``), m: the same as
-#: ``length``, ``height`` and the widths there (docs/output.md).
+#: ``height`` and the widths there (docs/output.md).
 LENGTH: dict[str, float] = {"lo": 1e-4, "hi": 1e4}
 
 
