@@ -13,7 +13,7 @@ Writes (under ``--out``, default ``docs/validation``):
   run-out (L_inf - L0)/L0, H_inf/L0, H_inf/H0, collapse time (s and in units of
   sqrt(H0/g)), volume change, wall time, median time per step and the solver
   statuses; the experimental laws; the fitted small-a slope and large-a
-  exponent against the gates of benchmarks.md G1;
+  exponent against the gates below;
 * ``cases/a<a>_N<N>[_<variant>].json``: the full scene summary of each case
   (per-step history, final particle cloud, library commit and source hash);
 * ``runout_vs_aspect.png``: run-out and final height against a (log-log);
@@ -67,7 +67,7 @@ SCENE = "column-collapse"
 G = 9.81
 
 # ---------------------------------------------------------------------------
-# Experimental laws (benchmarks.md G1)
+# Experimental laws and the gates of the run-out
 # ---------------------------------------------------------------------------
 
 #: Lube et al. (2005), 2D channel: 1.2 a for a <= 1.8, 1.9 a^(2/3) for a >= 2.8.
@@ -75,7 +75,7 @@ LUBE = {"slope": 1.2, "small_max": 1.8, "prefactor": 1.9, "large_min": 2.8}
 #: Lajeunesse et al. (2005), as tabulated by Lagrée et al. (2011): 1.8 a and
 #: 2.3 a^(2/3), crossover a0 ~ 3.
 LAJEUNESSE = {"slope": 1.8, "prefactor": 2.3, "a0": 3.0}
-#: Gates (benchmarks.md G1).
+#: Gates of the fitted small-a slope and large-a exponent.
 GATE_SLOPE = (0.75 * 1.2, 1.25 * 1.8)  # within +-25 % of 1.2-1.8
 GATE_EXPONENT = (0.55, 0.85)
 GATE_VOLUME = 0.01
@@ -925,7 +925,7 @@ def main(argv=None) -> int:
     todo.sort(key=lambda c: -(c[1] + 1) * (round(c[0] * c[1]) + 1) * math.sqrt(c[0]))
 
     t0 = time.perf_counter()
-    if todo:  # on Dask (issue 14): a local cluster of --jobs workers or --scheduler
+    if todo:  # on Dask: a local cluster of --jobs workers or --scheduler
         from skfem_npfem.sweeps import run_tasks
 
         outcomes = run_tasks(
@@ -981,7 +981,7 @@ def main(argv=None) -> int:
         }
     )
     result = {
-        "benchmark": "G1, 2D column collapse (benchmarks.md section 4)",
+        "benchmark": "2D column collapse against the experimental laws",
         "scene": SCENE,
         "setup": {
             "phi_deg": 30.0,

@@ -1,6 +1,6 @@
 """The reference paper's seed column in 3D, in axisymmetry and in plane strain.
 
-The seed case (issue 12): a cylindrical column r0 = 3.9 cm, h0 = 7.8 cm
+The seed case: a cylindrical column r0 = 3.9 cm, h0 = 7.8 cm
 (a = 2), rho = 1800 kg/m^3, E = 10 MPa, nu = 0.3, phi = 30 deg, psi = 0, c = 0,
 floor friction phi, dt = 2 ms, theta1 = theta2 = 1, released at t = 0 and run
 to t_bar = t / sqrt(h0/g) = 3 and on to rest (the scene's at-rest rule).  The
@@ -86,7 +86,7 @@ CASES: dict[str, dict] = {
         "spacing": R0 / 18,
         "dt": 2e-3,
     },
-    # The speed levers of issue 12 (solver preset accuracy=fast, tolerances
+    # The speed levers (solver preset accuracy=fast, tolerances
     # 1e-6 instead of 1e-8, and a 4 ms time step instead of the paper's 2 ms),
     # and their price at r0/12 in 3D and in axisymmetry.
     "3d-18-fast-dt4": {"geometry": "quarter-cylinder", "spacing": R0 / 18,
@@ -100,7 +100,7 @@ CASES: dict[str, dict] = {
                         "accuracy": "fast", "dt": 4e-3},
     "axi-18-fast-dt4": {"geometry": "axisymmetric", "spacing": R0 / 18,
                         "accuracy": "fast", "dt": 4e-3},
-    # Axisymmetric with the stress stabilisation of issue 10 (beta = 30, the
+    # Axisymmetric with the stress stabilisation (beta = 30, the
     # plane-strain default; the cylindrical geometries default to 0).
     "axi-12-stab": {"geometry": "axisymmetric", "spacing": R0 / 12,
                     "stabilisation": 30.0},
@@ -112,7 +112,7 @@ CASES: dict[str, dict] = {
     "3d-12-stab-fast-dt4": {"geometry": "quarter-cylinder", "spacing": R0 / 12,
                             "stabilisation": 30.0, "accuracy": "fast",
                             "dt": 4e-3},
-    # With the opt-in volume correction of issue 10 (kappa = 0.1), without and
+    # With the opt-in volume correction (kappa = 0.1), without and
     # with the stabilisation, at the speed levers.
     "3d-12-fast-dt4-vc": {"geometry": "quarter-cylinder", "spacing": R0 / 12,
                           "accuracy": "fast", "dt": 4e-3,

@@ -197,7 +197,7 @@ def test_axisymmetric_seed_collapse_smoke():
     sim.run(steps=6)
     recs = sim.records
     # Solved or AlmostSolved (the library's accepted statuses): with node masses
-    # from the cells (issue 10) step 4 ends AlmostSolved after 17 iterations.
+    # from the cells step 4 ends AlmostSolved after 17 iterations.
     assert all(r.status in ("Solved", "AlmostSolved") for r in recs)
     assert all(r.retries == 0 for r in recs)
     assert all(r.mass == m0 for r in recs)  # exactly

@@ -1,4 +1,4 @@
-"""Bad input through the public API and the CLI (issue 4), property-based.
+"""Bad input through the public API and the CLI, property-based.
 
 Every invalid input must raise a library error (:class:`ParameterError`, a
 ``ValueError``, or another documented subclass of :class:`NpfemError`) whose

@@ -1,4 +1,4 @@
-"""Extremes matrix, column-collapse part (issue 4).
+"""Extremes matrix, column-collapse part.
 
 Short, coarse collapses (6 particles across L0 = 0.2 m, a = 2, 72 particles)
 pushed to the edges. Every case must solve every step (Solved/AlmostSolved),

@@ -1,4 +1,4 @@
-"""Issue 13, defects 1-10: each with the reproducer of the issue (scaled down).
+"""Run safety and input checks, each with the reproducer of its defect (scaled down).
 
 The column-collapse reproducers use a coarse collapse (6 particles across L0,
 72 particles, qdldl, about 0.03 s per step) instead of ``spacing=0.02``: the
@@ -64,8 +64,7 @@ def one_error_line(code: int, err: str, *needles: str) -> str:
     return lines[0]
 
 
-# ------------------------------------------------------------------ defect 1 --
-def test_1_fresh_run_into_a_reused_folder_drops_the_old_checkpoints(tmp_path):
+def test_fresh_run_into_a_reused_folder_drops_the_old_checkpoints(tmp_path):
     # Reproducer: run to 0.3, run to 0.1 into the same folder, resume to 0.2:
     # the summary said t = 0.3 (the older run's checkpoint) while the index
     # ended at 0.1.  Scaled: 0.06 / 0.02 / 0.04 s, a checkpoint every 2 steps.
@@ -95,7 +94,6 @@ def test_1_fresh_run_into_a_reused_folder_drops_the_old_checkpoints(tmp_path):
     assert times == pytest.approx([0.0, 0.02, 0.025, 0.04], rel=1e-9)
 
 
-# ------------------------------------------------------------------ defect 2 --
 @pytest.mark.parametrize(
     ("scene", "item", "name", "gb"),
     [
@@ -106,7 +104,7 @@ def test_1_fresh_run_into_a_reused_folder_drops_the_old_checkpoints(tmp_path):
         ("column-collapse", "aspect=100", "aspect", 1),  # 51k particles
     ],
 )
-def test_2_size_is_checked_before_anything_is_built(monkeypatch, scene, item, name, gb):
+def test_size_is_checked_before_anything_is_built(monkeypatch, scene, item, name, gb):
     # A 16 GB machine (the issue's reproducers asked for 25-170 GB or died
     # with a MemoryError after a minute); 1 GB for the tall column.
     monkeypatch.setattr(limits, "machine_memory_mb", lambda: gb * 1024.0)
@@ -121,7 +119,7 @@ def test_2_size_is_checked_before_anything_is_built(monkeypatch, scene, item, na
     assert peak < 20e6  # refused before building: nothing big was allocated
 
 
-def test_2_estimate_covers_every_measured_run():
+def test_estimate_covers_every_measured_run():
     # Independent reference: peak memory measured by benchmarks/memory.py (one
     # step in a fresh process, qdldl/faer/MKL, 2D and 3D, 276 to 34k
     # particles).  The estimate is above every measurement, by less than 6x (the 3D
@@ -137,7 +135,7 @@ def test_2_estimate_covers_every_measured_run():
         assert 1.0 < ratio < 6.0, (r["case"], ratio)
 
 
-def test_2_size_check_false_overrides_the_refusal(monkeypatch):
+def test_size_check_false_overrides_the_refusal(monkeypatch):
     monkeypatch.setattr(limits, "machine_memory_mb", lambda: 100.0)  # 100 MB
     with pytest.raises(ParameterError, match="this machine has 100 MB"):
         run_scene("elastic-column", {"spacing": 0.5})
@@ -148,7 +146,7 @@ def test_2_size_check_false_overrides_the_refusal(monkeypatch):
     )
 
 
-def test_2_helper_for_other_geometries(monkeypatch):
+def test_helper_for_other_geometries(monkeypatch):
     # scenes.limits.check_size takes a count and a dimension (3D, axisymmetric).
     monkeypatch.setattr(limits, "machine_memory_mb", lambda: 8 * 1024.0)
     limits.check_size(15_000, 3, {})  # 4.3 GB estimated: fits
@@ -157,7 +155,6 @@ def test_2_helper_for_other_geometries(monkeypatch):
     limits.check_size(60_000, 3, {"size_check": False})
 
 
-# ------------------------------------------------------------------ defect 3 --
 @pytest.fixture(scope="module")
 def small_run(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("small") / "e"
@@ -166,7 +163,7 @@ def small_run(tmp_path_factory) -> Path:
     return out
 
 
-def test_3_truncated_vtu_raises_the_package_error(small_run, tmp_path):
+def test_truncated_vtu_raises_the_package_error(small_run, tmp_path):
     d = tmp_path / "e"
     shutil.copytree(small_run, d)
     bad = d / "result_000002.vtu"
@@ -181,8 +178,7 @@ def test_3_truncated_vtu_raises_the_package_error(small_run, tmp_path):
         npio.step_time(bad)
 
 
-# ------------------------------------------------------------------ defect 4 --
-def test_4_lost_index_and_checkpoints_then_resume_keeps_every_step(tmp_path):
+def test_lost_index_and_checkpoints_then_resume_keeps_every_step(tmp_path):
     # Reproducer: delete result.pvd and the last two checkpoints, resume: the
     # new index listed 4 of 13 steps.  Here 12 steps + the initial state.
     base = ["run", "column-collapse"]
@@ -208,7 +204,7 @@ def test_4_lost_index_and_checkpoints_then_resume_keeps_every_step(tmp_path):
     assert len(series["files"]) == 13
 
 
-def test_4_corrupt_index_is_rebuilt_and_an_unreadable_step_left_out(tmp_path):
+def test_corrupt_index_is_rebuilt_and_an_unreadable_step_left_out(tmp_path):
     w = npio.ResultWriter(tmp_path)
     pts = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
     for k in range(4):
@@ -223,7 +219,6 @@ def test_4_corrupt_index_is_rebuilt_and_an_unreadable_step_left_out(tmp_path):
     assert [(s, t) for s, t, _ in again.entries] == [(0, 0.0), (2, 0.5), (3, 0.75)]
 
 
-# ------------------------------------------------------------------ defect 5 --
 @pytest.mark.parametrize(
     ("argv", "name", "says"),
     [
@@ -238,7 +233,7 @@ def test_4_corrupt_index_is_rebuilt_and_an_unreadable_step_left_out(tmp_path):
         (["elastic-column", "steps=10000000"], "steps", "~1e+07 steps"),
     ],
 )
-def test_5_tiny_values_are_refused_in_one_line(argv, name, says):
+def test_tiny_values_are_refused_in_one_line(argv, name, says):
     scene, *items = argv
     code, _, err = cli(["run", scene, *sets(*items), "--quiet"])
     one_error_line(code, err, f"invalid {name}=", says)
@@ -263,7 +258,7 @@ def _soft_column(E: float, rotation: bool = True):
     return new, x, err
 
 
-def test_5_why_a_soft_column_was_wrong_and_why_it_is_refused():
+def test_why_a_soft_column_was_wrong_and_why_it_is_refused():
     # Two mechanisms, both from an elastic strain rho g H / M >> 1 in one step:
     # (a) E ~ 1..1e3 Pa: the stress is rotated by the round-off spin of the
     #     huge increment (6.3 % at E = 200 Pa; 0.34 % without the rotation,
@@ -286,7 +281,7 @@ def test_5_why_a_soft_column_was_wrong_and_why_it_is_refused():
         run_scene("elastic-column", {"E": 200.0})
 
 
-def test_5_step_count_refusal_is_overridden_by_size_check_false():
+def test_step_count_refusal_is_overridden_by_size_check_false():
     with pytest.raises(ParameterError, match="steps"):
         run_scene("elastic-column", {"steps": 2_000_000})
     scene = npfem.get_scene("column-collapse")
@@ -294,12 +289,10 @@ def test_5_step_count_refusal_is_overridden_by_size_check_false():
     assert values["size_check"] is False  # accepted: the run may go ahead
 
 
-# ------------------------------------------------------------------ defect 6 --
 # (subprocess tests with real signals: tests/test_reliability_signals.py)
 
 
-# ------------------------------------------------------------------ defect 7 --
-def test_7_resume_with_a_smaller_end_is_refused(tmp_path):
+def test_resume_with_a_smaller_end_is_refused(tmp_path):
     d = tmp_path / "d"
     base = ["run", "column-collapse", *sets(*COARSE, "checkpoint_every=2")]
     assert cli([*base, *sets("t_end=0.03"), "--out", str(d), "--quiet"])[0] == 0
@@ -314,7 +307,6 @@ def test_7_resume_with_a_smaller_end_is_refused(tmp_path):
     one_error_line(code, err, "invalid steps=2", "at least 3")
 
 
-# ------------------------------------------------------------------ defect 8 --
 @pytest.mark.parametrize(
     ("argv", "name", "says"),
     [
@@ -325,13 +317,13 @@ def test_7_resume_with_a_smaller_end_is_refused(tmp_path):
         (["strip-footing", "c=0"], "c", "mohr-coulomb or drucker-prager"),
     ],
 )
-def test_8_validation_names_the_parameter_the_user_set(argv, name, says):
+def test_validation_names_the_parameter_the_user_set(argv, name, says):
     scene, *items = argv
     code, _, err = cli(["run", scene, *sets(*items), "--quiet"])
     one_error_line(code, err, f"invalid {name}=", says)
 
 
-def test_8_repeated_set_and_empty_out_are_refused(tmp_path, monkeypatch):
+def test_repeated_set_and_empty_out_are_refused(tmp_path, monkeypatch):
     code, _, err = cli(["run", "elastic-column", *sets("E=1e7", "E=2e7")])
     one_error_line(code, err, "invalid --set='E=2e7'", "E is also set to '1e7'")
     monkeypatch.chdir(tmp_path)
@@ -340,7 +332,7 @@ def test_8_repeated_set_and_empty_out_are_refused(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []  # nothing written to the current folder
 
 
-def test_8_static_failure_advice_has_no_time_step(monkeypatch):
+def test_static_failure_advice_has_no_time_step(monkeypatch):
     for status in ("NumericalError", "InsufficientProgress", "MaxIterations"):
         assert "reduce dt" not in hint(status, dynamic=False)
         assert "smaller load steps" in hint(status, dynamic=False)
@@ -365,7 +357,7 @@ def test_8_static_failure_advice_has_no_time_step(monkeypatch):
     assert "(load step)" in line
 
 
-def test_8_collapse_time_is_null_before_rest(tmp_path):
+def test_collapse_time_is_null_before_rest(tmp_path):
     s = tmp_path / "s.json"
     argv = ["run", "column-collapse", *sets(*COARSE, "t_end=0.05")]
     code, out, _ = cli([*argv, "--summary", str(s)])
@@ -376,7 +368,7 @@ def test_8_collapse_time_is_null_before_rest(tmp_path):
     assert "collapse_time = null" in out
 
 
-def test_8_theta2_note_is_one_warning_line():
+def test_theta2_note_is_one_warning_line():
     argv = ["run", "column-collapse", *sets(*COARSE, "t_end=0.01", "theta2=0.9")]
     code, _, err = cli([*argv, "--quiet"])
     assert code == 0
@@ -386,7 +378,7 @@ def test_8_theta2_note_is_one_warning_line():
     ]
 
 
-def test_8_tresca_cohesion_range_is_stated_and_c_zero_runs_with_friction():
+def test_tresca_cohesion_range_is_stated_and_c_zero_runs_with_friction():
     param = {p.name: p for p in npfem.get_scene("strip-footing").params}["c"]
     assert "tresca: > 0" in param.help
     m = run_scene(
@@ -404,8 +396,7 @@ def test_8_tresca_cohesion_range_is_stated_and_c_zero_runs_with_friction():
     assert m["q_ult"] > 0 and np.isfinite(m["bearing_factor"])
 
 
-# ------------------------------------------------------------------ defect 9 --
-def test_9_numpy_scalars_are_accepted():
+def test_numpy_scalars_are_accepted():
     a = run_scene("elastic-column", {"dim": np.int64(2), "nu": np.float32(0.25)})
     b = run_scene("elastic-column", {"dim": 2, "nu": float(np.float32(0.25))})
     assert a["parameters"]["dim"] == 2 and isinstance(a["parameters"]["dim"], int)
@@ -414,7 +405,7 @@ def test_9_numpy_scalars_are_accepted():
     assert c["parameters"]["E"] == 2e7
 
 
-def test_9_wrong_types_give_parameter_errors():
+def test_wrong_types_give_parameter_errors():
     with pytest.raises(ParameterError, match=r"invalid materials\[0\]='sand'"):
         Model(dim=2, materials=["sand"])
     with pytest.raises(ParameterError, match="invalid materials='sand'"):
@@ -425,7 +416,7 @@ def test_9_wrong_types_give_parameter_errors():
         run_scene("elastic-column", {"dim": np.bool_(True)})
 
 
-def test_9_zero_area_element_shared_by_others_is_refused_at_the_source():
+def test_zero_area_element_shared_by_others_is_refused_at_the_source():
     p = np.array([[0, 0], [1, 0], [0, 1], [1, 1], [0.5, 0.5]], float).T
     t = np.array([[0, 1, 4], [1, 3, 4], [3, 2, 4], [2, 0, 4], [0, 3, 4]]).T
     with pytest.raises(ParameterError, match=r"first 4 with nodes \[0, 3, 4\]"):
@@ -434,7 +425,7 @@ def test_9_zero_area_element_shared_by_others_is_refused_at_the_source():
     assert ni.volumes.sum() == pytest.approx(1.0, rel=1e-14)
 
 
-def test_9_tangled_fixed_mesh_is_refused_before_solving(monkeypatch):
+def test_tangled_fixed_mesh_is_refused_before_solving(monkeypatch):
     mesh = MeshTri.init_tensor(np.linspace(0, 1, 5), np.linspace(0, 1, 5))
     x = mesh.p.T.copy()
     x[12] += [0.45, 0.45]  # the centre node pulled across its neighbours
@@ -456,8 +447,7 @@ def test_9_tangled_fixed_mesh_is_refused_before_solving(monkeypatch):
     assert active.size == 25
 
 
-# ----------------------------------------------------------------- defect 10 --
-def test_10_extremes_page_lists_no_stale_gaps():
+def test_extremes_page_lists_no_stale_gaps():
     # The former gaps give one-line errors now (tests/test_bad_input.py):
     # the page and its generator say so, with the same words.
     root = Path(__file__).parents[1]

@@ -304,7 +304,7 @@ def cli(argv: list[str]) -> tuple[int, str, str]:
     return code, out.getvalue(), err.getvalue()
 
 
-def test_3_plot_skips_a_corrupt_vtu_and_refuses_an_all_corrupt_folder(
+def test_plot_skips_a_corrupt_vtu_and_refuses_an_all_corrupt_folder(
     collapse_dir, tmp_path
 ):
     # Reproducer: truncate a result_*.vtu and run plot (meshio called

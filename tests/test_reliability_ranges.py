@@ -1,4 +1,4 @@
-"""Issue 13, defect 5: every allowed range is a range the scenes can run.
+"""Every allowed range is a range the scenes can run.
 
 For every parameter with a magnitude window (``scenes/limits.py``), both ends
 are run in every scene that has the parameter (coarse, one to three steps, the

@@ -1,7 +1,7 @@
 """Scenes against analytic and published references.
 
-E1 (elastic column under self-weight), E2 (sudden gravity, 1-D wave) and P1
-(Prandtl strip footing, q/c = 2 + π) of benchmarks.md.  Reference values are
+The elastic column under self-weight, sudden gravity (a 1-D wave) and the
+Prandtl strip footing (q/c = 2 + π).  Reference values are
 computed here from the closed forms, not read from the scene's own metrics; the
 scene metrics are checked against them as well.
 """

@@ -1,4 +1,4 @@
-"""Parameter sweeps on Dask (issue 14): tables, resume, failures, a real scheduler.
+"""Parameter sweeps on Dask: tables, resume, failures, a real scheduler.
 
 The reference of every sweep result is the same case run by hand through
 :func:`skfem_npfem.run_scene` (and, for the static column, the analytic
