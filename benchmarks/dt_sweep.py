@@ -54,7 +54,7 @@ def overrides(config: str, args) -> dict:
     key, _, val = config.partition("=")
     ov = {
         "aspect": ASPECT,
-        "length": L0,
+        "half_width": L0,
         "spacing": L0 / args.spacing_div,
         "t_end": args.t_end,
         "output_every": 10**6,
@@ -92,7 +92,7 @@ def child(config: str, ov: dict) -> dict:
     summ = sim.summary()
     p = sim.particles
     rho, g = values["rho"], values["gravity"]
-    H0 = values["aspect"] * values["length"]
+    H0 = values["aspect"] * values["half_width"]
     h = values["spacing"]
     scale = rho * g * H0
     act = np.zeros(p.n, bool)

@@ -41,7 +41,7 @@ from .errors import (
     RunInterrupted,
     SolverError,
 )
-from .io import read_pvd, read_step
+from .io import ResultWriter, read_pvd, read_step
 from .materials import (
     DruckerPrager,
     LinearElastic,
@@ -71,6 +71,8 @@ from .sweeps import sweep
 
 #: Run a scene.
 __all__ = ["SCENES", "AtRest", "Simulation", "__version__", "get_scene", "run_scene"]
+#: Output: the VTU series of a run (``Simulation(..., writer=ResultWriter(dir))``).
+__all__ += ["ResultWriter"]
 #: Build particles and meshes.
 __all__ += [
     "AlphaShapeMesher",

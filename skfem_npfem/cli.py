@@ -144,6 +144,17 @@ def scenes_markdown() -> str:
                 f"| `{p.name}` | {_format_default(p)} | {p.unit} | "
                 f"{p.help} | {p.allowed()} |"
             )
+        if s.renamed:
+            lines += [
+                "",
+                "Renamed parameters (the old names still work, with a deprecation "
+                "message): "
+                + "; ".join(
+                    f"`{r.old}` is `{r.new}`" + (f" ({r.how})" if r.how else "")
+                    for r in s.renamed
+                )
+                + ".",
+            ]
         lines += ["", "| metric | meaning |", "|---|---|"]
         lines += [f"| `{k}` | {v} |" for k, v in s.metrics_doc.items()]
         lines.append("")
@@ -296,7 +307,8 @@ def build_parser() -> argparse.ArgumentParser:
         type=float,
         nargs="*",
         default=None,
-        help="times to render (normalised by sqrt(H0/g) unless --absolute)",
+        help="times to render (normalised by sqrt(H0/g) unless --absolute; "
+        "strip-footing: settlements in m)",
     )
     p_plot.add_argument(
         "--absolute", action="store_true", help="--times are in seconds"

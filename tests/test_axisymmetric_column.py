@@ -197,7 +197,7 @@ def test_axisymmetric_seed_collapse_smoke():
     sim.run(steps=6)
     recs = sim.records
     # Solved or AlmostSolved (the library's accepted statuses): with node masses
-    # from the cells (issue 10) step 4 ends AlmostSolved after 17 iterations.
+    # from the cells step 4 ends AlmostSolved after 17 iterations.
     assert all(r.status in ("Solved", "AlmostSolved") for r in recs)
     assert all(r.retries == 0 for r in recs)
     assert all(r.mass == m0 for r in recs)  # exactly
@@ -240,3 +240,32 @@ def test_symmetry_planes_benchmark_counts_the_plane_rows(tmp_path):
     assert walls["contacts"] - fix["contacts"] == 2 * 45
     assert fix["status"] == walls["status"] == "Solved"
     assert out.exists() and res["ratio_fixity_over_walls"] > 0
+
+
+def test_axisymmetric_output_is_the_full_ring_in_r_z_and_says_so(tmp_path):
+    """docs/output.md called 2D masses 'per metre of depth' for every 2D result.
+
+    An axisymmetric VTU holds (r, z) points and full-ring masses: their sum is
+    the column's mass rho pi r0^2 h0 (a lattice column fills its rectangle
+    section exactly), and the field data names the coordinate system.
+    """
+    from skfem_npfem import run_scene
+    from skfem_npfem.io import read_pvd, read_step
+
+    s = run_scene(
+        "column-collapse",
+        {"geometry": "axisymmetric", "spacing": 0.039 / 6, "t_end": 0.002},
+        out=tmp_path,
+    )
+    p = s["parameters"]
+    step = read_step(read_pvd(tmp_path / "result.pvd")[0][1])
+    ring = p["rho"] * math.pi * p["radius"] ** 2 * p["height"]
+    assert step.point_data["mass"].sum() == pytest.approx(ring, rel=1e-12)
+    assert step.field_data["Axisymmetric"][0] == 1.0
+    assert step.points[:, 0].min() == 0.0  # r >= 0: the axis is x = 0
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "output.md").read_text()
+    mass_row = next(r for r in doc.splitlines() if r.startswith("| `mass`"))
+    assert "full ring" in mass_row and "per metre of depth in plane strain" in mass_row
+    stress_row = next(r for r in doc.splitlines() if r.startswith("| `stress`"))
+    assert "hoop stress" in stress_row
+    assert "`Axisymmetric = 1`" in doc

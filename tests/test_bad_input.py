@@ -1,4 +1,4 @@
-"""Bad input through the public API and the CLI (issue 4), property-based.
+"""Bad input through the public API and the CLI, property-based.
 
 Every invalid input must raise a library error (:class:`ParameterError`, a
 ``ValueError``, or another documented subclass of :class:`NpfemError`) whose
@@ -451,7 +451,7 @@ def test_cli_physical_limits_elastic_column(sets, name):
         (["material=mohr-coulomb", "phi=20", "psi=30"], "psi"),
         (["material=tresca", "c=0"], "c"),
         (["material=mohr-coulomb", "c=0", "phi=0"], "c"),
-        (["material=mohr-coulomb", "c=0", "phi=30", "gamma=0"], "gamma"),
+        (["material=mohr-coulomb", "c=0", "phi=30", "rho=0"], "rho"),
         (["spacing=0.9"], "spacing"),
     ],
 )

@@ -1,10 +1,10 @@
 """``--set method=`` on the scenes: the baselines through the CLI and Python.
 
-References: the elastic column (benchmarks.md E1: ``s_v = -rho g (H - z)``,
+References: the elastic column (``s_v = -rho g (H - z)``,
 top settlement ``rho g H^2 / (2 M)``; P2 elements hold the exact solution,
 so FEM-remap P2 reproduces it to round-off; SPFEM with ``alpha = 2 omega_1``
-settles to it within 1 % / 0.5 %), the Prandtl footing (benchmarks.md P1:
-``2 + pi``; FEM P2 at 8 elements across ``b`` measured +3.1 %, phase 1), mass
+settles to it within 1 % / 0.5 %), the Prandtl footing (``2 + pi``;
+FEM P2 at 8 elements across ``b`` measured +3.1 %), mass
 conservation and the same outputs for every method in the column collapse,
 bit-identical resumes (checkpoints, VTU series and step records), and one
 ``error:`` line before any step for bad input.
@@ -22,7 +22,7 @@ import pytest
 
 from skfem_npfem.cli import main
 from skfem_npfem.io import load_checkpoint, read_pvd, read_step
-from skfem_npfem.scenes import run_scene
+from skfem_npfem.scenes import get_scene, run_scene
 from skfem_npfem.scenes.methods import METHOD_METRICS
 
 RHO, G, E, NU = 2000.0, 9.81, 1.0e7, 0.3
@@ -187,6 +187,31 @@ def test_resume_reproduces_the_uninterrupted_run(tmp_path, method):
         assert resumed["metrics"][key] == full["metrics"][key]
 
 
+def test_each_scene_lists_only_the_methods_and_options_it_runs():
+    """strip-footing is quasi-static: spfem (explicit dynamics) is not offered.
+
+    ``--set method=spfem`` there used to say spfem "needs inertia
+    (mode=dynamic)", a parameter the scene does not have, while the scene
+    catalogue listed spfem and its parameters for it.
+    """
+    from skfem_npfem.cli import scenes_markdown
+
+    for name, methods, spfem_options in (
+        ("strip-footing", ("npfem", "fem-remap"), False),
+        ("elastic-column", ("npfem", "fem-remap", "spfem"), True),
+        ("column-collapse", ("npfem", "fem-remap", "spfem"), True),
+    ):
+        params = {p.name: p for p in get_scene(name).params}
+        assert params["method"].choices == methods
+        assert ("spfem" in params["method"].help) == spfem_options
+        assert {"damping", "explicit_dt"} <= set(params) or not spfem_options
+        assert not {"damping", "explicit_dt"} & set(params) or spfem_options
+    footing = scenes_markdown().split("## `strip-footing`")[1].split("## ")[0]
+    method_row = next(r for r in footing.splitlines() if r.startswith("| `method`"))
+    assert "one of npfem, fem-remap (spfem is not available" in method_row
+    assert "| `damping`" not in footing and "mode=dynamic" not in footing
+
+
 @pytest.mark.parametrize(
     ("scene", "sets", "needles"),
     [
@@ -198,12 +223,21 @@ def test_resume_reproduces_the_uninterrupted_run(tmp_path, method):
             ["transfer", "spfem has no option"],
         ),
         (
-            "strip-footing",
+            "elastic-column",
             ["method=fem-remap", "damping=5"],
             ["damping", "fem-remap has no option"],
         ),
+        (
+            "strip-footing",
+            ["method=fem-remap", "damping=5"],
+            ["parameter='damping'", "has parameters"],
+        ),
         ("elastic-column", ["explicit_dt=1e-4"], ["explicit_dt", "npfem"]),
-        ("strip-footing", ["method=spfem"], ["method='spfem'", "quasi-static"]),
+        (
+            "strip-footing",
+            ["method=spfem"],
+            ["method='spfem'", "one of npfem, fem-remap", "not available in strip"],
+        ),
         ("elastic-column", ["method=spfem"], ["method='spfem'", "mode=dynamic"]),
         (
             "column-collapse",

@@ -118,7 +118,7 @@ def test_geometry_runs_from_the_cli(tmp_path, geometry):
     [
         (["geometry=axisymmetric", "radius=0.05", "height=0.1", "aspect=2"], "aspect"),
         (["geometry=quarter-cylinder", "symmetric=false"], "symmetric"),
-        (["geometry=axisymmetric", "length=0.1"], "length"),
+        (["geometry=axisymmetric", "half_width=0.1"], "half_width"),
         (["geometry=plane-strain", "radius=0.05"], "radius"),
         (["height=0.05"], "height"),
         (["geometry=box", "height=0.1"], "height"),
@@ -151,12 +151,13 @@ def test_bad_geometry_input_is_one_error_line_before_any_work(
 def test_memory_refusal_says_estimate_machine_and_fix(capsys):
     code = main(
         ["run", "column-collapse", "--quiet", "--set", "geometry=quarter-cylinder",
-         "--set", "spacing=1e-5"]
+         "--set", "spacing=1e-4"]
     )  # fmt: skip
     assert code == 2
     err = capsys.readouterr().err
-    # ~(pi/4) 3900^2 x 7801 = 9.3e10 particles: far beyond any machine.
-    for word in ("9.32e+10 particles", "memory", "size_check=false"):
+    # ~(pi/4) 390^2 x 781 = 9.3e7 particles (the smallest spacing, 1e-4 m):
+    # far beyond any machine.
+    for word in ("9.36e+07 particles", "memory", "size_check=false"):
         assert word in err, word
 
 
@@ -167,7 +168,7 @@ def test_particle_estimate_is_the_lattice_count():
     assert lattice_particles("axisymmetric", v, R0 / 18) == 19 * 37
     n = lattice_particles("quarter-cylinder", v, R0 / 18)
     assert abs(n / quarter_count(18, 36) - 1) < 0.03
-    box = {"length": 0.2, "aspect": 2.0, "depth": 0.16, "symmetric": True}
+    box = {"half_width": 0.2, "aspect": 2.0, "depth": 0.16, "symmetric": True}
     assert lattice_particles("box", box, 0.04) == 6 * 5 * 11
 
 

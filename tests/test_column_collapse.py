@@ -57,15 +57,14 @@ def test_coarse_collapse_deposit(coarse_collapse):
 
     Measured at this resolution (231 particles): (L_inf - L0)/L0 = 3.59,
     H_inf/H0 = 0.51, t_c = 3.6 sqrt(H0/g), mesh volume -7 %; at 1 035 particles
-    3.8, 0.50 and -6 %.  formulation.md §9(c) reports 3.4-3.7 and H/H0 = 0.55
-    at 1 035 particles, mesh volume -8.5 %.  The band runs from Lube et al.'s
-    2D law 1.2 a = 2.4 (a frictional continuum with a rate-independent floor
-    contact is not less mobile than sand) to 4.5 (above the 4.4 of a mu(I)
+    3.8, 0.50 and -6 %.  The reference implementation reports 3.4-3.7 and H/H0 =
+    0.55 at 1 035 particles, mesh volume -8.5 %.  The band runs from Lube et
+    al.'s 2D law 1.2 a = 2.4 (a frictional continuum with a rate-independent
+    floor contact is not less mobile than sand) to 4.5 (above the 4.4 of a mu(I)
     continuum, Lagrée et al. 2011): it catches a column that does not collapse
-    or flows away, not a 10 % drift.  The stress stabilisation (default
-    beta = 30, issue 10) compacts the coarse deposit more: mesh volume -15.5 %
-    at 231 particles (-10.5 % at 1 035; docs/validation.md), hence the volume
-    bound of 18 %.
+    or flows away, not a 10 % drift.  The stress stabilisation (default beta =
+    30) compacts the coarse deposit more: mesh volume -15.5 % at 231 particles
+    (-10.5 % at 1 035; docs/validation.md), hence the volume bound of 18 %.
     """
     _, m, _ = coarse_collapse
     # a = 2 is inside Lube's 1.8-2.8 transition: 1.2 a and 1.9 a^(2/3) joined
@@ -77,6 +76,42 @@ def test_coarse_collapse_deposit(coarse_collapse):
     assert m["final_height"] == pytest.approx(2 * m["height_ratio"])
     assert abs(m["volume_change"]) < 0.18
     assert m["n_inactive_final"] < 0.05 * m["n_particles"]
+
+
+def test_detached_grains_are_reported_beside_the_front(capsys):
+    """A coarse a = 1 run whose 99 % front is set by a few stray grains.
+
+    At 12 particles across L0 and dt = 10 ms, 8 inactive grains (2.5 % of the
+    mass) fly ahead: the 99 % mass front gives (L_inf - L0)/L0 = 1.565 while
+    the main body stops at 1.17.  The summary must say so (a warning and the
+    main-body value beside the front), and the CLI prints the warning.
+    """
+    args = ["--set", "aspect=1", "--set", "spacing=0.0167", "--set", "dt=0.01"]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        s = run_scene("column-collapse", dict(a.split("=") for a in args[1::2]))
+    m = s["metrics"]
+    L0 = s["parameters"]["half_width"]
+    main_body = (m["runout_main_body"] - L0) / L0
+    assert m["normalised_runout_main_body"] == pytest.approx(main_body, rel=1e-12)
+    # The front is ahead of the main body by more than 3 spacings (0.25 L0).
+    assert m["normalised_runout"] - m["normalised_runout_main_body"] > 0.25
+    # Every inactive grain is detached: at least their share of the mass (the
+    # lattice masses are at least a quarter of rho h^2, the corner share).
+    rho, h = s["parameters"]["rho"], 0.0167
+    total = rho * L0 * L0  # a = 1 half column, mass conserved exactly
+    assert m["mass_change"] == 0.0
+    assert m["n_inactive_final"] >= 1
+    floor = m["n_inactive_final"] * 0.25 * rho * h * h / total
+    assert m["detached_mass_fraction"] >= floor * (1 - 1e-2)
+    assert m["detached_mass_fraction"] > 0.01
+    [note] = m["warnings"]
+    assert f"{m['detached_mass_fraction']:.1%} of the mass is detached" in note
+    assert f"normalised_runout_main_body = {main_body:.3g}" in note
+    assert note in {str(w.message) for w in caught}
+    # The CLI prints it as one "warning:" line.
+    assert main(["run", "column-collapse", *args, "--quiet"]) == 0
+    assert f"warning: {note}" in capsys.readouterr().err.splitlines()
 
 
 def run_tiny(out, **over):
@@ -260,3 +295,34 @@ def test_mass_front_is_a_mass_quantile():
     x3 = np.vstack([x, [[50.0, 0.0]]])
     m3 = np.append(m, 5.0)
     assert abs(mass_front(x3, m3, True) - mass_front(x, m, True)) < 0.01
+
+
+def test_half_width_is_the_name_and_length_still_works(tmp_path):
+    """One vocabulary: ``width`` is a full width, ``half_width`` a half width.
+
+    The collapse's half-width L0 was ``length``; the old name still runs the
+    same column, with a deprecation message, also when resuming a checkpoint
+    written with it.
+    """
+    params = {p.name for p in SCENE.params}
+    assert "half_width" in params and "length" not in params
+    values = {"spacing": 0.04, "t_end": 0.02, "rest_fraction": 0.0}
+    with pytest.warns(FutureWarning, match="parameter length is deprecated"):
+        old = get_scene("column-collapse").resolve({**values, "length": "0.2"})
+    new = get_scene("column-collapse").resolve({**values, "half_width": 0.2})
+    assert old == new
+    with pytest.warns(FutureWarning):
+        box = get_scene("column-collapse").resolve({"geometry": "box", "length": 0.2})
+    assert box["half_width"] == 0.2
+    with pytest.warns(FutureWarning), pytest.raises(ParameterError) as info:
+        get_scene("column-collapse").resolve({"geometry": "axisymmetric", "length": 1})
+    assert info.value.name == "half_width"
+    # A checkpoint whose saved parameters say "length" resumes.
+    first = run_scene("column-collapse", {**values, "t_end": 0.01}, out=tmp_path)
+    [path] = sorted(tmp_path.glob("checkpoint_*.npz"))
+    p, meta = load_checkpoint(path)
+    saved = dict(meta["parameters"])
+    saved["length"] = saved.pop("half_width")
+    save_checkpoint(path, p, {**meta, "parameters": saved})
+    more = run_scene("column-collapse", values, out=tmp_path, resume=True)
+    assert more["solver"]["steps"] > first["solver"]["steps"]

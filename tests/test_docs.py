@@ -89,3 +89,19 @@ def test_readme_first_script_runs_as_written(tmp_path):
     assert abs(float(mean) / float(exact) - 1) < 1e-2
     q = float(re.search(r"^Prandtl q/c = ([\d.]+) vs 2\+pi$", out, re.M).group(1))
     assert abs(q / (2 + math.pi) - 1) < 1e-2
+
+
+def test_tutorial_own_scene_names_every_class_it_uses():
+    # Tutorial 4 passed `writer=...` without naming the class, which was not in
+    # `skfem_npfem.__all__`; it must name it (public), and show an initial
+    # geostatic stress and what `wall_force` holds.
+    import skfem_npfem as npfem
+    from skfem_npfem.io import ResultWriter
+
+    assert "ResultWriter" in npfem.__all__ and npfem.ResultWriter is ResultWriter
+    text = (ROOT / "docs" / "tutorials" / "own_scene.md").read_text()
+    assert "writer=..." not in text
+    assert "writer=npfem.ResultWriter(" in text
+    assert "{py:class}`~skfem_npfem.ResultWriter`" in text
+    assert "Particles.create(xl, mass, stress=stress" in text.replace("npfem.", "")
+    assert re.search(r"`particles\.wall_force` has one column per wall", text)

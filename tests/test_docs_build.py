@@ -148,12 +148,16 @@ def test_tutorial_prandtl_matches_two_plus_pi(site):
     assert abs(refined / (2 + math.pi) - 1) < 0.002
 
 
-def test_tutorial_collapse_runout_is_in_the_experimental_band(site):
+def test_tutorial_collapse_main_body_is_in_the_experimental_band(site):
+    # The main body's run-out, not the 99 % front (which stray grains of a
+    # coarse run carry ahead), is checked against the experiments.
     text = page_text(site, "tutorials/column_collapse.html")
-    a2 = float(re.search(r"a = 2\.0: \(L_inf - L0\)/L0 = ([\d.]+)", text).group(1))
-    a1 = float(re.search(r"a = 1: \(L_inf - L0\)/L0 = ([\d.]+)", text).group(1))
-    # Lube et al. 2005 (1.2 a) to Lajeunesse et al. 2005 (1.8 a).
-    assert 2.4 <= a2 <= 3.6 and 1.2 <= a1 <= 1.8
+    a2 = float(re.search(r"a = 2\.0: 99 % front .*? main body ([\d.]+)", text)[1])
+    a1 = float(re.search(r"a = 1: main body \(L_inf - L0\)/L0 = ([\d.]+)", text)[1])
+    # a = 2: between Lube et al.'s two branches 1.2 a and 1.9 a^(2/3) (their
+    # transition band); a = 1: Lube's 1.2 a to Lajeunesse et al.'s 1.8 a.
+    assert 2.4 <= a2 <= 1.9 * 2 ** (2 / 3) and 1.2 <= a1 <= 1.8
+    assert "detached from the main body" in text  # the a = 2 run's warning
     assert text.count("plastic_strain_eq") >= 1
 
 
@@ -166,6 +170,13 @@ def test_tutorial_own_scene_slides_like_a_rigid_block(site):
         ).groups(),
     )
     assert abs(slide / exact - 1) < 1e-3
+    # The level layer with its geostatic stress rests on the floor: the floor
+    # forces (wall_force) carry its weight.
+    force, weight = map(
+        float,
+        re.search(r"floor force ([\d.]+) N/m .*?weight ([\d.]+) N/m", text).groups(),
+    )
+    assert abs(force / weight - 1) < 1e-5
     code = re.search(
         r"import numpy as np.*?records = sim\.run\(t_end=0\.3\)", text, re.S
     )

@@ -1,4 +1,4 @@
-"""Extremes matrix, column-collapse part (issue 4).
+"""Extremes matrix, column-collapse part.
 
 Short, coarse collapses (6 particles across L0 = 0.2 m, a = 2, 72 particles)
 pushed to the edges. Every case must solve every step (Solved/AlmostSolved),
@@ -35,7 +35,7 @@ def collapse(steps: int, **over):
         if arr.dtype.kind == "f":
             assert np.all(np.isfinite(arr)), name
     assert p.mass.sum() == p0.mass.sum()
-    level = values["length"] * 1e-12
+    level = values["half_width"] * 1e-12
     assert p.x[:, 1].min() >= -level
     its = [r.iterations for r in sim.records]
     return sim, srun.metrics(sim), its
@@ -130,7 +130,7 @@ def test_length_scale_invariance():
     for length in (1e-3, 100.0):
         s = length / L0
         sim, m, _ = collapse(
-            10, length=length, spacing=length / 6, E=1e7 * s, dt=5e-3 * math.sqrt(s)
+            10, half_width=length, spacing=length / 6, E=1e7 * s, dt=5e-3 * math.sqrt(s)
         )
         out.append((sim.particles.x / length, m["normalised_runout"]))
     np.testing.assert_allclose(out[0][0], out[1][0], atol=1e-6)

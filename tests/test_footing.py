@@ -1,7 +1,7 @@
-"""Strip footing run to a detected load plateau (issue 10, part 3).
+"""Strip footing run to a detected load plateau.
 
 References: Prandtl-Reissner ``N_c(phi) = (N_q - 1) cot(phi)`` (2 + pi at
-phi = 0) with the tolerances of benchmarks.md P1/P2, computed here from the
+phi = 0) with the tolerances of docs/verification.md, computed here from the
 closed form; the collapse load of the same mesh from a single rigid-plastic step
 (E = 1e12), which the plateau approaches from below (the stresses of every step
 are statically admissible); and linear elasticity (load proportional to the
@@ -13,6 +13,7 @@ from __future__ import annotations
 import io
 import json
 import math
+import warnings
 from contextlib import redirect_stderr, redirect_stdout
 
 import numpy as np
@@ -234,3 +235,62 @@ def test_caps_below_the_first_stage(sets, name, needle):
     lines = err.strip().splitlines()
     assert code == 2 and len(lines) == 1
     assert lines[0].startswith(f"error: invalid {name}=") and needle in lines[0]
+
+
+def test_fem_remap_p1_load_is_called_locking_inflated_not_a_lower_estimate():
+    """fem-remap (P1) under Tresca flow locks: its load is far above Prandtl.
+
+    Its warning used to call the capped load a lower estimate of the collapse
+    load, while the load (q/c = 6.6 here after 4 steps, 15.5 at the default
+    caps) already exceeds Prandtl's exact 2 + pi.
+    """
+    from skfem_npfem.scenes.strip_footing import locking_note
+
+    with warnings.catch_warnings(record=True):
+        warnings.simplefilter("always")
+        s = run_scene(
+            "strip-footing", {"method": "fem-remap", "steps": 3, "max_steps": 4}
+        )
+    m = s["metrics"]
+    assert m["bearing_factor"] > 1.2 * (2 + math.pi)  # above the exact load
+    [note] = m["warnings"]
+    assert "no load plateau" in note
+    assert "the reported load is a lower estimate" not in note
+    assert "fem-remap with P1 elements under isochoric plastic flow (tresca)" in note
+    assert "inflated by locking and unreliable" in note
+    base = {"method": "fem-remap", "element": None, "psi": None}
+    assert locking_note({**base, "material": "tresca"}, 0.0)
+    assert locking_note({**base, "material": "mohr-coulomb", "psi": 0.0}, 30.0)
+    # Dilatant (associated) flow, P2 elements and N-PFEM: no locking note.
+    assert not locking_note({**base, "material": "mohr-coulomb"}, 30.0)
+    assert not locking_note({**base, "material": "tresca", "element": "p2"}, 0.0)
+    assert not locking_note({**base, "material": "tresca", "method": "npfem"}, 0.0)
+
+
+def test_density_is_rho_and_gravity_as_in_the_other_scenes():
+    """strip-footing took a unit weight ``gamma``, the other scenes rho, gravity.
+
+    ``gamma`` still works, with a deprecation message, as rho = gamma / g.
+    """
+    names = {
+        s: {p.name for p in get_scene(s).params}
+        for s in ("strip-footing", "column-collapse", "elastic-column")
+    }
+    for params in names.values():
+        assert {"rho", "gravity"} <= params and "gamma" not in params
+    heavy = {"material": "mohr-coulomb", "c": 0, "phi": 30, "spacing": 0.25}
+    heavy |= {"steps": 2, "plateau_tol": 0}
+    with pytest.warns(FutureWarning, match="parameter gamma is deprecated, use rho"):
+        old = run_scene("strip-footing", {**heavy, "gamma": "18000"})
+    assert old["parameters"]["rho"] == 18000 / 9.81
+    new = run_scene("strip-footing", {**heavy, "rho": 18000 / 9.81})
+    assert new["metrics"]["bearing_factor"] == old["metrics"]["bearing_factor"]
+    # N_gamma = q / (rho g b): the same load on the Moon is 6 times lighter.
+    moon = run_scene("strip-footing", {**heavy, "rho": 18000 / 9.81, "gravity": 1.635})
+    q_ratio = moon["metrics"]["q_ult"] / new["metrics"]["q_ult"]
+    assert q_ratio == pytest.approx(1.635 / 9.81, rel=1e-6)
+    assert moon["metrics"]["bearing_factor"] == pytest.approx(
+        new["metrics"]["bearing_factor"], rel=1e-6
+    )
+    with pytest.raises(ParameterError, match="not together with rho"):
+        get_scene("strip-footing").resolve({"gamma": 1.0, "rho": 2.0})

@@ -99,10 +99,10 @@ def test_fresh_run_into_a_reused_folder_drops_the_old_checkpoints(tmp_path):
 @pytest.mark.parametrize(
     ("scene", "item", "name", "gb"),
     [
-        ("column-collapse", "spacing=1e-5", "spacing", 16),
+        ("column-collapse", "spacing=1e-4", "spacing", 16),  # the smallest
         ("column-collapse", "spacing=2e-4", "spacing", 16),
-        ("strip-footing", "spacing=1e-5", "spacing", 16),
-        ("elastic-column", "spacing=1e-5", "spacing", 16),
+        ("strip-footing", "spacing=1e-4", "spacing", 16),  # the smallest
+        ("elastic-column", "spacing=1e-4", "spacing", 16),  # the smallest
         ("column-collapse", "aspect=100", "aspect", 1),  # 51k particles
     ],
 )
@@ -321,7 +321,7 @@ def test_resume_with_a_smaller_end_is_refused(tmp_path):
         (["elastic-column", "spacing=10"], "spacing", "at most height/4 = 1 m"),
         (["column-collapse", "aspect=1e-6"], "aspect", "[0.01, 100]"),
         (["column-collapse", "aspect=0.05"], "aspect", "at least 0.0909"),
-        (["column-collapse", "length=1e-200"], "length", "[0.0001, 10000]"),
+        (["column-collapse", "half_width=1e-200"], "half_width", "[0.0001, 10000]"),
         (["strip-footing", "c=0"], "c", "mohr-coulomb or drucker-prager"),
     ],
 )
@@ -395,7 +395,7 @@ def test_tresca_cohesion_range_is_stated_and_c_zero_runs_with_friction():
             "material": "mohr-coulomb",
             "c": 0,
             "phi": 30,
-            "gamma": 18e3,
+            "rho": 18e3 / 9.81,
             "spacing": 0.25,
             "steps": 2,
             "plateau_tol": 0,

@@ -1,4 +1,4 @@
-"""Issue 13: pictures a geotechnician reads, and plotting a damaged result.
+"""Pictures a geotechnician reads, and plotting a damaged result.
 
 The figure-building functions are checked for what they draw (axes, scenery,
 markers, colour ranges, crop, the footing's load-settlement curve), not for
@@ -76,7 +76,7 @@ def collapse_dir(tmp_path_factory) -> Path:
                 "active": active,
             },
         )
-    params = {"aspect": A, "length": L0, "symmetric": True, "gravity": 9.81}
+    params = {"aspect": A, "half_width": L0, "symmetric": True, "gravity": 9.81}
     (folder / "scene.json").write_text(
         json.dumps({"scene": "column-collapse", "parameters": params})
     )
@@ -121,10 +121,10 @@ def test_collapse_picture_shows_scenery_runout_and_reference(collapse_dir):
     cum = np.arange(1, x.size + 1) - 0.5
     front = float(np.interp(0.99 * x.size, cum, x))
     assert f"run-out (99 % mass) {front:.3g} m" in labels
-    # Cropped to the body: the flying grain (x = 5 m) is outside, the body
-    # and the reference inside.
-    body_max = step.points[np.unique(step.cells), 0].max()
-    assert view.xlim[0] < 0.0 and max(body_max, reference) < view.xlim[1] < 1.5
+    # The flying grain (x = 5 m) is drawn, named in the legend and inside the
+    # frame, with the body and the reference.
+    assert "detached grain (in no cell): 1" in labels
+    assert view.xlim[0] < 0.0 and max(5.0, reference) < view.xlim[1] < 5.5
     assert "t/\u221a(H0/g) = " in frames.fig._suptitle.get_text()
 
 
@@ -224,6 +224,79 @@ def test_plot_writes_the_pictures(collapse_dir, footing_dir, tmp_path):
             im.verify()
 
 
+def test_detached_grains_and_the_front_of_a_coarse_collapse_are_in_the_frame(
+    tmp_path,
+):
+    """The coarse a = 1 collapse whose 8 stray grains set the 99 % front.
+
+    Its picture used to crop to the meshed body: the grains (inactive, in no
+    cell) and the run-out line the legend labels (0.513 m against a main body
+    ending at 0.433 m) were off the frame.  Everything the legend names must be
+    inside it, the grains drawn apart from the body.
+    """
+    from skfem_npfem import run_scene
+
+    d = tmp_path / "a1"
+    s = run_scene(
+        "column-collapse", {"aspect": 1, "spacing": 0.0167, "dt": 0.01}, out=d
+    )
+    n_free = s["metrics"]["n_inactive_final"]
+    assert n_free >= 1
+    sc, loaded, _, view, frames = _frames(d, "plastic_strain_eq")
+    last = max(loaded.kept)
+    frames.draw(last)
+    step = loaded.kept[last]
+    assert len(step.free) == n_free
+    labels = _legend(frames)
+    assert f"detached grains (in no cell): {n_free}" in labels
+    front = float(next(t for t in labels if t.startswith("run-out"))[20:-2])
+    (x0, x1), (y0, y1) = view.xlim, view.ylim
+    assert x0 < step.points[:, 0].min() and step.points[:, 0].max() < x1
+    assert y0 < step.points[:, 1].min() and step.points[:, 1].max() < y1
+    assert x0 < front < x1 and x0 < sc.runout_reference < x1
+    # The grains are diamonds with black edges, the body a coloured mesh.
+    grains = next(c for c in frames.ax.collections if c.get_label().startswith("det"))
+    assert grains.get_offsets().shape == (n_free, 2)
+    assert np.allclose(grains.get_edgecolor()[0][:3], 0.0)
+
+
+def test_snapshot_names_and_messages_say_what_is_drawn(
+    collapse_dir, footing_dir, tmp_path
+):
+    """``--times 100`` (normalised) beyond the last step, and the footing.
+
+    The message used to mix t/sqrt(H0/g) with seconds and the file was named
+    after 100, a time it does not show; footing files were named ``_t`` after a
+    settlement.
+    """
+    tau = (H0 / 9.81) ** 0.5
+    last = 0.3 / tau  # the last stored step, t = 0.3 s
+    with pytest.warns(UserWarning) as caught:
+        paths = plot_results(
+            collapse_dir,
+            times=[100],
+            field=["stress_yy"],
+            animation="none",
+            out_dir=tmp_path,
+        )
+    shown = float(f"{last:.4g}")
+    assert [p.name for p in paths] == [f"stress_yy_t{shown:g}.png"]
+    [msg] = [str(w.message) for w in caught if "outside" in str(w.message)]
+    assert msg.startswith("t/sqrt(H0/g) = 100 is outside the stored steps (0..")
+    assert f"drawing the step at t/sqrt(H0/g) = {shown:g} (t = 0.3 s)" in msg
+    paths = plot_results(
+        footing_dir,
+        times=[0.002, 1.0],
+        field=["stress_yy"],
+        animation="none",
+        out_dir=tmp_path / "f",
+    )
+    assert [p.name for p in paths[:2]] == [
+        "stress_yy_s0.002.png",
+        "stress_yy_s0.005.png",
+    ]
+
+
 def cli(argv: list[str]) -> tuple[int, str, str]:
     out, err = io.StringIO(), io.StringIO()
     with redirect_stderr(err), redirect_stdout(out):
@@ -231,7 +304,7 @@ def cli(argv: list[str]) -> tuple[int, str, str]:
     return code, out.getvalue(), err.getvalue()
 
 
-def test_3_plot_skips_a_corrupt_vtu_and_refuses_an_all_corrupt_folder(
+def test_plot_skips_a_corrupt_vtu_and_refuses_an_all_corrupt_folder(
     collapse_dir, tmp_path
 ):
     # Reproducer: truncate a result_*.vtu and run plot (meshio called

@@ -1,4 +1,4 @@
-"""Issue 13, defect 5: every allowed range is a range the scenes can run.
+"""Every allowed range is a range the scenes can run.
 
 For every parameter with a magnitude window (``scenes/limits.py``), both ends
 are run in every scene that has the parameter (coarse, one to three steps, the
@@ -49,13 +49,24 @@ REFUSED = {
     ("column-collapse", "aspect", "lo"): "spacing",
     # rho g H / M = 5.8e4: the stress rotation of a huge increment
     ("elastic-column", "E", "lo"): "E",
+    # A body 1e-4 m across cannot hold the 2-4 spacings its scene needs, the
+    # spacing being a length of at least 1e-4 m too.
+    ("column-collapse", "length", "lo"): "spacing",
+    ("column-collapse", "half_width", "lo"): "spacing",
+    # (the axisymmetric column of height 1e-4 m: its radius 5e-5 m)
+    ("column-collapse", "height", "lo"): "radius",
+    ("strip-footing", "half_width", "lo"): "spacing",
+    ("elastic-column", "height", "lo"): "spacing",
 }
+
+#: Smallest spacing (a length: docs/output.md).
+MIN_SPACING = 1e-4
 
 
 def _scaled(scene: str, name: str, value: float) -> dict:
     """The coarse base case with ``name = value`` (and a spacing to match)."""
     over = {**BASE[scene], name: value}
-    if name == "length":
+    if name == "length" or (name, scene) == ("half_width", "column-collapse"):
         over["spacing"] = value / 6
     elif name == "height" and scene == "column-collapse":
         # the cylindrical geometries' h0: an axisymmetric column of aspect 2,
@@ -70,6 +81,7 @@ def _scaled(scene: str, name: str, value: float) -> dict:
         over["spacing"] = value / 4
     elif name == "aspect":
         over["spacing"] = 0.2 / 2 if value > 1 else over["spacing"]
+    over["spacing"] = max(over["spacing"], MIN_SPACING)
     return over
 
 

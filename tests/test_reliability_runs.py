@@ -18,12 +18,12 @@ from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 
 import pytest
-from skfem_npfem.run.control import Progress
 
 import skfem_npfem as npfem
 import skfem_npfem.io as npio
 from skfem_npfem import ParameterError
 from skfem_npfem.cli import main
+from skfem_npfem.run.control import Progress
 
 COARSE = [
     "spacing=0.03333333333333333",

@@ -1,7 +1,7 @@
 """Scenes against analytic and published references.
 
-E1 (elastic column under self-weight), E2 (sudden gravity, 1-D wave) and P1
-(Prandtl strip footing, q/c = 2 + π) of benchmarks.md.  Reference values are
+The elastic column under self-weight, sudden gravity (a 1-D wave) and the
+Prandtl strip footing (q/c = 2 + π).  Reference values are
 computed here from the closed forms, not read from the scene's own metrics; the
 scene metrics are checked against them as well.
 """
@@ -187,3 +187,45 @@ def test_prandtl_convergence():
     # |error| decreases (measured 0.39 %, 0.073 %, 0.009 %); finest ≤ 0.2 %.
     assert errors[0] > errors[1] > errors[2]
     assert errors[-1] < 2e-3
+
+
+def test_lengths_are_limited_like_the_other_lengths():
+    # spacing, radius and depth accepted any positive value, although every
+    # other length is limited to [1e-4, 1e4] m (docs/output.md).
+    from skfem_npfem import ParameterError
+
+    for scene, name in (
+        ("column-collapse", "spacing"),
+        ("column-collapse", "radius"),
+        ("column-collapse", "depth"),
+        ("strip-footing", "spacing"),
+        ("elastic-column", "spacing"),
+    ):
+        param = {p.name: p for p in get_scene(scene).params}[name]
+        assert param.allowed() == "a finite number in [0.0001, 10000]"
+        for bad in (1e-5, 2e4):
+            with pytest.raises(ParameterError) as info:
+                get_scene(scene).resolve({name: bad})
+            assert info.value.name == name
+        assert param.check(1e-4) == 1e-4 and param.check(1e4) == 1e4
+
+
+def test_parameter_help_says_what_each_scene_does():
+    names = ("elastic-column", "strip-footing", "column-collapse")
+    params = {s: {p.name: p for p in get_scene(s).params} for s in names}
+    # The stabilisation's default is said once where it is 0 for every method.
+    for s in ("elastic-column", "strip-footing"):
+        text = params[s]["stabilisation"].help
+        assert "default 0: off; > 0 with method=npfem only" in text
+        assert "0 for the other methods" not in text
+    assert (
+        "default 30 for method=npfem" in params["column-collapse"]["stabilisation"].help
+    )
+    # `steps` means different things: each scene says exactly what.
+    assert "run exactly" in params["elastic-column"]["steps"].help
+    footing_steps = params["strip-footing"]["steps"].help
+    assert "first stage" in footing_steps and "max_steps counting all" in footing_steps
+    assert "steps" not in params["column-collapse"]  # the collapse runs to t_end
+    # K0: why the collapse keeps 0.5 and the footing follows phi.
+    assert "not recomputed from phi" in params["column-collapse"]["K0"].help
+    assert "1 - sin phi" in params["strip-footing"]["K0"].help

@@ -544,3 +544,22 @@ def test_ctrl_c_stops_a_sweep_quietly_and_names_the_way_to_continue(tmp_path):
     assert done.returncode == 0, done.stderr
     assert re.search(r"4 runs, [1-3] finished before", done.stderr), done.stderr
     assert len(pd.read_csv(out / "table.csv")) == 4
+
+
+def test_a_metric_named_like_a_parameter_is_renamed_and_documented():
+    # spfem's metric `explicit_dt` (largest substep used) clashes with the
+    # parameter `explicit_dt`; docs/sweep.md said metrics keep their names.
+    from skfem_npfem.sweeps.table import summary_row
+
+    row = summary_row(
+        {
+            "parameters": {"explicit_dt": None, "dt": 0.01},
+            "metrics": {"explicit_dt": 2.5e-5, "runout": 0.5, "warnings": ["a", "b"]},
+        }
+    )
+    assert row["metric.explicit_dt"] == 2.5e-5 and row["runout"] == 0.5
+    assert np.isnan(row["explicit_dt"]) and row["warnings"] == "a+b"
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "sweep.md").read_text()
+    line = next(r for r in doc.splitlines() if r.startswith("| scene metrics |"))
+    assert "`metric.<name>`" in line and "`metric.explicit_dt`" in line
+    assert "joined by `+`" in line

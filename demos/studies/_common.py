@@ -73,7 +73,7 @@ def run_to_rest(overrides: dict[str, Any]) -> dict[str, Any]:
     from skfem_npfem.scenes import get_scene
 
     scene = get_scene("column-collapse")
-    h0 = overrides.get("aspect", 2.0) * overrides.get("length", LENGTH)
+    h0 = overrides.get("aspect", 2.0) * overrides.get("half_width", LENGTH)
     t_end = T_END_FACTOR * math.sqrt(h0 / G)
     values = scene.resolve(
         {"t_end": t_end, "volume_correction": 0.0, **overrides, "threads": 1}

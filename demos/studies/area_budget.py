@@ -52,7 +52,7 @@ def budget(overrides: dict) -> dict:
     if sim.particles.x.shape[1] != 2:
         raise ValueError("the budget is written for 2D (triangles)")
     a0 = mesher.triangulate(sim.particles.x).volume
-    scale = values["rho"] * values["gravity"] * values["aspect"] * values["length"]
+    scale = values["rho"] * values["gravity"] * values["aspect"] * values["half_width"]
     acc = dict.fromkeys(
         ("linear", "linear_apex", "expanding", "quadratic", "remesh"), 0.0
     )

@@ -13,7 +13,7 @@ Writes (under ``--out``, default ``docs/validation``):
   run-out (L_inf - L0)/L0, H_inf/L0, H_inf/H0, collapse time (s and in units of
   sqrt(H0/g)), volume change, wall time, median time per step and the solver
   statuses; the experimental laws; the fitted small-a slope and large-a
-  exponent against the gates of benchmarks.md G1;
+  exponent against the gates below;
 * ``runout_vs_aspect.png``: run-out and final height against a (log-log);
 * ``refinement_a2.png``: run-out and final height against N at a = 2;
 * ``deposits.png``: the final deposits of the primary sweep;
@@ -72,7 +72,7 @@ SCENE = "column-collapse"
 G = 9.81
 
 # ---------------------------------------------------------------------------
-# Experimental laws (benchmarks.md G1)
+# Experimental laws and the gates of the run-out
 # ---------------------------------------------------------------------------
 
 #: Lube et al. (2005), 2D channel: 1.2 a for a <= 1.8, 1.9 a^(2/3) for a >= 2.8.
@@ -80,7 +80,7 @@ LUBE = {"slope": 1.2, "small_max": 1.8, "prefactor": 1.9, "large_min": 2.8}
 #: Lajeunesse et al. (2005), as tabulated by Lagrée et al. (2011): 1.8 a and
 #: 2.3 a^(2/3), crossover a0 ~ 3.
 LAJEUNESSE = {"slope": 1.8, "prefactor": 2.3, "a0": 3.0}
-#: Gates (benchmarks.md G1).
+#: Gates of the fitted small-a slope and large-a exponent.
 GATE_SLOPE = (0.75 * 1.2, 1.25 * 1.8)  # within +-25 % of 1.2-1.8
 GATE_EXPONENT = (0.55, 0.85)
 GATE_VOLUME = 0.01
@@ -146,7 +146,7 @@ def case_params(a: float, n: int, args) -> dict:
     t_scale = math.sqrt(H0 / G)
     params = {
         "aspect": a,
-        "length": L0,
+        "half_width": L0,
         "spacing": L0 / n,
         "dt": args.dt,
         "t_end": round(args.t_end_factor * t_scale, 6),
@@ -317,7 +317,7 @@ def row_from_summary(s: dict) -> dict:
     r = float(m["normalised_runout"])
     lube, laj = lube_law(a), lajeunesse_law(a)
     hist = s.get("history", [])
-    L0 = p["length"]
+    L0 = p.get("half_width", p.get("length"))
     late = _late_range(hist, "runout", 0.1 * s["solver"]["time"])
     extra = {}
     if hist and "front_q99" in hist[-1]:
@@ -343,15 +343,15 @@ def row_from_summary(s: dict) -> dict:
         "N": n,
         "variant": s["case"].get("variant"),
         "spacing": p["spacing"],
-        "L0": p["length"],
-        "H0": a * p["length"],
+        "L0": L0,
+        "H0": a * L0,
         "particles": int(m["n_particles"]),
         "steps": int(sol["steps"]),
         "end_time": float(sol["time"]),
         "t_end": p["t_end"],
         "at_rest": bool(m["at_rest"]),
         "normalised_runout": r,
-        "normalised_runout_tip": (m["runout_tip"] - p["length"]) / p["length"],
+        "normalised_runout_tip": (m["runout_tip"] - L0) / L0,
         "final_height_L0": float(m["final_height"]),
         "final_height_H0": float(m["height_ratio"]),
         "collapse_time": m["collapse_time"],
@@ -916,7 +916,7 @@ def cases_to_run(
 def run_all(todo: list, args, cases_dir: Path) -> float:
     """Run ``todo`` on Dask (local --jobs workers or --scheduler); wall time."""
     t0 = time.perf_counter()
-    if todo:
+    if todo:  # on Dask: a local cluster of --jobs workers or --scheduler
         from skfem_npfem.sweeps import run_tasks
 
         outcomes = run_tasks(
@@ -1007,7 +1007,7 @@ def record(args, got: dict, skipped: list[str], wall_all: float) -> dict:
     all_rows = got["rows"]
     libs = sorted({(r.get("library") or {}).get("source_sha1", "?") for r in all_rows})
     return {
-        "benchmark": "G1, 2D column collapse (benchmarks.md section 4)",
+        "benchmark": "2D column collapse against the experimental laws",
         "scene": SCENE,
         "setup": setup(args),
         "laws": {

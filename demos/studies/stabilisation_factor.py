@@ -105,7 +105,7 @@ def task(spec: tuple[str, float, float | None]) -> dict[str, Any]:
         }
     overrides: dict[str, Any] = {"stabilisation": beta}
     if aspect is not None:
-        overrides.update(aspect=aspect, length=LENGTH, spacing=LENGTH / 12)
+        overrides.update(aspect=aspect, half_width=LENGTH, spacing=LENGTH / 12)
     out = run_to_rest(overrides)
     return {"kind": kind, "beta": beta, "aspect": aspect, **out}
 

@@ -97,7 +97,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     sweep = [
         {
             "aspect": a,
-            "length": LENGTH,
+            "half_width": LENGTH,
             "spacing": LENGTH / 12,
             "volume_correction": k,
         }

@@ -188,12 +188,16 @@ class Simulation:
         """Write the current particles as one VTU step."""
         if self.writer is None:
             return
+        # An axisymmetric result says so in its field data: points are (r, z)
+        # and the third stress component is the hoop stress.
+        axisymmetric = getattr(self.model, "axisymmetric", False)
         self.writer.write(
             self.step,
             self.time,
             self.particles.x,
             cells_global,
             self.point_data(self.particles, active),
+            field_data={"Axisymmetric": 1.0} if axisymmetric else None,
         )
 
     def save_checkpoint(self) -> Path | None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Callable, Mapping
 from contextlib import nullcontext
 from dataclasses import dataclass, field
@@ -32,7 +33,14 @@ from ..io import (
 )
 from .limits import MAGNITUDES, check_steps
 
-__all__ = ["DEFAULT_CHECKPOINT_EVERY", "Param", "Scene", "SceneRun", "parse_value"]
+__all__ = [
+    "DEFAULT_CHECKPOINT_EVERY",
+    "Param",
+    "Renamed",
+    "Scene",
+    "SceneRun",
+    "parse_value",
+]
 
 #: Steps between checkpoints of scenes that do not choose (``checkpoint_every``).
 DEFAULT_CHECKPOINT_EVERY = 20
@@ -58,6 +66,9 @@ class Param:
         Allowed values for str/int parameters.
     lo, hi : float
         Allowed closed range for numbers (``lo_open``/``hi_open`` make it open).
+    note : str
+        Appended in parentheses to the allowed values (in the docs and in the
+        error of a refused value), e.g. why a method is not offered.
     """
 
     name: str
@@ -70,9 +81,15 @@ class Param:
     hi: float = math.inf
     lo_open: bool = False
     hi_open: bool = False
+    note: str = ""
 
     def allowed(self) -> str:
         """Human-readable allowed values."""
+        if self.note:
+            return f"{self._allowed()} ({self.note})"
+        return self._allowed()
+
+    def _allowed(self) -> str:
         if self.choices is not None:
             return "one of " + ", ".join(map(str, self.choices))
         if self.kind is bool:
@@ -179,6 +196,41 @@ class SceneRun:
     history: list = field(default_factory=list)
 
 
+@dataclass(frozen=True)
+class Renamed:
+    """An old parameter name that still works, with a deprecation message.
+
+    Attributes
+    ----------
+    old : str
+        The old name.
+    new : str
+        The parameter that replaces it.
+    how : str
+        How the old value maps onto the new parameter(s), for the message
+        (e.g. "rho = gamma / gravity"); empty: the same value.
+    convert : callable or None
+        ``convert(value, given) -> dict`` of new parameter values from the old
+        (checked) value and the other given values; None: ``{new: value}``.
+    param : Param or None
+        How the old value is checked (None: as the new parameter).
+    """
+
+    old: str
+    new: str
+    how: str = ""
+    convert: Callable[[Any, Mapping[str, Any]], dict[str, Any]] | None = None
+    param: Param | None = None
+
+    def apply(self, value: Any, given: Mapping[str, Any], new: Param) -> dict:
+        """New parameter values for the old ``value`` (checked)."""
+        checker = self.param if self.param is not None else new
+        v = checker.check(value)
+        if self.convert is None:
+            return {self.new: v}
+        return self.convert(v, given)
+
+
 @dataclass
 class Scene:
     """A named problem with documented parameters and metrics.
@@ -199,6 +251,8 @@ class Scene:
         ``scenery(parameters: dict, folder: Path | None) -> Scenery``: what a
         picture of a result shows besides the particles (floor, walls, outline,
         reference values, step labels); see :mod:`skfem_npfem.scenes.scenery`.
+    renamed : tuple of Renamed
+        Old parameter names that still work (with a ``FutureWarning``).
     """
 
     name: str
@@ -207,18 +261,52 @@ class Scene:
     build: Callable[..., SceneRun]
     metrics_doc: dict[str, str]
     scenery: Callable[..., Any] | None = None
+    renamed: tuple[Renamed, ...] = ()
 
-    def resolve(self, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
-        """Defaults updated with validated overrides."""
-        by_name = {p.name: p for p in self.params}
-        values = {p.name: p.default for p in self.params}
+    def translate(
+        self, overrides: Mapping[str, Any] | None, *, warn: bool = True
+    ) -> dict[str, Any]:
+        """``overrides`` with every old (renamed) name replaced by the new one.
+
+        Each old name given raises a ``FutureWarning`` naming its replacement
+        (``warn=False``: silently, e.g. for the saved parameters of a
+        checkpoint).  Giving both an old name and its replacement is an error.
+        """
         if overrides is not None and not isinstance(overrides, Mapping):
             raise ParameterError(
                 "overrides",
                 overrides,
                 "a dict of parameter name -> value, e.g. {'E': 2e7}",
             )
-        for key, val in (overrides or {}).items():
+        out = dict(overrides or {})
+        by_name = {p.name: p for p in self.params}
+        for r in self.renamed:
+            if r.old not in out:
+                continue
+            value = out.pop(r.old)
+            if r.new in out:
+                raise ParameterError(
+                    r.old, value, f"not together with {r.new}, which replaces it"
+                )
+            new = r.apply(value, out, by_name[r.new])
+            if warn:
+                how = f" ({r.how})" if r.how else ""
+                warnings.warn(
+                    f"{self.name}: parameter {r.old} is deprecated, use {r.new}"
+                    f"{how}; {r.old}={value} runs as "
+                    + ", ".join(f"{k}={v:.6g}" for k, v in new.items()),
+                    FutureWarning,
+                    stacklevel=3,
+                )
+            out.update(new)
+        return out
+
+    def resolve(self, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
+        """Defaults updated with validated overrides (old names translated)."""
+        by_name = {p.name: p for p in self.params}
+        values = {p.name: p.default for p in self.params}
+        overrides = self.translate(overrides)
+        for key, val in overrides.items():
             if key not in by_name:
                 raise ParameterError(
                     "parameter",
@@ -336,6 +424,8 @@ class Scene:
             )
         saved = meta.get("parameters")
         if saved is not None:
+            # A checkpoint of an older version may hold renamed parameters.
+            saved = to_jsonable(self.translate(saved, warn=False))
             now = to_jsonable(values)
             # A parameter the checkpointed version did not have yet, left at
             # its default now, is the behaviour that version had: not a change.

@@ -19,7 +19,7 @@ Mohr-Coulomb in triaxial compression, spacing ``r0/18``).  Two of ``radius``,
 ``height`` and ``aspect`` fix the third; the defaults fill ``radius`` first,
 then ``aspect``.  A parameter the chosen geometry does not use, given
 explicitly, is refused (``aspect`` with both ``radius`` and ``height``,
-``symmetric`` or ``length`` with a cylindrical geometry, ...), as is a spacing
+``symmetric`` or ``half_width`` with a cylindrical geometry, ...), as is a spacing
 above ``r0/4`` or a run whose estimated memory exceeds the machine's
 (:func:`~.limits.check_size` with the particle count of :mod:`.sizing`).
 :class:`GeometryScene` is a scene whose :meth:`~GeometryScene.resolve` knows
@@ -37,7 +37,7 @@ from .base import Param, Scene
 from .box_column import DEPTH_SPACINGS
 from .common import check_soil
 from .cylinder import SEED, SEED_DIVISIONS
-from .limits import check_size
+from .limits import LENGTH, check_size
 from .sizing import lattice_particles
 
 __all__ = [
@@ -79,8 +79,7 @@ GEOMETRY_PARAMS = [
         "m",
         "cylindrical geometries: column radius r0 (default 3.9 cm, or height / aspect)",
         float,
-        lo=0,
-        lo_open=True,
+        **LENGTH,
     ),
     Param(
         "height",
@@ -98,8 +97,7 @@ GEOMETRY_PARAMS = [
         f"box: slab depth W between the smooth walls y = 0 and y = W (default "
         f"{DEPTH_SPACINGS} spacings)",
         float,
-        lo=0,
-        lo_open=True,
+        **LENGTH,
     ),
     Param(
         "strength_floor",
@@ -144,6 +142,9 @@ CYLINDRICAL_MEANING = {
     "collapse_time": "when the 99 % front radius stops",
     "collapse_time_normalised": "collapse_time / sqrt(h0 / g)",
     "volume_change": "full-ring volume (axisymmetric), quarter volume (3D)",
+    "runout_main_body": "not reported",
+    "normalised_runout_main_body": "not reported",
+    "runout_tip": "not reported",
 }
 
 
@@ -182,7 +183,9 @@ def used_parameters(
         "accuracy",
     }  # fmt: skip
     if geometry == "box":
-        return common | {"aspect", "length", "symmetric", "depth", "max_displacement"}
+        return common | {
+            "aspect", "half_width", "symmetric", "depth", "max_displacement"
+        }  # fmt: skip
     used = common | {"radius", "height"}
     if not {"radius", "height"} <= given:
         used.add("aspect")
@@ -220,7 +223,7 @@ def finalize(
         if "dt" not in given:
             values["dt"] = SEED_DT
     else:
-        h = values["spacing"] or values["length"] / 22.0
+        h = values["spacing"] or values["half_width"] / 22.0
         values["spacing"] = h
         if values["depth"] is None:
             values["depth"] = DEPTH_SPACINGS * h
@@ -288,8 +291,8 @@ def _check_values(values: dict[str, Any]) -> None:
     check_soil(values)
     if values["geometry"] == "box":
         L0, H0, h = (
-            values["length"],
-            values["aspect"] * values["length"],
+            values["half_width"],
+            values["aspect"] * values["half_width"],
             values["spacing"],
         )
         if h > L0 / 2 or h > H0 / 2:
@@ -299,8 +302,8 @@ def _check_values(values: dict[str, Any]) -> None:
     if values["theta2"] < 1.0:
         warnings.warn(
             f"theta2={values['theta2']:g}: impacts on the floor have restitution "
-            f"{1 / values['theta2'] - 1:.2f}; keep theta2 = 1 (formulation.md "
-            "pitfall 3)",
+            f"{1 / values['theta2'] - 1:.2f}; keep theta2 = 1 (1/2 makes them "
+            "elastic and the collapse unstable)",
             stacklevel=3,
         )
 
@@ -318,6 +321,7 @@ class GeometryScene(Scene):
 
     def resolve(self, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
         """Defaults updated with validated overrides, then the geometry rules."""
+        overrides = self.translate(overrides)
         values = super().resolve(overrides)
         finalize(values, frozenset(overrides or {}), self.plane_names)
         return values

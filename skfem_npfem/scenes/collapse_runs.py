@@ -17,6 +17,7 @@ parameters; plane strain runs the plane-strain build unchanged.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -42,6 +43,8 @@ from .column_collapse import (
     collapse_scenery,
     collapse_simulation,
     collapse_time,
+    detached_fraction,
+    detached_warnings,
     rest_warnings,
     run_control,
 )
@@ -93,7 +96,7 @@ def _column_setup(values: dict[str, Any]) -> ColumnSetup:
         return cylinder_column(
             geo, values["spacing"], material=values["material"], **kw, **soil
         )
-    L0 = values["length"]
+    L0 = values["half_width"]
     return box_column(
         soil,
         length=L0,
@@ -128,6 +131,7 @@ def _recorder(values: dict[str, Any], h: float):
         body[step.active[main_body(p.x[step.active], 3.0 * h)]] = True
         extra = step.record.extra
         extra["max_height"] = float(p.x[body, -1].max()) if body.any() else math.nan
+        extra["detached_mass_fraction"] = detached_fraction(p.mass, body)
         run = _front(geo, p.x, p.mass, symmetric)
         if geo in CYLINDRICAL:
             extra["runout_radius"] = run
@@ -149,8 +153,8 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
     """The summary metrics of a finished run (GEOMETRY_METRICS and the shared)."""
     geo = values["geometry"]
     cyl = geo in CYLINDRICAL
-    L0 = values["radius"] if cyl else values["length"]
-    H0 = values["height"] if cyl else values["aspect"] * values["length"]
+    L0 = values["radius"] if cyl else values["half_width"]
+    H0 = values["height"] if cyl else values["aspect"] * values["half_width"]
     key = "runout_radius" if cyl else "runout"
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
@@ -164,11 +168,17 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
         # Before rest (stopped by t_end) the front may still move: unknown.
         t_c = collapse_time(times, runs, h) if at_rest else math.nan
         summ = sim_.summary()
+        detached = float(last.get("detached_mass_fraction", 0.0))
+        main = None if cyl else float(last.get("runout_main_body", L0))
+        notes = detached_warnings("column-collapse", detached, run, main, L0)
+        for msg in notes:
+            warnings.warn(msg, stacklevel=2)
         out: dict[str, Any] = {key: run, "normalised_runout": (run - L0) / L0}
         if cyl:
             out["reference_runout_lube2004"] = lube2004_runout(H0 / L0)
         else:
-            out["runout_main_body"] = float(last.get("runout_main_body", L0))
+            out["runout_main_body"] = main
+            out["normalised_runout_main_body"] = (main - L0) / L0
             out["runout_tip"] = float(last.get("runout_tip", L0))
             out["reference_runout_lube"] = lube_runout(values["aspect"])
         out |= {
@@ -177,7 +187,7 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
             "collapse_time": t_c,
             "collapse_time_normalised": t_c / math.sqrt(H0 / values["gravity"]),
             "at_rest": at_rest,
-            "warnings": rest_warnings(sim_, values, stop),
+            "warnings": [*rest_warnings(sim_, values, stop), *notes],
             "volume_change": summ["volume_change"],
             "mass_change": summ["mass_change"],
             "max_kinetic_energy": summ["max_kinetic_energy"],
@@ -185,6 +195,7 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
             "n_inactive_final": int(recs[-1].n_inactive) if recs else 0,
             "n_particles": int(sim_.particles.n),
             "mass_basis": MASS_BASIS[geo],
+            "detached_mass_fraction": detached,
         }
         return out
 
@@ -204,7 +215,7 @@ def build_geometry(
     H0 = (
         values["height"]
         if values["geometry"] in CYLINDRICAL
-        else (values["aspect"] * values["length"])
+        else (values["aspect"] * values["half_width"])
     )
     run_kwargs, stop = run_control(values, H0)
     # The method option (npfem only here) adds the stress roughness per step
@@ -216,7 +227,7 @@ def build_geometry(
 #: their help).
 GEOMETRY_NOTES = {
     "aspect": "cylindrical: h0/r0, unless radius and height are both given",
-    "length": "plane-strain and box only",
+    "half_width": "plane-strain and box only",
     "symmetric": "plane-strain and box only",
     "spacing": "cylindrical: default r0/18; box: L0/22",
     "material": "3D: drucker-prager only; cylindrical and box default drucker-prager",
@@ -255,6 +266,7 @@ def with_geometries(plane: Scene) -> GeometryScene:
         metrics_doc=metrics_doc(plane.metrics_doc),
         plane_names=names,
         scenery=geometry_scenery,
+        renamed=plane.renamed,
     )
 
 

@@ -10,9 +10,8 @@ The particles start on a regular lattice of the given spacing (the remesher
 breaks the lattice ties), with masses ``rho V_i`` from the initial mesh (kept
 fixed: mass is conserved exactly), a geostatic stress ``s_yy = -rho g (H0 - y)``,
 ``s_xx = s_zz = K0 s_yy``, and floor contact forces equal to the weight of the
-column over each base particle's tributary width (otherwise the floor's
-friction, which is lagged by one step, would be zero in the first step and the
-base would slide freely).  Every step the particles are
+column over each base particle's tributary width (the floor friction is lagged:
+without them the first step would be frictionless).  Every step the particles are
 re-triangulated (Delaunay plus alpha shape); the floor is a rigid wall with
 lagged Coulomb friction, the symmetry wall is frictionless.  The material is
 Mohr-Coulomb (exact in plane strain) or Drucker-Prager (plane-strain match),
@@ -35,8 +34,7 @@ Lube et al. (2005) found ``(L_inf - L0) / L0 = 1.2 a`` for ``a <~ 1.8`` and
 
 Time integration: keep ``theta2 = 1``.  ``theta2`` sets the restitution of
 impacts, ``e = 1/theta2 - 1``: ``theta2 = 1/2`` makes the impact on the floor
-perfectly elastic and the collapse gains volume and then blows up (the
-contact impulse is returned in full by the next step; tests/test_contact.py).
+perfectly elastic and the collapse gains volume and then blows up.
 """
 
 from __future__ import annotations
@@ -59,7 +57,7 @@ from ..particles import Particles
 from ..run.simulation import AtRest, Simulation
 from ..step.model import Model
 from ..step.stages import Step
-from .base import Param, Scene, SceneRun
+from .base import Param, Renamed, Scene, SceneRun
 from .common import (
     check_size,
     check_soil,
@@ -70,6 +68,7 @@ from .common import (
     solver_from,
     solver_params,
 )
+from .limits import LENGTH
 from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
 from .scenery import Scenery, box, number, time_label
 
@@ -94,11 +93,15 @@ COLLAPSE_STABILISATION = 30.0
 #: those the default is 0.
 COLLAPSE_VOLUME_CORRECTION = 0.05
 VOLUME_CORRECTION_STRAIN = 1e-2
+#: Detached mass fraction above which the summary warns that the 99 % mass
+#: front may be set by grains outside the main body (coarse runs shed a few
+#: grains that fly ahead of the deposit).
+DETACHED_WARNING = 0.01
 
 PARAMS = [
     Param("aspect", 2.0, "-", "aspect ratio a = H0/L0", float, lo=0, lo_open=True),
     Param(
-        "length",
+        "half_width",
         0.2,
         "m",
         "column half-width L0 (the width of the half column)",
@@ -120,8 +123,7 @@ PARAMS = [
         "m",
         "particle (lattice) spacing (default L0/22: 1 035 particles at a = 2)",
         float,
-        lo=0,
-        lo_open=True,
+        **LENGTH,
     ),
     Param("material", "mohr-coulomb", "-", "yield criterion", str, MATERIALS),
     Param("rho", 1800.0, "kg/m^3", "density", float, lo=0, lo_open=True),
@@ -153,7 +155,11 @@ PARAMS = [
         "K0",
         0.5,
         "-",
-        "initial s_xx / s_yy (at-rest coefficient)",
+        "initial s_xx / s_yy (at-rest coefficient). 0.5 is Jaky's 1 - sin phi "
+        "at the default phi = 30; it is not recomputed from phi (unlike "
+        "strip-footing's default 1 - sin phi), so a change of phi changes the "
+        "material, not the initial stresses. For phi < 19.5 it lies outside "
+        "the yield cone and is refused: set K0 too (e.g. 1 - sin phi)",
         float,
         lo=0,
         lo_open=True,
@@ -259,6 +265,11 @@ METRICS = {
     "normalised_runout": "(L_inf - L0) / L0",
     "runout_main_body": "edge of the meshed main body (largest cluster with gaps "
     "below 3 spacings), m",
+    "normalised_runout_main_body": "(runout_main_body - L0) / L0: the run-out of "
+    "the main body, free of detached grains",
+    "detached_mass_fraction": "mass outside the main body (inactive grains and "
+    "small clusters) / total mass at the end; above "
+    f"{DETACHED_WARNING:.0%} a warning says the 99 % front may be set by them",
     "runout_tip": "the farthest grain, m",
     "reference_runout_lube": "Lube et al. 2005: 1.2 a (a <= 1.8), 1.9 a^(2/3) "
     "(a >= 2.8), log-linear in between",
@@ -270,7 +281,8 @@ METRICS = {
     "at_rest": "the run ended by the at-rest rule (not t_end); false: the run-out "
     "and height are not final (see warnings)",
     "warnings": "list of one-line warnings (the run reached t_end before the "
-    "at-rest rule stopped it); the CLI prints each on stderr",
+    f"at-rest rule stopped it; detached mass above {DETACHED_WARNING:.0%}); the "
+    "CLI prints each on stderr",
     "volume_change": "relative mesh-volume (area) change, end vs t = 0",
     "mass_change": "relative change of the total particle mass (0: exact)",
     "max_kinetic_energy": "largest kinetic energy, J (per metre of depth)",
@@ -351,6 +363,36 @@ def front(x: np.ndarray, body: np.ndarray, symmetric: bool) -> tuple[float, floa
     return float(runout), float(xb[:, 1].max())
 
 
+def detached_fraction(mass: np.ndarray, body: np.ndarray) -> float:
+    """Mass outside the main body (mask ``body``) as a fraction of the total."""
+    total = float(mass.sum())
+    return float(mass[~body].sum()) / total if total > 0 else 0.0
+
+
+def detached_warnings(
+    scene: str, fraction: float | None, runout: float, main: float | None, L0: float
+) -> list[str]:
+    """The warning of a run whose detached mass exceeds :data:`DETACHED_WARNING`.
+
+    ``runout`` is the 99 % mass front and ``main`` the edge of the main body
+    (None where the geometry has none), both in m; ``L0`` the initial width.
+    """
+    if fraction is None or not fraction > DETACHED_WARNING:
+        return []
+    msg = (
+        f"{scene}: {fraction:.1%} of the mass is detached from the main body "
+        f"(above {DETACHED_WARNING:.0%}), so the 99 % mass front "
+        f"(runout = {runout:.4g} m, normalised {(runout - L0) / L0:.3g}) may be "
+        "set by stray grains"
+    )
+    if main is not None:
+        msg += (
+            f"; the main body reaches {main:.4g} m (normalised_runout_main_body = "
+            f"{(main - L0) / L0:.3g})"
+        )
+    return [msg + "; a finer spacing sheds fewer grains"]
+
+
 def collapse_time(times: np.ndarray, runout: np.ndarray, tol: float) -> float:
     """First time after which the run-out stays within ``tol`` of its final value."""
     if runout.size == 0:
@@ -364,7 +406,7 @@ def collapse_time(times: np.ndarray, runout: np.ndarray, tol: float) -> float:
 
 def _check(values: dict[str, Any]) -> float:
     """Refuse inconsistent values; return the particle spacing h."""
-    L0, H0 = values["length"], values["aspect"] * values["length"]
+    L0, H0 = values["half_width"], values["aspect"] * values["half_width"]
     h = values["spacing"] if values["spacing"] is not None else L0 / 22.0
     if h > L0 / 2 or h > H0 / 2:
         if values["spacing"] is None:  # the user set aspect, not the spacing
@@ -414,7 +456,7 @@ def _check(values: dict[str, Any]) -> float:
 
 def _volume_correction(values: dict[str, Any]) -> float:
     """The default kappa: COLLAPSE_VOLUME_CORRECTION where its premise holds."""
-    h0 = values["aspect"] * values["length"]
+    h0 = values["aspect"] * values["half_width"]
     strain = values["rho"] * values["gravity"] * h0 / values["E"]
     if values["psi"] == 0.0 and strain <= VOLUME_CORRECTION_STRAIN:
         return COLLAPSE_VOLUME_CORRECTION
@@ -464,6 +506,7 @@ def _front_recorder(h: float, symmetric: bool):
             runout_main_body=edge,
             runout_tip=tip,
             max_height=top,
+            detached_mass_fraction=detached_fraction(p.mass, body),
         )
         return False
 
@@ -500,7 +543,7 @@ def rest_warnings(sim_: Simulation, values: dict[str, Any], stop: AtRest | None)
 
 def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
     """The summary metrics of a finished run (see METRICS)."""
-    L0, a = values["length"], values["aspect"]
+    L0, a = values["half_width"], values["aspect"]
     H0 = a * L0
     t_scale = math.sqrt(H0 / values["gravity"])
 
@@ -515,10 +558,17 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
         # Before rest (stopped by t_end) the front may still move: unknown.
         t_c = collapse_time(times, runouts, h) if at_rest else float("nan")
         summ = sim_.summary()
+        main = float(last.get("runout_main_body", L0))
+        detached = float(last.get("detached_mass_fraction", 0.0))
+        notes = detached_warnings("column-collapse", detached, runout, main, L0)
+        for msg in notes:
+            warnings.warn(msg, stacklevel=2)
         return {
             "runout": runout,
             "normalised_runout": (runout - L0) / L0,
-            "runout_main_body": float(last.get("runout_main_body", L0)),
+            "runout_main_body": main,
+            "normalised_runout_main_body": (main - L0) / L0,
+            "detached_mass_fraction": detached,
             "runout_tip": float(last.get("runout_tip", L0)),
             "reference_runout_lube": lube_runout(a),
             "final_height": top / L0,
@@ -526,7 +576,7 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
             "collapse_time": t_c,
             "collapse_time_normalised": t_c / t_scale,
             "at_rest": at_rest,
-            "warnings": rest_warnings(sim_, values, stop),
+            "warnings": [*rest_warnings(sim_, values, stop), *notes],
             "volume_change": summ["volume_change"],
             "mass_change": summ["mass_change"],
             "max_kinetic_energy": summ["max_kinetic_energy"],
@@ -543,7 +593,7 @@ def build(
 ) -> SceneRun:
     """Build the column-collapse simulation."""
     h = _check(values)
-    L0, H0 = values["length"], values["aspect"] * values["length"]
+    L0, H0 = values["half_width"], values["aspect"] * values["half_width"]
     symmetric = values["symmetric"]
     model = _model(values)
     mesher = AlphaShapeMesher(h, values["alpha"], walls=model.walls)
@@ -606,7 +656,9 @@ def run_control(
 def collapse_scenery(p: dict, folder: Path | None = None) -> Scenery:
     """The plane-strain collapse's scenery: rough floor, symmetry wall, Lube 2005."""
     s = Scenery(scene="column-collapse")
-    a, L0 = number(p, "aspect"), number(p, "length")
+    # (results of an older version name the half-width "length")
+    a = number(p, "aspect")
+    L0 = number(p, "half_width") or number(p, "length")
     if a is None or L0 is None:
         return s
     H0, g = a * L0, number(p, "gravity", GRAVITY) or GRAVITY
@@ -622,6 +674,10 @@ def collapse_scenery(p: dict, folder: Path | None = None) -> Scenery:
     return s
 
 
+#: Parameters renamed for one vocabulary across the scenes (``width`` is a
+#: full width, ``half_width`` a half width); the old names still work.
+RENAMED = (Renamed("length", "half_width", "the same value: L0"),)
+
 SCENE = Scene(
     name="column-collapse",
     description=__doc__.strip().splitlines()[0].split(": ", 1)[1],
@@ -629,4 +685,5 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=collapse_scenery,
+    renamed=RENAMED,
 )

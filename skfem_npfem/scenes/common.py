@@ -150,14 +150,20 @@ def fidelity_params(
         )
     else:
         kappa_default, kappa_help = 0.0, "method=npfem only; 0: off"
+    if stabilisation:
+        beta_help = (
+            f"default {stabilisation:g} for method=npfem{where}, 0 for the other "
+            "methods; 0: off"
+        )
+    else:  # off by default for every method of the scene
+        beta_help = "default 0: off; > 0 with method=npfem only"
     return [
         Param(
             "stabilisation",
             None,
             "-",
             "factor beta of the consistent element-residual stabilisation of the "
-            f"N-PFEM stresses (default {stabilisation:g} for method=npfem{where}, "
-            "0 for the other methods; 0: off; docs/theory.md)",
+            f"N-PFEM stresses ({beta_help}; docs/theory.md)",
             float,
             lo=0,
             hi=1e4,

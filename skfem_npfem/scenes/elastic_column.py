@@ -33,7 +33,8 @@ from .common import (
     solver_from,
     solver_params,
 )
-from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
+from .limits import LENGTH
+from .methods import METHOD_METRICS, method_params, with_method
 from .scenery import Scenery, box, number
 
 PARAMS = [
@@ -45,17 +46,26 @@ PARAMS = [
     Param(
         "width", 1.0, "m", "column width (and depth in 3D)", float, lo=0, lo_open=True
     ),
-    Param("spacing", 0.125, "m", "particle (node) spacing", float, lo=0, lo_open=True),
+    Param("spacing", 0.125, "m", "particle (node) spacing", float, **LENGTH),
     Param("mode", "static", "-", "static or dynamic", str, ("static", "dynamic")),
     Param("dt", 0.01, "s", "time step", float, lo=0, lo_open=True),
-    Param("steps", 1, "-", "number of steps", int, lo=1),
+    Param(
+        "steps",
+        1,
+        "-",
+        "number of steps of dt, run exactly (mode=dynamic: time steps to t = "
+        "steps x dt; mode=static: load steps under the full weight, the first "
+        "already in equilibrium)",
+        int,
+        lo=1,
+    ),
     Param(
         "theta1", 1.0, "-", "time-integration parameter theta1", float, lo=0.5, hi=1.0
     ),
     Param(
         "theta2", 1.0, "-", "time-integration parameter theta2", float, lo=0.5, hi=1.0
     ),
-    *METHOD_PARAMS,
+    *method_params(spfem="mode=dynamic only"),
     *fidelity_params(0.0),
     *solver_params(),
 ]

@@ -31,6 +31,7 @@ from typing import Any
 from ..errors import ParameterError
 
 __all__ = [
+    "LENGTH",
     "MAGNITUDES",
     "MAX_STEPS",
     "SAFETY",
@@ -76,7 +77,6 @@ MAGNITUDES: dict[str, tuple[float, float]] = {
     "dt": (1e-9, 1e4),
     "t_end": (1e-9, 1e6),
     "min_time": (1e-9, 1e6),
-    "length": (1e-4, 1e4),
     "height": (1e-4, 1e4),
     "width": (1e-4, 1e4),
     "half_width": (1e-4, 1e4),
@@ -85,6 +85,12 @@ MAGNITUDES: dict[str, tuple[float, float]] = {
     "max_settlement": (1e-9, 1e7),
     "max_displacement": (1e-3, 10.0),
 }
+
+
+#: Range of every length parameter that has no range of its own in
+#: :data:`MAGNITUDES` (``spacing``, ``radius``, ``depth``), m: the same as
+#: ``height`` and the widths there (docs/output.md).
+LENGTH: dict[str, float] = {"lo": 1e-4, "hi": 1e4}
 
 
 def estimate_memory_mb(n_particles: float, dim: int) -> float:

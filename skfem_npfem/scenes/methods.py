@@ -38,6 +38,7 @@ __all__ = [
     "METHOD_PARAMS",
     "make_method",
     "method_metrics",
+    "method_params",
     "with_method",
 ]
 
@@ -93,53 +94,81 @@ def make_method(name: str, **options: Any) -> FemRemap | SPFEM | None:
     return None
 
 
-METHOD_PARAMS = [
-    Param(
-        "method",
-        "npfem",
-        "-",
-        "npfem (nodal integration, cone program), fem-remap (Gauss-point state "
-        "remapped after each remesh, same cone program) or spfem (explicit "
-        "nodal integration; dynamic runs only)",
-        str,
-        METHODS,
-    ),
-    Param(
-        "element",
-        None,
-        "-",
-        "fem-remap only: p1 or p2 elements (default p1)",
-        str,
-        ELEMENTS,
-    ),
-    Param(
-        "transfer",
-        None,
-        "-",
-        "fem-remap only: nearest or recovery (patch recovery + interpolation) "
-        "transfer of Gauss-point state to a new mesh (default recovery)",
-        str,
-        TRANSFERS,
-    ),
-    Param(
-        "damping",
-        None,
-        "1/s",
-        "spfem only: mass-proportional damping coefficient (default 0)",
-        float,
-        lo=0,
-    ),
-    Param(
-        "explicit_dt",
-        None,
-        "s",
-        "spfem only: explicit substep, at most the stable step (default 0.9 x "
-        "the stable step of each step's mesh)",
-        float,
-        lo=0,
-        lo_open=True,
-    ),
-]
+def method_params(
+    methods: tuple[str, ...] = tuple(METHODS), spfem: str = "", missing: str = ""
+) -> list[Param]:
+    """The method parameters of a scene that offers ``methods``.
+
+    Parameters
+    ----------
+    methods : tuple of str
+        The methods the scene can run (a subset of
+        :data:`METHODS`); the parameters of a method not
+        offered (``damping``, ``explicit_dt`` of spfem; ``element``,
+        ``transfer`` of fem-remap) are left out.
+    spfem : str
+        When spfem is offered: where it runs, added to the help (e.g.
+        ``"mode=dynamic only"``).
+    missing : str
+        Why the methods left out are not offered (shown with the allowed
+        values, so ``--set method=spfem`` says it).
+    """
+    what = {
+        "npfem": "npfem (nodal integration, cone program)",
+        "fem-remap": "fem-remap (Gauss-point state remapped after each remesh, "
+        "same cone program)",
+        "spfem": f"spfem (explicit nodal integration{'; ' + spfem if spfem else ''})",
+    }
+    names = [what[m] for m in methods]
+    text = ", ".join(names[:-1]) + " or " + names[-1] if len(names) > 1 else names[0]
+    params = [Param("method", "npfem", "-", text, str, tuple(methods), note=missing)]
+    if "fem-remap" in methods:
+        params += [
+            Param(
+                "element",
+                None,
+                "-",
+                "fem-remap only: p1 or p2 elements (default p1)",
+                str,
+                ELEMENTS,
+            ),
+            Param(
+                "transfer",
+                None,
+                "-",
+                "fem-remap only: nearest or recovery (patch recovery + "
+                "interpolation) transfer of Gauss-point state to a new mesh "
+                "(default recovery)",
+                str,
+                TRANSFERS,
+            ),
+        ]
+    if "spfem" in methods:
+        params += [
+            Param(
+                "damping",
+                None,
+                "1/s",
+                "spfem only: mass-proportional damping coefficient (default 0)",
+                float,
+                lo=0,
+            ),
+            Param(
+                "explicit_dt",
+                None,
+                "s",
+                "spfem only: explicit substep, at most the stable step (default "
+                "0.9 x the stable step of each step's mesh)",
+                float,
+                lo=0,
+                lo_open=True,
+            ),
+        ]
+    return params
+
+
+#: The method parameters of a dynamic scene (every method).
+METHOD_PARAMS = method_params()
 
 METHOD_METRICS = {
     "stress_roughness": "stress roughness R of the vertical stress at the last "

@@ -186,8 +186,22 @@ class PlateauRule:
         k1, k2 = (q1 - q0) / (s1 - s0), (q2 - q1) / (s2 - s1)
         return k_0 > 0 and abs(k2 - k1) <= BEND * k_0
 
-    def outcome(self, curve: Sequence[Sequence[float]], scene: str) -> dict[str, Any]:
+    def outcome(
+        self, curve: Sequence[Sequence[float]], scene: str, locking: str = ""
+    ) -> dict[str, Any]:
         """Plateau metrics of a finished run (and its warnings).
+
+        Parameters
+        ----------
+        curve : sequence of (settlement, load)
+            The load curve of the run.
+        scene : str
+            Scene name, at the start of each warning.
+        locking : str
+            Non-empty when the discretisation locks (why, e.g. "fem-remap with
+            P1 elements under isochoric plastic flow"): its load keeps rising
+            above the collapse load, so a cap before the plateau does not give
+            a lower estimate, and a plateau is inflated.
 
         Returns
         -------
@@ -213,10 +227,25 @@ class PlateauRule:
                 if reason == "max_steps"
                 else f"max_settlement = {self.max_settlement:g} m"
             )
+            if locking:
+                verdict = (
+                    f"{locking} locks, so the load is inflated by locking and "
+                    "unreliable (not a lower estimate of the collapse load); use "
+                    "method=npfem or element=p2"
+                )
+            else:
+                verdict = (
+                    "the reported load is a lower estimate of the collapse load; "
+                    "raise max_settlement/max_steps"
+                )
             warnings.append(
                 f"{scene}: no load plateau within {cap} ({len(curve)} steps, "
-                f"settlement {s:.4g} m): {what}; the reported load is a lower "
-                "estimate of the collapse load; raise max_settlement/max_steps"
+                f"settlement {s:.4g} m): {what}; {verdict}"
+            )
+        elif locking and curve:
+            warnings.append(
+                f"{scene}: {locking} locks, so the load is inflated by locking "
+                "and unreliable; use method=npfem or element=p2"
             )
         return {
             "plateau_reached": reached,

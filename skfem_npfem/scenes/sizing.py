@@ -18,7 +18,7 @@ def lattice_particles(geometry: str, values: dict, spacing: float) -> float:
     """Particles of a column's lattice (estimated without building it).
 
     ``values`` holds ``radius`` and ``height`` (cylindrical geometries) or
-    ``length``, ``aspect``, ``depth`` and ``symmetric`` (box).  The quarter
+    ``half_width``, ``aspect``, ``depth`` and ``symmetric`` (box).  The quarter
     cylinder's count per layer is the quarter disc's area in lattice cells plus
     one edge and the centre, ``pi n^2 / 4 + n + 1`` (Gauss's circle problem:
     273.5 for ``n = 18`` spacings over the radius, 271 counted).
@@ -35,7 +35,7 @@ def lattice_particles(geometry: str, values: dict, spacing: float) -> float:
         if geometry == "axisymmetric":
             return (nr + 1.0) * layers
         return (math.pi / 4.0 * nr * nr + nr + 1.0) * layers
-    width = values["length"] * (1.0 if values["symmetric"] else 2.0)
-    height = values["aspect"] * values["length"]
+    width = values["half_width"] * (1.0 if values["symmetric"] else 2.0)
+    height = values["aspect"] * values["half_width"]
     per = [max(1.0, round(v / h)) + 1.0 for v in (width, values["depth"], height)]
     return per[0] * per[1] * per[2]

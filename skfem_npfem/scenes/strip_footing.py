@@ -39,7 +39,7 @@ from ..mesh.sources import FixedMesh
 from ..particles import Particles
 from ..run.simulation import Simulation
 from ..step.model import Model
-from .base import Param, Scene, SceneRun
+from .base import Param, Renamed, Scene, SceneRun
 from .common import (
     check_size,
     elastic_params,
@@ -49,7 +49,8 @@ from .common import (
     solver_from,
     solver_params,
 )
-from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
+from .limits import LENGTH
+from .methods import METHOD_METRICS, method_params, with_method
 from .plateau import PlateauRule
 from .scenery import Scenery, box, number
 
@@ -69,7 +70,7 @@ PARAMS = [
         "c",
         1.0e4,
         "Pa",
-        "cohesion (tresca: > 0; c = 0 needs gamma > 0)",
+        "cohesion (tresca: > 0; c = 0 needs rho > 0)",
         float,
         lo=0,
     ),
@@ -94,19 +95,35 @@ PARAMS = [
         hi_open=True,
     ),
     Param(
-        "gamma", 0.0, "N/m^3", "unit weight of the soil (0: weightless)", float, lo=0
+        "rho",
+        0.0,
+        "kg/m^3",
+        "density of the soil (0: weightless); its unit weight is gamma = rho g",
+        float,
+        lo=0,
+    ),
+    Param(
+        "gravity",
+        9.81,
+        "m/s^2",
+        "gravitational acceleration (acts when rho > 0)",
+        float,
+        lo=0,
+        lo_open=True,
     ),
     Param(
         "K0",
         None,
         "-",
-        "at-rest earth pressure coefficient (default 1-sin phi)",
+        "at-rest earth pressure coefficient s_xx / s_yy of the initial "
+        "geostatic stress (default Jaky's 1 - sin phi, phi of the soil; no "
+        "effect on a weightless soil)",
         float,
         **_POSITIVE,
     ),
     Param("footing", "smooth", "-", "footing-soil interface", str, ("smooth", "rough")),
     Param("half_width", 1.0, "m", "footing half-width b", float, **_POSITIVE),
-    Param("spacing", 0.125, "m", "element size under the footing", float, **_POSITIVE),
+    Param("spacing", 0.125, "m", "element size under the footing", float, **LENGTH),
     Param(
         "grading",
         1.15,
@@ -134,7 +151,17 @@ PARAMS = [
         float,
         **_POSITIVE,
     ),
-    Param("steps", 8, "-", "number of equal steps up to `settlement`", int, lo=1),
+    Param(
+        "steps",
+        8,
+        "-",
+        "number of equal settlement steps up to `settlement` (the first stage; "
+        "the run then goes on with growing steps until the plateau or a cap, "
+        "max_steps counting all steps; exactly `steps` steps with "
+        "plateau_tol = 0)",
+        int,
+        lo=1,
+    ),
     Param(
         "plateau_tol",
         None,
@@ -174,20 +201,26 @@ PARAMS = [
         "small-strain limit analysis",
         bool,
     ),
-    *METHOD_PARAMS,
+    *method_params(
+        ("npfem", "fem-remap"),
+        missing="spfem is not available in strip-footing: it is explicit "
+        "dynamics and this scene is quasi-static, without inertia",
+    ),
     *fidelity_params(0.0),
     *solver_params(),
 ]
 
 METRICS = {
     "q_ult": "footing pressure at the last step (= collapse load on the plateau), Pa",
-    "bearing_factor": "q_ult / c (c > 0), else q_ult / (gamma b) = N_gamma (B = 2b)",
+    "bearing_factor": "q_ult / c (c > 0), else q_ult / (gamma b) = N_gamma (B = 2b, "
+    "gamma = rho g)",
     "bearing_factor_reference": "Prandtl-Reissner N_c for weightless soil (else null)",
     "relative_error": "bearing_factor / reference - 1 (weightless soil)",
     "load_curve": "list of [settlement (m), pressure (Pa)] per step",
     "plateau_reached": "true if the run stopped on a detected plateau, false if a "
-    "cap stopped it first (then q_ult is a lower estimate); null when "
-    "plateau_tol = 0",
+    "cap stopped it first (then q_ult is a lower estimate, except for fem-remap "
+    "with P1 elements and isochoric plastic flow, which locks: its load is "
+    "inflated, see warnings); null when plateau_tol = 0",
     "plateau_change": "relative load change over the last doubling of the "
     "settlement (null before the settlement has doubled)",
     "plateau_tolerance": "plateau_tol used (0: detection off)",
@@ -195,9 +228,14 @@ METRICS = {
     "not reached)",
     "stopped_by": "plateau, max_settlement, max_steps or steps (plateau_tol = 0)",
     "warnings": "list of one-line warnings (a cap stopped the run before the "
-    "plateau); the CLI prints each on stderr",
+    "plateau; fem-remap P1 locking); the CLI prints each on stderr",
     "n_particles": "number of particles",
     **METHOD_METRICS,
+    # spfem is not offered here: its metrics are always null.
+    **{
+        k: "spfem only: always null here (spfem is not available in this scene)"
+        for k in ("explicit_steps", "stable_dt", "explicit_dt")
+    },
 }
 
 
@@ -243,8 +281,7 @@ def soil_material(values: dict[str, Any]) -> tuple[Material, float]:
     name = values["material"]
     c, phi = values["c"], values["phi"]
     psi = phi if values["psi"] is None else values["psi"]
-    gamma = values["gamma"]
-    rho = gamma / GRAVITY
+    rho = values["rho"]
     E, nu = values["E"], values["nu"]
     if name == "tresca":
         if c <= 0:
@@ -252,15 +289,15 @@ def soil_material(values: dict[str, Any]) -> tuple[Material, float]:
                 "c",
                 c,
                 "material=tresca needs c > 0 (c = 0 is allowed with "
-                "mohr-coulomb or drucker-prager and gamma > 0)",
+                "mohr-coulomb or drucker-prager and rho > 0)",
             )
         mat, phi = Tresca(E, nu, rho, c=c), 0.0
     elif name == "mohr-coulomb":
         mat = MohrCoulomb(E, nu, rho, c=c, phi=phi, psi=psi)
     else:
         mat = DruckerPrager(E, nu, rho, c=c, phi=phi, psi=psi)
-    if c == 0 and gamma == 0:
-        raise ParameterError("gamma", gamma, "must be > 0 when c = 0 (no strength)")
+    if c == 0 and rho == 0:
+        raise ParameterError("rho", rho, "must be > 0 when c = 0 (no strength)")
     return mat, phi
 
 
@@ -272,8 +309,8 @@ def soil_particles(
     The footing particles move down at unit pseudo-speed (1 m per unit of
     pseudo-time), so a step's ``dt`` is its settlement increment.
     """
-    b, gamma = values["half_width"], values["gamma"]
-    L, rho = values["domain"] * b, gamma / GRAVITY
+    b, rho = values["half_width"], values["rho"]
+    L, gamma = values["domain"] * b, unit_weight(values)
     ni = nodal_integration(mesh)
     x = mesh.p.T.copy()
     fixed = np.zeros_like(x, dtype=bool)
@@ -296,12 +333,23 @@ def soil_particles(
     return particles.replace(v_prescribed=vp), foot
 
 
+def unit_weight(values: dict[str, Any]) -> float:
+    """Unit weight ``gamma = rho g`` of the soil, N/m^3 (0: weightless)."""
+    return values["rho"] * values["gravity"]
+
+
+def _rho_from_gamma(gamma: float, given: dict[str, Any]) -> dict[str, float]:
+    """The old ``gamma`` (N/m^3) as the density at the given or default gravity."""
+    gravity = _GRAVITY.check(given.get("gravity", _GRAVITY.default))
+    return {"rho": gamma / gravity}
+
+
 def plateau_rule(values: dict[str, Any]) -> PlateauRule:
     """The stepping and stop rule from the resolved parameters."""
     b = values["half_width"]
     settlement = values["settlement"]
     if settlement is None:
-        strength = values["c"] + values["gamma"] * b
+        strength = values["c"] + unit_weight(values) * b
         settlement = SETTLEMENT_SCALE * strength * b / values["E"]
     tol = values["plateau_tol"]
     if tol is None:
@@ -325,11 +373,11 @@ def build(
     mat, phi = soil_material(values)
     rule = plateau_rule(values)
     particles, foot = soil_particles(values, mesh, phi)
-    b, c, gamma = values["half_width"], values["c"], values["gamma"]
+    b, c, gamma = values["half_width"], values["c"], unit_weight(values)
     model = Model(
         dim=2,
         materials=[mat],
-        gravity=GRAVITY if gamma > 0 else 0.0,
+        gravity=values["gravity"] if values["rho"] > 0 else 0.0,
         mode="static",
         objective_rotation=values["large_deformation"],
         update_geometry=values["large_deformation"],
@@ -366,7 +414,7 @@ def build(
         curve = load_curve(sim_)
         q = curve[-1][1] if curve else float("nan")
         factor = q / c if c > 0 else q / (gamma * b)
-        plateau = rule.outcome(curve, "strip-footing")
+        plateau = rule.outcome(curve, "strip-footing", locking_note(values, phi))
         for msg in plateau["warnings"]:
             warnings.warn(msg, stacklevel=2)
         return {
@@ -384,6 +432,27 @@ def build(
     )
 
 
+def locking_note(values: dict[str, Any], phi: float) -> str:
+    """Why the run's load is inflated by volumetric locking ("" if it is not).
+
+    Constant-strain triangles (fem-remap, P1) carry about one incompressibility
+    constraint per element under isochoric plastic flow (Tresca, or a dilation
+    angle psi = 0), about as many as free degrees of freedom: the load keeps
+    rising far above the collapse load (docs/baselines.md).  N-PFEM (nodal
+    integration) and P2 elements do not lock.
+    """
+    if values["method"] != "fem-remap" or (values["element"] or "p1") != "p1":
+        return ""
+    psi = phi if values["psi"] is None else values["psi"]
+    if values["material"] == "tresca":
+        flow = "isochoric plastic flow (tresca)"
+    elif psi == 0.0:
+        flow = "isochoric plastic flow (psi = 0)"
+    else:
+        return ""
+    return f"fem-remap with P1 elements under {flow}"
+
+
 def load_curve(sim: Simulation) -> list[list[float]]:
     """``[settlement, pressure]`` of every recorded step."""
     return [
@@ -391,6 +460,9 @@ def load_curve(sim: Simulation) -> list[list[float]]:
         for r in sim.records
         if "pressure" in r.extra
     ]
+
+
+_GRAVITY = next(p for p in PARAMS if p.name == "gravity")
 
 
 def footing_scenery(p: dict, folder: Path | None = None) -> Scenery:
@@ -411,7 +483,11 @@ def footing_scenery(p: dict, folder: Path | None = None) -> Scenery:
     s.outline = box(0.0, L, 0.0, L)
     s.footing = (0.0, b, L)
     s.label = s.settlement_label
-    c, gamma, phi = number(p, "c", 0.0), number(p, "gamma", 0.0), number(p, "phi", 0.0)
+    c, phi = number(p, "c", 0.0), number(p, "phi", 0.0)
+    # unit weight rho g (a result of an older version: its parameter gamma)
+    gamma = number(p, "gamma", 0.0) or number(p, "rho", 0.0) * (
+        number(p, "gravity", GRAVITY) or GRAVITY
+    )
     if p.get("material") == "tresca":
         phi = 0.0
     if gamma == 0 and c and c > 0:
@@ -451,4 +527,13 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=footing_scenery,
+    renamed=(
+        Renamed(
+            "gamma",
+            "rho",
+            "with gravity, as in the other scenes: rho = gamma / gravity",
+            _rho_from_gamma,
+            Param("gamma", 0.0, "N/m^3", "unit weight", float, lo=0),
+        ),
+    ),
 )

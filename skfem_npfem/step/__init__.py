@@ -3,30 +3,32 @@
 The data flow of :func:`advance` (in :mod:`.stages`) goes through these modules:
 
 * :mod:`.model` -- what is solved: materials, mode, walls, time scheme, options;
-* :mod:`.program` -- the step's data (:class:`StepData`) and its cone program's
+* :mod:`.program` -- the cone program's input (:class:`ConeInput`) and its
   blocks;
 * :mod:`.families`, :mod:`.stabilisation`, :mod:`.volume` -- the program's terms:
   the yield cones per material family, the consistent element-residual
   stabilisation and the volume correction;
 * :mod:`.conic` -- scaling, Clarabel's problem and the solution read back from the
-  duals (:class:`StepSolution`);
+  duals (:class:`ConeSolution`);
 * :mod:`.solver`, :mod:`.backends` -- solver options and the direct linear solvers;
-* :mod:`.kinematics` -- stress rotation, strain measures, energies.
+* :mod:`.kinematics` -- stress rotation, strain measures, energies;
+* :mod:`.stages` -- :func:`advance`: the three stages of a step, its
+  :class:`Step` and :class:`StepRecord`.
 """
 
-from .conic import StepSolution, solve_step
+from .conic import ConeSolution, solve_step
 from .model import Model
-from .program import StepData
+from .program import ConeInput
 from .solver import SolverOptions
-from .stages import StepRecord, StepResult, advance
+from .stages import Step, StepRecord, advance
 
 __all__ = [
+    "ConeInput",
+    "ConeSolution",
     "Model",
     "SolverOptions",
-    "StepData",
+    "Step",
     "StepRecord",
-    "StepResult",
-    "StepSolution",
     "advance",
     "solve_step",
 ]

@@ -1,15 +1,16 @@
 """Pictures of 2D results with matplotlib: what a geotechnician expects to see.
 
-:class:`Frames2D` draws one field of any stored step of a 2D result: the
-particles' mesh coloured by the field (particles outside the mesh as dots), axes
-in metres with equal scales, the floor, walls and footing of the scene, the
-initial outline of the body, the run-out (99 % mass front) and the reference
-run-out of Lube et al. (2005) for the collapse, and for the strip footing the
-load-settlement curve beside it with the current point marked.  The frame is
-cropped to the body; the colour bar says when values beyond its range were
-clipped.  :func:`load_settlement_figure` is the footing's main result on its
-own.  Both return matplotlib figures (no pyplot, no display), so tests can look
-at what is drawn; :meth:`Frames2D.image` renders one to pixels.
+:class:`Frames2D` draws one field of any stored step of a 2D result: the particles' mesh
+coloured by the field (detached grains, outside the mesh, as black-edged diamonds in the
+field's colours, counted in the legend), axes in metres with equal scales, the floor,
+walls and footing of the scene, the initial outline of the body, the run-out (99 % mass
+front) and the reference run-out of Lube et al. (2005) for the collapse, and for the
+strip footing the load-settlement curve beside it with the current point marked.  The
+frame is cropped to every particle (detached grains included, so the run-out line the
+legend names is in the picture) and the scenery; the colour bar says when values beyond
+its range were clipped.  :func:`load_settlement_figure` is the footing's main result on
+its own.  Both return matplotlib figures (no pyplot, no display), so tests can look at
+what is drawn; :meth:`Frames2D.image` renders one to pixels.
 """
 
 from __future__ import annotations
@@ -49,12 +50,16 @@ class View:
 
 
 def crop(steps: list[Step], sc: Scenery, window: tuple[int, int] | None) -> View:
-    """The view of a result: the meshed body over all steps plus the scenery."""
+    """The view of a result: every particle over the drawn steps plus the scenery.
+
+    The detached grains (in no cell) are inside the frame too: they are drawn
+    and named in the legend, and they can set the 99 % mass front whose line
+    the legend labels.
+    """
     boxes = []
     for s in steps:
-        used = np.unique(s.cells) if len(s.cells) else np.arange(len(s.points))
-        if used.size:
-            p = s.points[used, :2]
+        if len(s.points):
+            p = s.points[:, :2]
             boxes.append(np.r_[p.min(axis=0), p.max(axis=0)])
     if sc.outline is not None:
         boxes.append(np.r_[sc.outline.min(axis=0), sc.outline.max(axis=0)])
@@ -295,6 +300,7 @@ class Frames2D:
                 )
         if len(step.free):
             f = step.free
+            n = len(f)
             self.dynamic.append(
                 ax.scatter(
                     x[f],
@@ -302,10 +308,12 @@ class Frames2D:
                     c=values[f],
                     cmap=style.cmap,
                     norm=norm,
-                    s=14,
-                    edgecolors=_BODY,
-                    linewidths=0.6,
-                    zorder=5,
+                    s=30,
+                    marker="D",
+                    edgecolors="black",
+                    linewidths=1.0,
+                    zorder=8,
+                    label=f"detached grain{'s' if n > 1 else ''} (in no cell): {n}",
                 )
             )
 

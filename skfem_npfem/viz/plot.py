@@ -285,29 +285,79 @@ def _check_args(
     return req
 
 
-def _pick_snapshots(
-    ts: np.ndarray, req: list[float] | None, tau: float | None
-) -> dict[int, float]:
-    """Map step index -> time label (in the unit of the request) of each snapshot.
+@dataclass(frozen=True)
+class _TimeUnit:
+    """How snapshot times are given, shown and put in file names.
 
-    ``tau`` is ``sqrt(H0/g)`` when the requested times are normalised.
+    Attributes
+    ----------
+    prefix : str
+        File-name prefix of the value: ``t`` (time) or ``s`` (the footing's
+        settlement, its pseudo-time).
+    name : str
+        Unit in messages (``t/sqrt(H0/g)``, ``s``, ``m of settlement``).
+    scale : float
+        Seconds (pseudo-time) per unit.
     """
-    unit = 1.0 if tau is None else tau
+
+    prefix: str = "t"
+    name: str = "s"
+    scale: float = 1.0
+
+    def text(self, value: float) -> str:
+        """``value`` with its unit, e.g. ``t/sqrt(H0/g) = 5.25``."""
+        if self.prefix == "s":
+            return f"settlement {value:.4g} m"
+        if self.name == "s":
+            return f"t = {value:.4g} s"
+        return f"{self.name} = {value:.4g}"
+
+
+def _time_unit(sc, normalised: bool) -> _TimeUnit:
+    """The unit of ``times`` for a result with scenery ``sc``."""
+    if sc.footing is not None:  # pseudo-time is the settlement, m
+        return _TimeUnit("s", "m of settlement")
+    if normalised and sc.tau is not None:
+        h0 = "h0" if "h0" in sc.label(0.0) else "H0"
+        return _TimeUnit("t", f"t/sqrt({h0}/g)", sc.tau)
+    return _TimeUnit()
+
+
+def _pick_snapshots(
+    ts: np.ndarray, req: list[float] | None, unit: _TimeUnit | None = None
+) -> dict[int, float]:
+    """Map step index -> label (in ``unit``) of each snapshot.
+
+    A requested time within half a step of a stored step keeps its value as
+    the label; one outside the stored steps is labelled with the time of the
+    step drawn (and a warning says so, in the same unit).
+    """
+    unit = _TimeUnit() if unit is None else unit
+    scale = unit.scale
     if not req:  # 5 evenly spaced times, labelled with the step times
         picks = (np.argmin(np.abs(ts - t)) for t in np.linspace(ts[0], ts[-1], 5))
-        return {int(i): float(ts[i] / unit) for i in dict.fromkeys(picks)}
+        return {int(i): float(ts[i] / scale) for i in dict.fromkeys(picks)}
     dt = float(np.median(np.diff(ts))) if len(ts) > 1 else 0.0
     snaps: dict[int, float] = {}
     for label in req:
-        t_s = label * unit
+        t_s = label * scale
         i = int(np.argmin(np.abs(ts - t_s)))
         if abs(ts[i] - t_s) > 0.5 * dt + 1e-9 * max(1.0, abs(t_s)):
+            shown = float(np.float64(f"{ts[i] / scale:.4g}"))
+            seconds = (
+                ""
+                if unit.name in ("s", "m of settlement")
+                else (f" (t = {ts[i]:.4g} s)")
+            )
             warnings.warn(
-                f"time {label:g} is outside the stored steps "
-                f"({ts[0]:.4g}..{ts[-1]:.4g} s); drawing the step at t = {ts[i]:.4g} s",
+                f"{unit.text(label)} is outside the stored steps "
+                f"({ts[0] / scale:.4g}..{ts[-1] / scale:.4g} {unit.name}); drawing "
+                f"the step at {unit.text(shown)}{seconds}, saved as "
+                f"_{unit.prefix}{_time_label(shown)}",
                 UserWarning,
                 stacklevel=3,
             )
+            label = shown
         snaps.setdefault(i, label)
     return snaps
 
@@ -388,10 +438,14 @@ def plot_results(
     times : sequence of float or None, default None
         Snapshot times; each picks the nearest stored step (steps picked twice
         are drawn once). With ``normalised``, times are ``t / sqrt(H0 / g)`` with
-        ``H0 = aspect * length`` and ``g = gravity`` (9.81 m/s² if absent) from
+        ``H0 = aspect * half_width`` and ``g = gravity`` (9.81 m/s² if absent) from
         ``scene.json``; if the folder has no such parameters the times are
-        absolute seconds and a ``UserWarning`` says so. None or empty: 5 times
-        evenly spaced from the first to the last step.
+        absolute seconds and a ``UserWarning`` says so. For the strip footing
+        the times are settlements in m (its pseudo-time), whatever
+        ``normalised``. A time outside the stored steps draws the nearest
+        step, with a ``UserWarning`` in the same unit, and is labelled with
+        that step's time. None or empty: 5 times evenly spaced from the first
+        to the last step.
     normalised : bool, default True
         Whether ``times`` are normalised (see above) or in seconds.
     field : str or sequence of str, default "stress_yy"
@@ -424,7 +478,9 @@ def plot_results(
     -------
     list of pathlib.Path
         Files written, per field: ``<field>_t<time>.png`` per snapshot (time
-        as requested, in the unit of ``times``, up to 4 significant digits),
+        in the unit of ``times``, up to 4 significant digits: as requested, or
+        the drawn step's time when the request is outside the stored steps;
+        ``<field>_s<settlement>.png`` for the strip footing, settlement in m),
         then ``<field>.gif`` or ``<field>.mp4``; for the strip footing (2D)
         finally ``load_settlement.png``.
 
@@ -440,25 +496,24 @@ def plot_results(
     Notes
     -----
     2D results (matplotlib, :mod:`skfem_npfem.viz.figures`): axes in metres with
-    equal scales, cells coloured by the field (thin mesh edges up to 4000
-    cells), particles in no cell (``active == 0``) as dots in the same colours,
-    and the scenery of ``scene.json`` (:mod:`skfem_npfem.viz.scenery`): the floor
-    or fixed base, walls, the footing at its current settlement, the symmetry
-    axis, the initial outline; for the collapse the run-out (99 % mass front)
-    of the step and the final run-out of Lube et al. (2005); for the strip
-    footing the load-settlement curve beside the field with the step marked
-    (and ``load_settlement.png`` on its own), and the settlement instead of
-    the pseudo-time in titles.  The frame is cropped to the meshed body over
-    all steps (grains that flew off may lie outside).  3D results are shown
-    in an isometric view (pyvista, surface of the tetrahedra).  The colour
-    range is the same in every picture of a field, over all stored steps: for
-    stresses the 1-99 % range, ``min..0`` (compression only), ``0..max``
-    (tension only) or symmetric, in Pa/kPa/MPa; for magnitudes ``0..max``; for
-    plastic strain ``0`` to the 95th percentile of the plastic values (a thin
-    band of very large strains, e.g. on the floor, does not swamp the body; at
-    least 1e-6, so round-off is not coloured).  Arrows on the colour bar show
-    values beyond its range.  A step file that cannot be read is skipped with
-    a warning naming it.
+    equal scales, cells coloured by the field (thin mesh edges up to 4000 cells),
+    particles in no cell (``active == 0``: detached grains) as black-edged diamonds
+    in the same colours, counted in the legend, and the scenery of ``scene.json``
+    (:mod:`skfem_npfem.viz.scenery`): the floor or fixed base, walls, the footing at
+    its current settlement, the symmetry axis, the initial outline; for the collapse
+    the run-out (99 % mass front) of the step and the final run-out of Lube et al.
+    (2005); for the strip footing the load-settlement curve beside the field with
+    the step marked (and ``load_settlement.png`` on its own), and the settlement
+    instead of the pseudo-time in titles. The frame holds every particle of the
+    drawn steps (detached grains included) and everything the legend names. 3D
+    results are shown in an isometric view (pyvista, surface of the tetrahedra). The
+    colour range is the same in every picture of a field, over all stored steps: for
+    stresses the 1-99 % range, ``min..0`` (compression only), ``0..max`` (tension
+    only) or symmetric, in Pa/kPa/MPa; for magnitudes ``0..max``; for plastic strain
+    ``0`` to the 95th percentile of the plastic values (a thin band of very large
+    strains, e.g. on the floor, does not swamp the body; at least 1e-6, so round-off
+    is not coloured). Arrows on the colour bar show values beyond its range. A step
+    file that cannot be read is skipped with a warning naming it.
 
     Examples
     --------
@@ -472,9 +527,10 @@ def plot_results(
     if not entries:
         raise CheckpointError(f"{pvd}: the collection lists no steps")
     sc = scenery(folder)
-    if normalised and sc.tau is None and req:
+    unit = _time_unit(sc, normalised)
+    if normalised and sc.tau is None and sc.footing is None and req:
         warnings.warn(
-            f"{folder}: scene.json has no 'aspect' and 'length' parameters, so "
+            f"{folder}: scene.json has no 'aspect' and 'half_width' parameters, so "
             "times are taken as absolute seconds instead of t/sqrt(H0/g)",
             UserWarning,
             stacklevel=2,
@@ -482,7 +538,7 @@ def plot_results(
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         loaded, entries, snaps, frames = _load_picked(
-            entries, field, req, sc.tau if normalised else None, animation, max_frames
+            entries, field, req, unit, animation, max_frames
         )
     for w in caught:
         warnings.warn(str(w.message), w.category, stacklevel=2)
@@ -514,7 +570,7 @@ def plot_results(
         renderer = make(False)
         try:
             for i in sorted(snaps, key=lambda k: ts[k]):
-                path = out / f"{name}_t{_time_label(snaps[i])}.png"
+                path = out / f"{name}_{unit.prefix}{_time_label(snaps[i])}.png"
                 renderer.draw(i)
                 renderer.image(path)
                 written.append(path)
@@ -537,10 +593,10 @@ def plot_results(
     return written
 
 
-def _load_picked(entries, field, req, tau, animation, max_frames):
+def _load_picked(entries, field, req, unit, animation, max_frames):
     """Read the steps; pick the snapshots and frames among the readable ones."""
     ts = np.array([t for t, _ in entries])
-    snaps = _pick_snapshots(ts, req, tau)
+    snaps = _pick_snapshots(ts, req, unit)
     n_frames = 0 if animation == "none" else max_frames
     frames = list(_frame_indices(len(ts), n_frames)) if n_frames else []
     loaded = _load(entries, field, set(snaps) | set(frames))
@@ -549,7 +605,7 @@ def _load_picked(entries, field, req, tau, animation, max_frames):
         ts = np.array([t for t, _ in entries])
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # said on the first pass
-            snaps = _pick_snapshots(ts, req, tau)
+            snaps = _pick_snapshots(ts, req, unit)
             frames = list(_frame_indices(len(ts), n_frames)) if n_frames else []
             loaded = _load(entries, field, set(snaps) | set(frames))
         loaded.bad = []

@@ -204,7 +204,7 @@ for _foot in ("smooth", "rough"):
             "material": "mohr-coulomb",
             "c": 0,
             "phi": 30,
-            "gamma": 2e4,
+            "rho": 2e4 / 9.81,
             "footing": _foot,
             "settlement": 0.1,
             "steps": 5,
@@ -214,7 +214,7 @@ for _foot in ("smooth", "rough"):
     )
     def _foot_ngamma(footing_=_foot):
         # Measured 8.139 (+6.4 %, smooth) and 14.874 (+0.8 %, rough).
-        o = {"material": "mohr-coulomb", "c": 0.0, "phi": 30.0, "gamma": 2e4}
+        o = {"material": "mohr-coulomb", "c": 0.0, "phi": 30.0, "rho": 2e4 / 9.81}
         o |= {"footing": footing_, "settlement": 0.1, "steps": 5}
         _, m, q, its = footing(o)
         ref = N_GAMMA_30[footing_]
