@@ -60,13 +60,15 @@ from .mesh.delaunay import Triangulation, alpha_shape
 from .mesh.smoothing import NodalIntegration, nodal_integration, p1_gradients
 from .mesh.sources import AlphaShapeMesher, FixedMesh, main_body
 from .particles import Particles
-from .run.simulation import AtRest, Simulation
+from .run.rest import AtRest
+from .run.simulation import Simulation
 from .scenes import SCENES, get_scene, run_scene
 from .step.conic import ConeSolution, solve_step
 from .step.model import Model
 from .step.program import ConeInput
+from .step.records import Step, StepRecord, skfem_fields
 from .step.solver import SolverOptions
-from .step.stages import Step, StepRecord, advance, skfem_fields
+from .step.stages import advance
 from .sweeps import sweep
 
 #: Run a scene.

@@ -284,20 +284,22 @@ def test_a_collapse_stopped_by_t_end_before_rest_says_so(tmp_path):
     code, _, err = cli([*base, *sets("t_end=0.6"), "--summary", str(s)])
     assert code == 0
     m = json.loads(s.read_text())["metrics"]
-    assert m["at_rest"] is False and len(m["warnings"]) == 1
+    # (this coarse column also sheds grains: their warning comes after)
+    rest = [w for w in m["warnings"] if "t_end" in w]
+    assert m["at_rest"] is False and len(rest) == 1 and m["warnings"][0] == rest[0]
     assert m["warnings"][0].startswith(
         "column-collapse: the run ended at t_end = 0.6 s while the kinetic energy "
         "was still "
     )
     assert "not at rest, so the run-out and height are not final" in m["warnings"][0]
-    assert err.splitlines() == [f"warning: {m['warnings'][0]}"]
+    assert sorted(err.splitlines()) == sorted(f"warning: {w}" for w in m["warnings"])
     # Ended before the earliest stop at rest (min_time = 2 sqrt(H0/g)).
     code, _, err = cli([*base, *sets("t_end=0.1")])
     assert code == 0
     assert "before the earliest stop at rest, min_time = 0.4039 s" in err
     # With the rule off (rest_fraction = 0) the user chose t_end: no warning.
     code, _, err = cli([*base, *sets("t_end=0.1", "rest_fraction=0")])
-    assert code == 0 and err == ""
+    assert code == 0 and "t_end" not in err
 
 
 def test_sweep_plot_marks_the_runs_that_were_not_at_rest(tmp_path, monkeypatch):

@@ -4,6 +4,7 @@
 (signals, progress lines).
 """
 
-from .simulation import AtRest, Simulation
+from .rest import AtRest
+from .simulation import Simulation
 
 __all__ = ["AtRest", "Simulation"]

@@ -18,8 +18,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from ..errors import CheckpointError, ParameterError, RunInterrupted
 from ..io import (
     check_writable_dir,
@@ -31,7 +29,8 @@ from ..io import (
     to_jsonable,
     write_json,
 )
-from .limits import MAGNITUDES, check_steps
+from .limits import check_steps
+from .params import Param, Renamed, parse_value
 
 __all__ = [
     "DEFAULT_CHECKPOINT_EVERY",
@@ -44,136 +43,6 @@ __all__ = [
 
 #: Steps between checkpoints of scenes that do not choose (``checkpoint_every``).
 DEFAULT_CHECKPOINT_EVERY = 20
-
-
-@dataclass(frozen=True)
-class Param:
-    """One scene parameter.
-
-    Attributes
-    ----------
-    name : str
-        Name used with ``--set name=value``.
-    default : object
-        Default value (None: derived from other parameters, see ``help``).
-    unit : str
-        SI unit ("-" for dimensionless).
-    help : str
-        One-line description.
-    kind : type
-        float, int, str or bool.
-    choices : tuple or None
-        Allowed values for str/int parameters.
-    lo, hi : float
-        Allowed closed range for numbers (``lo_open``/``hi_open`` make it open).
-    note : str
-        Appended in parentheses to the allowed values (in the docs and in the
-        error of a refused value), e.g. why a method is not offered.
-    """
-
-    name: str
-    default: Any
-    unit: str
-    help: str
-    kind: type = float
-    choices: tuple | None = None
-    lo: float = -math.inf
-    hi: float = math.inf
-    lo_open: bool = False
-    hi_open: bool = False
-    note: str = ""
-
-    def allowed(self) -> str:
-        """Human-readable allowed values."""
-        if self.note:
-            return f"{self._allowed()} ({self.note})"
-        return self._allowed()
-
-    def _allowed(self) -> str:
-        if self.choices is not None:
-            return "one of " + ", ".join(map(str, self.choices))
-        if self.kind is bool:
-            return "true or false"
-        what = "an integer" if self.kind is int else "a finite number"
-        lo, hi, lo_open, hi_open, zero = self.bounds()
-        left = "(" if lo_open or math.isinf(lo) else "["
-        right = ")" if hi_open or math.isinf(hi) else "]"
-        text = f"{what} in {left}{lo:g}, {hi:g}{right}"
-        return f"0 or {text}" if zero else text
-
-    def bounds(self) -> tuple[float, float, bool, bool, bool]:
-        """``(lo, hi, lo_open, hi_open, zero_allowed)`` of a number.
-
-        The parameter's own range intersected with the magnitudes the scenes
-        run at (:data:`~skfem_npfem.scenes.limits.MAGNITUDES`); ``zero_allowed``
-        says that 0 is allowed besides ``lo..hi``.
-        """
-        lo, hi, lo_open, hi_open = self.lo, self.hi, self.lo_open, self.hi_open
-        window = MAGNITUDES.get(self.name)
-        if window is None or not lo >= 0:
-            return lo, hi, lo_open, hi_open, False
-        zero = lo == 0 and not lo_open
-        if window[0] > lo:
-            lo, lo_open = window[0], False
-        if window[1] < hi:
-            hi, hi_open = window[1], False
-        return lo, hi, lo_open, hi_open, zero
-
-    def check(self, value: Any) -> Any:
-        """Convert and validate a value (strings are parsed).
-
-        Numbers may be Python or numpy scalars (``np.int64(2)``,
-        ``np.float32(0.3)``); booleans Python or numpy bools.
-        """
-        if value is None and self.default is None:
-            return None
-        v = parse_value(self, value) if isinstance(value, str) else value
-        if isinstance(v, np.generic) and v.ndim == 0:
-            v = v.item()  # numpy scalar -> Python bool/int/float/str
-        if self.kind is bool:
-            if not isinstance(v, bool):
-                raise ParameterError(self.name, value, self.allowed())
-            return v
-        if self.kind in (int, float):
-            if isinstance(v, bool) or not isinstance(v, int | float):
-                raise ParameterError(self.name, value, self.allowed())
-            if self.kind is int and not (math.isfinite(v) and int(v) == v):
-                raise ParameterError(self.name, value, self.allowed())
-            v = self.kind(v)
-            lo, hi, lo_open, hi_open, zero = self.bounds()
-            ok = math.isfinite(v)
-            ok = ok and (v > lo if lo_open else v >= lo)
-            ok = ok and (v < hi if hi_open else v <= hi)
-            if not (ok or (zero and v == 0)):
-                raise ParameterError(self.name, value, self.allowed())
-        if self.kind is str and not isinstance(v, str):
-            raise ParameterError(self.name, value, self.allowed())
-        if self.choices is not None and v not in self.choices:
-            raise ParameterError(self.name, value, self.allowed())
-        return v
-
-
-def parse_value(param: Param, text: str) -> Any:
-    """Parse the text of ``--set name=text`` according to the parameter kind."""
-    t = text.strip()
-    try:
-        if param.kind is bool:
-            low = t.lower()
-            if low in ("1", "true", "yes", "on"):
-                return True
-            if low in ("0", "false", "no", "off"):
-                return False
-            raise ValueError
-        if param.kind is int:
-            f = float(t)
-            if f != int(f):
-                raise ValueError
-            return int(f)
-        if param.kind is float:
-            return float(t)
-    except (ValueError, OverflowError):
-        raise ParameterError(param.name, text, param.allowed()) from None
-    return t
 
 
 @dataclass
@@ -194,41 +63,6 @@ class SceneRun:
     run_kwargs: dict
     metrics: Callable[[Any], dict]
     history: list = field(default_factory=list)
-
-
-@dataclass(frozen=True)
-class Renamed:
-    """An old parameter name that still works, with a deprecation message.
-
-    Attributes
-    ----------
-    old : str
-        The old name.
-    new : str
-        The parameter that replaces it.
-    how : str
-        How the old value maps onto the new parameter(s), for the message
-        (e.g. "rho = gamma / gravity"); empty: the same value.
-    convert : callable or None
-        ``convert(value, given) -> dict`` of new parameter values from the old
-        (checked) value and the other given values; None: ``{new: value}``.
-    param : Param or None
-        How the old value is checked (None: as the new parameter).
-    """
-
-    old: str
-    new: str
-    how: str = ""
-    convert: Callable[[Any, Mapping[str, Any]], dict[str, Any]] | None = None
-    param: Param | None = None
-
-    def apply(self, value: Any, given: Mapping[str, Any], new: Param) -> dict:
-        """New parameter values for the old ``value`` (checked)."""
-        checker = self.param if self.param is not None else new
-        v = checker.check(value)
-        if self.convert is None:
-            return {self.new: v}
-        return self.convert(v, given)
 
 
 @dataclass

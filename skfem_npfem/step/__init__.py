@@ -19,8 +19,9 @@ The data flow of :func:`advance` (in :mod:`.stages`) goes through these modules:
 from .conic import ConeSolution, solve_step
 from .model import Model
 from .program import ConeInput
+from .records import Step, StepRecord
 from .solver import SolverOptions
-from .stages import Step, StepRecord, advance
+from .stages import advance
 
 __all__ = [
     "ConeInput",
