@@ -42,8 +42,8 @@ t = [r["time"] for r in summary["history"]]
 front = [r["runout"] for r in summary["history"]]
 fig, ax = plt.subplots(figsize=(5, 3.2))
 ax.plot(t, front)
-ax.axhline(summary["parameters"]["length"] * (1 + 1.2 * a), ls=":", c="k")
-ax.axhline(summary["parameters"]["length"] * (1 + 1.8 * a), ls=":", c="k")
+ax.axhline(summary["parameters"]["half_width"] * (1 + 1.2 * a), ls=":", c="k")
+ax.axhline(summary["parameters"]["half_width"] * (1 + 1.8 * a), ls=":", c="k")
 ax.set(xlabel="t (s)", ylabel="run-out (m)", title="front against the band")
 fig.tight_layout()
 fig.savefig(OUT / "runout.png", dpi=100)

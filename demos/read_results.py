@@ -51,7 +51,7 @@ print({name: a.shape for name, a in mesh.point_data.items()})
 # Mass is carried by the particles: the last file's total is the column's.
 summary = json.loads((run / "summary.json").read_text())
 par = summary["parameters"]
-column_mass = par["rho"] * par["length"] * par["length"] * par["aspect"]
+column_mass = par["rho"] * par["half_width"] * par["half_width"] * par["aspect"]
 total_mass = float(mesh.point_data["mass"].sum())
 mass_error = abs(total_mass / column_mass - 1)
 print(f"mass {total_mass:.4f} kg/m, rho L0 H0 = {column_mass:.4f} ({mass_error:.1e})")

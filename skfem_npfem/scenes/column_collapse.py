@@ -68,7 +68,7 @@ from .common import (
     solver_from,
     solver_params,
 )
-from .limits import LENGTH
+from .limits import SPACING
 from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
 from .scenery import Scenery, box, number, time_label
 
@@ -123,7 +123,7 @@ PARAMS = [
         "m",
         "particle (lattice) spacing (default L0/22: 1 035 particles at a = 2)",
         float,
-        **LENGTH,
+        **SPACING,
     ),
     Param("material", "mohr-coulomb", "-", "yield criterion", str, MATERIALS),
     Param("rho", 1800.0, "kg/m^3", "density", float, lo=0, lo_open=True),

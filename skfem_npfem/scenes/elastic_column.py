@@ -33,7 +33,7 @@ from .common import (
     solver_from,
     solver_params,
 )
-from .limits import LENGTH
+from .limits import SPACING
 from .methods import METHOD_METRICS, method_params, with_method
 from .scenery import Scenery, box, number
 
@@ -46,7 +46,7 @@ PARAMS = [
     Param(
         "width", 1.0, "m", "column width (and depth in 3D)", float, lo=0, lo_open=True
     ),
-    Param("spacing", 0.125, "m", "particle (node) spacing", float, **LENGTH),
+    Param("spacing", 0.125, "m", "particle (node) spacing", float, **SPACING),
     Param("mode", "static", "-", "static or dynamic", str, ("static", "dynamic")),
     Param("dt", 0.01, "s", "time step", float, lo=0, lo_open=True),
     Param(

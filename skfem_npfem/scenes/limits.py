@@ -35,6 +35,7 @@ __all__ = [
     "MAGNITUDES",
     "MAX_STEPS",
     "SAFETY",
+    "SPACING",
     "check_size",
     "check_steps",
     "estimate_memory_mb",
@@ -91,6 +92,10 @@ MAGNITUDES: dict[str, tuple[float, float]] = {
 #: :data:`MAGNITUDES` (``spacing``, ``radius``, ``depth``), m: the same as
 #: ``height`` and the widths there (docs/output.md).
 LENGTH: dict[str, float] = {"lo": 1e-4, "hi": 1e4}
+
+#: Range of a particle ``spacing``, m: down to 1e-6 m so that a body of the
+#: smallest size (1e-4 m) can still be resolved by tens of particles.
+SPACING: dict[str, float] = {"lo": 1e-6, "hi": 1e4}
 
 
 def estimate_memory_mb(n_particles: float, dim: int) -> float:

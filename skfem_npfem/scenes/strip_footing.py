@@ -49,7 +49,7 @@ from .common import (
     solver_from,
     solver_params,
 )
-from .limits import LENGTH
+from .limits import SPACING
 from .methods import METHOD_METRICS, method_params, with_method
 from .plateau import PlateauRule
 from .scenery import Scenery, box, number
@@ -123,7 +123,7 @@ PARAMS = [
     ),
     Param("footing", "smooth", "-", "footing-soil interface", str, ("smooth", "rough")),
     Param("half_width", 1.0, "m", "footing half-width b", float, **_POSITIVE),
-    Param("spacing", 0.125, "m", "element size under the footing", float, **LENGTH),
+    Param("spacing", 0.125, "m", "element size under the footing", float, **SPACING),
     Param(
         "grading",
         1.15,
