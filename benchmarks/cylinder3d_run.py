@@ -1,11 +1,12 @@
 #!/usr/bin/env python
 """A whole 3D quarter-cylinder PFEM run, step by step, written as JSON lines.
 
-The issue's 3D seed case is ~135 steps of 2 ms; this runs the suite's
-``cylinder3d-*`` case (``benchmarks/suite.py``) for that many steps and writes one
-line per step: time, IPM iterations, status, cumulative wall time, active
-particles, radial fronts (99 % quantile and farthest particle), top height, largest
-speed and the mesh-volume change.  A solver failure is reported with the step.
+The seed column in 3D (docs/seed_column.md) runs to rest in ~135 steps of 2 ms;
+this runs the suite's ``cylinder3d-*`` case (``benchmarks/suite.py``) for that
+many steps and writes one line per step: time, IPM iterations, status,
+cumulative wall time, active particles, radial fronts (99 % quantile and
+farthest particle), top height, largest speed and the mesh-volume change.
+A solver failure is reported with the step.
 
 Usage::
 

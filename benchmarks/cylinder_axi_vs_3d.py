@@ -1,9 +1,10 @@
 #!/usr/bin/env python
 """Axisymmetric against 3D for the seed column at matched spacing: speed and run-out.
 
-Issue 12 asks the axisymmetric model of the seed column to reach t_bar =
-t / sqrt(h0/g) = 3 at least 30x faster than the 3D quarter cylinder, with the
-run-out within 5 % of the 3D one, at matched spacing.  This script takes the
+The targets of the axisymmetric model of the seed column (docs/seed_column.md,
+"Axisymmetric against 3D"): reach t_bar = t / sqrt(h0/g) = 3 at least 30x faster
+than the 3D quarter cylinder, with the run-out within 5 % of the 3D one, at
+matched spacing.  This script takes the
 two runs at spacing ``r0 / N`` from the seed-column study
 (``demos/studies/seed_column.py``, cases ``3d-N`` and ``axi-N``; they are run there,
 or continued from their checkpoints, if they are not finished) and records:

@@ -2,7 +2,7 @@
 """The seed column in 3D: time per step of solver variants, measured interleaved.
 
 Builds the ``column-collapse`` scene's quarter cylinder (the seed column of
-issue 12, spacing ``r0 / divisions``) once per variant and advances the
+docs/seed_column.md, spacing ``r0 / divisions``) once per variant and advances the
 variants *alternately*, one step each, so that every variant sees the same
 machine load (the machine is shared); each step is timed with the harness's
 :class:`~_harness.Meter` (wall, process CPU, cores used by other processes).
@@ -14,7 +14,7 @@ the results by more than the solver tolerance shows here.
 
 Variants (``--variants``, comma separated):
 
-* ``base``: the library before issue 12 phase 2 (``strength_floor=0``);
+* ``base``: no strength floor (``strength_floor=0``, the former default);
 * ``floor``: the default of the 3D scene (``strength_floor=1e-6``);
 * ``nocnr``: ``floor`` with ``reproducible=False`` (MKL without conditional
   numerical reproducibility);

@@ -60,8 +60,9 @@ CASES: dict[str, dict] = {
 }
 DEFAULT_CASES = tuple(SIZES)
 SOLVERS = ("qdldl", "faer")
-# formulation.md §9: a straightforward implementation, granular collapse, 2-core
-# EPYC VM, seconds per 2D step (qdldl; faer 0.52 / 3.08 / 18.8 s solve).
+# docs/performance.md, "Reference timings": a straightforward implementation,
+# granular collapse, 2-core EPYC VM, seconds per 2D step (qdldl; faer 0.52 /
+# 3.08 / 18.8 s solve).
 REFERENCE_BY_SIZE = {"2d-1k": 0.32, "2d-4k": 2.3, "2d-16k": 20.0}
 REFERENCE = {
     name: REFERENCE_BY_SIZE[name.removesuffix("-confined")]
@@ -365,8 +366,8 @@ def markdown(report: dict) -> str:
         "1-min load average seen before a step (above the core count the machine "
         "was shared and the wall times are inflated).  "
         "`ref` = median / reference (0.32, 2.3, 20 s per 2D step of a "
-        "straightforward implementation, formulation.md §9: a granular collapse on "
-        "a 2-core EPYC VM — indicative only, < 1 is faster).",
+        "straightforward implementation, docs/performance.md, 'Reference timings': "
+        "a granular collapse on a 2-core EPYC VM — indicative only, < 1 is faster).",
         "",
         "| case | nodes | solver | vars / rows / nnz(A) | median s/step | cpu s | "
         "mesh/asm/setup/solve/upd/other % | s/iter | IPM iterations | status | "

@@ -54,7 +54,7 @@ import step_time as st
 #: kind "cylinder3d": 3D PFEM collapse of a quarter cylinder (R = 0.2 m, a = 2,
 #: cubic lattice with ``nr`` spacings over R, symmetry walls x = 0 and y = 0,
 #: cohesionless Drucker-Prager, Δt = 2 ms, remeshed every step): the geometry of
-#: the issue's 3D reference numbers.
+#: the 3D reference timings (docs/performance.md, "Reference timings").
 #: ``steps``: timed steps after the untimed warm-up step.
 CASES: dict[str, dict] = {
     "collapse-1k": {"kind": "collapse", "div": 22, "steps": 5},
@@ -102,7 +102,8 @@ HOPELESS = {
     ("cylinder3d-4k", "qdldl"): "qdldl is 5-9x slower than faer on 3D programs",
     ("cylinder3d-10k", "qdldl"): "as block3d-10k / qdldl",
 }
-#: Issue text, 2-core machine, straightforward implementation: s per step.
+#: Reference timings of a straightforward implementation on a 2-core machine,
+#: s per step (docs/performance.md, "Reference timings").
 #: (3D: a quarter cylinder of 3.4k / 10.7k nodes, not the block; indicative.)
 REFERENCE = {
     "collapse-1k": {"qdldl": 0.2},
@@ -110,7 +111,7 @@ REFERENCE = {
     "collapse-16k": {"faer": 17.0, "mkl": 8.2},
     "block3d-3k": {"faer": 21.0, "mkl": 9.4},
     "block3d-11k": {"mkl": 75.0},
-    # The issue's own geometry, at 3.9k / 10.0k particles instead of 3.4k / 10.7k.
+    # The reference's own geometry, at 3.9k / 10.0k particles instead of 3.4k / 10.7k.
     "cylinder3d-4k": {"faer": 21.0, "mkl": 9.4},
     "cylinder3d-10k": {"mkl": 75.0},
 }
@@ -506,7 +507,7 @@ def markdown(report: dict) -> str:
         "our CPU time); a step is clean when others < 0.25, and only clean steps "
         "enter the statistics when at least max(2, 1/3) of them are clean (`clean "
         "steps`; otherwise all steps are used and the row is contaminated by "
-        "other jobs on this 2-core machine).  `ref`: issue-text number for a "
+        "other jobs on this 2-core machine).  `ref`: reference time of a "
         "straightforward implementation with the same backend (3D: a quarter cylinder, "
         "indicative); `ratio` = s/step / ref.",
         "",

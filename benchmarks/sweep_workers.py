@@ -1,6 +1,6 @@
 """Wall time of one 8-run sweep on a local Dask cluster with 1 and 2 workers.
 
-The sweep (issue 14): ``column-collapse`` at spacing 0.02 m (L0/10), aspect
+The sweep (docs/sweep.md): ``column-collapse`` at spacing 0.02 m (L0/10), aspect
 ratio 1 and 2 x friction angle 25, 30, 35, 40 degrees, each run to rest (a few
 seconds each).  The same sweep runs with 1 and 2 workers back to back, in the
 order 1, 2, 2, 1 (``--rounds 2``) so that a drift of the machine's load hits

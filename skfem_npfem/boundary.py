@@ -37,7 +37,8 @@ class RigidWall:
 
     Contact is unilateral (gap closes, never penetrates, the wall only pushes).
     Friction is Coulomb with the *lagged* normal force of the previous step
-    (pitfall 8: associated friction would lift nodes off by ``mu |slip|``).
+    (associated friction would lift nodes off by ``mu |slip|``: docs/theory.md,
+    "Wall friction: lagged normal forces").
 
     Parameters
     ----------
@@ -158,7 +159,7 @@ class Contacts:
 
     Notes
     -----
-    Sign conventions (``formulation.md`` §4.3): the wall pushes on the body, so
+    Sign conventions (docs/theory.md, "The mixed step"): the wall pushes on the body, so
     the equilibrium rows read ``G s + r - N lambda_n - T lambda_t = f~`` with
     ``lambda_n >= 0``; the normal dual gives ``gap + n . du >= 0`` and is zero
     where ``lambda_n > 0``.  Tangential forces ``lambda_t`` act along

@@ -1,10 +1,11 @@
 """Axisymmetric N-PFEM operators: exactness, consistency and closed-form problems.
 
-References: benchmarks.md U6 (cells partition the body: here the body of
-revolution, sum V_i = pi (b^2 - a^2) h), U7 (patch test, with the hoop strain),
-U8 (divergence consistency), U9 (zero-energy modes), U12 (single-point return),
-E1 (oedometric column), P5 (thick cylinder: Lamé, and the von Mises limit
-pressure (2/sqrt 3) sigma_y ln(b/a)); docs/theory.md "Axisymmetric N-PFEM".
+References (docs/verification.md, "The reference cases"): smoothing cells (the
+cells partition the body of revolution, sum V_i = pi (b^2 - a^2) h), the patch
+test (with the hoop strain), divergence consistency, zero-energy modes, the
+single-point return, the elastic column (oedometric) and the thick-walled
+cylinder (Lamé, and the von Mises limit pressure (2/sqrt 3) sigma_y ln(b/a));
+docs/theory.md "Axisymmetric N-PFEM".
 All references are closed forms or independent scikit-fem assemblies.
 """
 
@@ -85,7 +86,7 @@ def node_major(basis, ncomp):
     return perm
 
 
-# ------------------------------------------------------------ U6: volumes ----
+# -------------------------------------------------- smoothing cells: volumes ----
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_cell_volumes_sum_to_the_body_of_revolution(seed):
     a, b, h = ANNULUS["r0"], ANNULUS["r1"], ANNULUS["h"]
@@ -117,7 +118,7 @@ def test_cell_volume_is_the_weighted_integral_not_area_times_radius():
     assert np.max(np.abs(naive[~axis] / ni.volumes[~axis] - 1)) > 0.02
 
 
-# ------------------------------------------------------- U7: patch test ----
+# ----------------------------------------------------------- patch test ----
 def hoop_reference(mesh, ur):
     """(2 pi / V_i) int phi_i u_r dA by an independent scikit-fem assembly."""
     basis = Basis(mesh, ElementTriP1(), intorder=4)
@@ -182,7 +183,7 @@ def test_G_equals_the_scikit_fem_axisymmetric_bilinear_form():
     assert np.linalg.norm(G - ref) < 1e-13 * np.linalg.norm(ref)
 
 
-# --------------------------------------------- U8: divergence consistency ----
+# ------------------------------------------------- divergence consistency ----
 def test_uniform_stress_gives_the_consistent_boundary_and_hoop_loads():
     # For uniform sigma: G sigma = int_dOmega phi sigma n 2 pi r ds
     #                              - int phi div_axi(sigma) 2 pi r dA,
@@ -216,7 +217,7 @@ def test_uniform_stress_gives_the_consistent_boundary_and_hoop_loads():
     assert np.max(np.abs(f_hyd.reshape(-1, 2)[inner])) < 1e-12 * np.abs(f_hyd).max()
 
 
-# ------------------------------------------------ U9: zero-energy modes ----
+# ---------------------------------------------------- zero-energy modes ----
 @pytest.mark.parametrize("make", [annulus, solid])
 def test_only_the_axial_translation_has_zero_energy(make):
     # K = G diag(D / V_i) G^T: in axisymmetry the only rigid motion is u_z =
@@ -253,7 +254,7 @@ def test_model_refuses_what_axisymmetry_cannot_use():
         axisymmetric_integration(annulus(), components=(0, 1, 3))
 
 
-# ------------------------------------------- E1: the oedometric column ----
+# ------------------------------------ elastic column: the oedometric column ----
 def test_oedometric_column_under_self_weight():
     # Solid cylinder R = 1, H = 4, fixed base, smooth lateral wall (u_r = 0 at
     # r = R) and the axis (u_r = 0): s_zz = -rho g (H - z), s_rr = s_tt =
@@ -291,7 +292,7 @@ def test_oedometric_column_under_self_weight():
     assert abs(new.stress[np.isclose(z, 0), 1].mean() / (-rho * g * H) - 1) <= 5e-3
 
 
-# ------------------------------------------------- P5: Lamé, elastic ----
+# ------------------------------------------ thick-walled cylinder: Lamé ----
 def lame_setup(nr, nz, a=1.0, b=2.0):
     """Annulus [a, b] x [0, hz] with rollers on top and bottom (eps_zz = 0)."""
     hz = (b - a) / nr * nz
@@ -377,7 +378,7 @@ def test_lame_thick_cylinder_plane_strain_without_locking():
     assert e5["mean_nodal"] > 5 * e5["mean_elem"]
 
 
-# ------------------------------------ P5: von Mises limit pressure ----
+# -------------------- thick-walled cylinder: von Mises limit pressure ----
 #: Published limit pressure of the internally pressurised thick cylinder of
 #: de Souza Neto, Peric & Owen (2008), plane strain: a = 100, b = 200,
 #: E = 210, nu = 0.3, sigma_y = 0.24 (Hill's (2/sqrt 3) sigma_y ln(b/a)).
@@ -436,7 +437,7 @@ def _j2(s: np.ndarray) -> np.ndarray:
     return 0.5 * np.sum(dev**2, axis=1) + s[:, 3] ** 2
 
 
-# ------------------------------- U12: Drucker-Prager with the hoop stress ----
+# ------------------ single-point return: Drucker-Prager with the hoop stress ----
 def dp_return(sig_n, eps, E, nu, alpha, k):
     """Closed-form associated Drucker-Prager return (smooth part of the cone)."""
     G, K = E / (2 * (1 + nu)), E / (3 * (1 - 2 * nu))
@@ -540,11 +541,12 @@ def test_axisymmetric_mohr_coulomb_is_three_second_order_cones(phi, c):
 @pytest.mark.parametrize("phi", [0.0, 10.0, 30.0])
 @pytest.mark.parametrize(("factor", "feasible"), [(0.99, True), (1.01, False)])
 def test_mohr_coulomb_thick_cylinder_limit_pressure(phi, factor, feasible):
-    # benchmarks.md P5, Mohr-Coulomb cylinder in plane strain (hoop stress
+    # Thick-walled cylinder, Mohr-Coulomb in plane strain (hoop stress
     # major, radial minor, axial intermediate): p_lim = c cot(phi) [(b/a)^((N-1)
     # /N) - 1] = 1.2911 c (10 deg), 1.0174 c (30 deg); Tresca 2 c ln(b/a) =
     # 1.3863 c.  The hoop-major cone is the active one.  Bisection on this
-    # 16 x 4 mesh: 1.0006, 1.00006, 1.0053 p_lim; gate +-1 % (P5's tolerance).
+    # 16 x 4 mesh: 1.0006, 1.00006, 1.0053 p_lim; gate +-1 % (the case's
+    # tolerance, docs/verification.md).
     a, b, c = 1.0, 2.0, 1.0
     s = math.sin(math.radians(phi))
     if phi == 0.0:

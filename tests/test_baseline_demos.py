@@ -1,8 +1,9 @@
 """The comparison demos in reduced form (full runs: docs/validation/comparison).
 
-References: benchmarks.md E4 (Cook's membrane, case (c): Taylor-Hood 7.7286 at
-n = 32, NS-FEM 7.273 / 7.626 at n = 8 / 16, FEM-T3 2.085 / 2.125, converged
-7.77 +- 0.01; locking index >= 0.97), T12 (remesh idempotence: N-PFEM
+References (docs/verification.md, "The reference cases"; docs/baselines.md,
+"Comparison (a)"): Cook's membrane at nu = 0.4999 (Taylor-Hood 7.7286 at
+n = 32, independent NS-FEM 7.273 / 7.626 at n = 8 / 16 and FEM-T3 2.085 / 2.125,
+converged 7.77 +- 0.01; locking index >= 0.97), remesh idempotence (N-PFEM
 < 1e-10; FEM+remapping drift reported, nonzero); undamped sudden loading of an
 elastic column doubles the static settlement (dynamic amplification factor 2,
 SPFEM without damping) while the implicit backward-Euler methods settle to
@@ -27,19 +28,19 @@ def load(name: str):
     return importlib.import_module(name)
 
 
-def test_locking_demo_quick_matches_the_catalogue():
+def test_locking_demo_quick_matches_the_published_values():
     res = load("compare_locking").main(["--quick"])
     case = res["cases"][0]
     assert case["nu"] == 0.4999
-    # Our Taylor-Hood reference reproduces the catalogue's n = 32 value.
+    # Our Taylor-Hood reference reproduces the published n = 32 value.
     assert abs(case["reference"]["values"][0] - 7.7286) < 5e-4
     m = case["methods"]
-    converged = 7.77  # catalogue E4(c), +- 0.01
-    # N-PFEM is NS-FEM: the catalogue's own values, 7.273 and 7.626.
+    converged = 7.77  # Cook's membrane at nu = 0.4999, +- 0.01
+    # N-PFEM is NS-FEM: the independent NS-FEM values, 7.273 and 7.626.
     assert abs(m["N-PFEM"]["u_C"][0] - 7.273) < 2e-3
     assert abs(m["N-PFEM"]["u_C"][1] - 7.626) < 2e-3
     assert m["N-PFEM"]["u_C"][1] / converged >= 0.97  # locking index
-    # FEM P1 locks (catalogue FEM-T3: 2.085, 2.125).
+    # FEM P1 locks (independent FEM-T3: 2.085, 2.125).
     assert abs(m["FEM P1"]["u_C"][0] - 2.085) < 2e-3
     assert m["FEM P1"]["u_C"][1] / converged < 0.35
     # FEM P2 does not lock (measured 0.965 of 7.77 at n = 16).
@@ -50,8 +51,8 @@ def test_mapping_demo_quick_remesh_idempotence(capsys):
     res = load("compare_mapping").main(["--quick"])
     rest, rigid = res["at_rest"], res["rigid_motion"]
     assert rest["n_remesh"] == 100
-    # T12: N-PFEM maps nothing; 100 re-solves on rebuilt meshes change the
-    # stresses by < 1e-10 (measured 2e-14).
+    # Remesh idempotence: N-PFEM maps nothing; 100 re-solves on rebuilt meshes
+    # change the stresses by < 1e-10 (measured 2e-14).
     assert rest["npfem"]["drift"] < 1e-10
     # FEM-remap drifts (printed for the record; measured 3.3e-2 P1 nearest,
     # 8.0e-3 P2 nearest, 3.5e-2 P1 recovery, 8e-13 P2 recovery: the P2 state

@@ -1,11 +1,11 @@
-"""FEM-remap verified on its own (benchmarks.md E1, P1, T5; formulation.md §1).
+"""FEM-remap verified on its own (docs/verification.md, "The reference cases").
 
-* E1, elastic column under self-weight (H = 10 m, E = 10 MPa, nu = 0.3,
+* The elastic column under self-weight (H = 10 m, E = 10 MPa, nu = 0.3,
   rho = 2000): P2 reproduces the exact linear stress and quadratic settlement
   (inside the space: round-off); gates 1 % (sigma_yy, rel. L2 at the Gauss
   points and at the recovered nodes) and 0.5 % (top settlement).  P1 is not
   exact: its error must fall at least linearly with h.
-* P1 (catalogue id), Prandtl strip footing, weightless Tresca soil, smooth
+* The Prandtl footing, weightless Tresca soil, smooth
   footing, displacement control, the strip-footing scene's mesh: P2 within
   3 % of 2 + pi.  P1 elements lock (constant-strain triangles with isochoric
   plastic flow, Nagtegaal et al. 1974): the pressure overshoots 2 + pi by more

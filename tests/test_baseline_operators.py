@@ -1,6 +1,6 @@
 """Gauss-point operators of the FEM baseline and its cone program.
 
-References: the patch test (benchmarks.md E5: a linear displacement gives the
+References: the patch test (docs/verification.md: a linear displacement gives the
 exact constant strain at every Gauss point), scikit-fem's own assembly of
 ``int sigma : eps(v)`` (the operator must equal it), the element area, the
 HRZ lumping fractions of the P2 triangle/tet (1/19, 16/57; 1/36, 4/27, from
@@ -58,7 +58,7 @@ def voigt(grad: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("element", ["p1", "p2"])
 def test_patch_test_and_weights(dim, element):
-    # E5: u = a + A x gives eps = sym(A) at every Gauss point (1e-12) and the
+    # Patch test: u = a + A x gives eps = sym(A) at every Gauss point (1e-12) and the
     # displacement gradient A; the weights sum to the domain measure.
     x, t = jittered(dim, seed=1)
     gm = gauss_mesh(x, t, element, FULL[dim])

@@ -1,4 +1,4 @@
-"""Closed-form return mapping against the library's cone step (U12).
+"""Closed-form return mapping against the library's cone step (single-point return).
 
 Reference: one N-PFEM step (``conic.solve_step``, an independent SOCP) of a
 patch whose boundary follows a uniform strain increment: every node's stress

@@ -9,14 +9,10 @@ field with a checkerboard on top; and an independent implementation of the
 definition (``tests/roughness_reference.py``: plain sets and counters) on the
 VTU files of a run, which must give the values the scene stored on its step
 records (to round-off), as must the public :func:`skfem_npfem.stress_roughness`
-on the same files.  Where a copy of the project's original stand-alone tool is
-found beside the checkout, it is compared too.
+on the same files.
 """
 
 from __future__ import annotations
-
-import importlib.util
-from pathlib import Path
 
 import meshio
 import numpy as np
@@ -33,12 +29,6 @@ from skfem_npfem.baseline.roughness import (
 )
 from skfem_npfem.io import read_pvd
 from skfem_npfem.scenes import run_scene
-
-ROOT = Path(__file__).resolve().parent.parent
-TOOL = [
-    ROOT.parent / "shared" / "tools" / "stress_roughness.py",
-    Path("/work/shared/tools/stress_roughness.py"),
-]
 
 
 def lattice(n: int = 12) -> MeshTri:
@@ -86,19 +76,7 @@ def test_floor_is_the_roughness_of_the_smooth_part():
     assert roughness_floor(p.T, m.t.T, cubic) == pytest.approx(r_cubic, rel=1e-9)
 
 
-def _tool():
-    """The stand-alone tool the measure was first defined by, if it is around."""
-    for path in TOOL:
-        if path.is_file():
-            spec = importlib.util.spec_from_file_location("stress_roughness", path)
-            module = importlib.util.module_from_spec(spec)
-            spec.loader.exec_module(module)
-            return module
-    return None
-
-
-def test_scene_records_equal_the_reference_measure(tmp_path, capsys):
-    tool = _tool()
+def test_scene_records_equal_the_reference_measure(tmp_path):
     res = run_scene(
         "column-collapse",
         {
@@ -121,14 +99,6 @@ def test_scene_records_equal_the_reference_measure(tmp_path, capsys):
         assert n >= MIN_INTERIOR
         assert history[step] == pytest.approx(ref, rel=1e-12, abs=1e-15)
         assert npfem.stress_roughness(cells, stress) == history[step]
-        if tool is not None:
-            r_tool, _ = tool.roughness(m.points[:, :2], cells, stress[:, 1])
-            assert history[step] == pytest.approx(r_tool, rel=1e-12, abs=1e-15)
         checked += 1
     assert checked == 4
     assert res["metrics"]["stress_roughness"] == history[max(history)]
-    if tool is not None:
-        assert tool.main([str(tmp_path)]) == 0
-        last = capsys.readouterr().out.strip().splitlines()[-1].split()
-        r_last = res["metrics"]["stress_roughness"]
-        assert float(last[3]) == pytest.approx(r_last, abs=5e-5)

@@ -1,15 +1,15 @@
-"""SPFEM verified on its own (benchmarks.md E1, U13; explicit stability).
+"""SPFEM verified on its own (elastic column, simple shear; explicit stability).
 
 * The stable-step estimate (smallest smoothing-cell size / P-wave speed) is
   below the exact central-difference limit ``2 / omega_max`` of the nodally
   integrated stiffness (largest eigenvalue by ARPACK) on lattice, jittered,
   random and alpha-shape meshes in 2D and 3D.
-* E1: the elastic column under gravity, released from rest with
+* The elastic column under gravity, released from rest with
   mass-proportional damping ``alpha = 2 omega_1`` (first oedometric mode
   critically damped), settles to the static solution: sigma_yy and sigma_xx
   within 1 % (rel. L2), settlement within 0.5 %, and the state equals the
   library's static N-PFEM step on the same mesh (same discretisation) to 1e-4.
-* U13: simple shear of a Tresca patch: tau reaches c and stays there.
+* Simple shear of a Tresca patch: tau reaches c and stays there.
 * A time step above the stable one is refused before any step.
 """
 

@@ -1,4 +1,4 @@
-"""Gauss-point transfer between unrelated meshes (benchmarks.md §7).
+"""Gauss-point transfer between unrelated meshes (docs/baselines.md, "Verification").
 
 References: a linear field must be reproduced to round-off by the recovery
 transfer (patch recovery + linear interpolation is linear-exact) on irregular
@@ -6,7 +6,7 @@ meshes in 2D and 3D, for P1 and P2 Gauss points; the nearest-point transfer is
 not exact (its error is of the order of the point spacing times the
 gradient); point location must agree with an exhaustive search; for a smooth
 non-linear field the recovery error falls at least linearly with h; the
-integral of the field changes by <= 1 % (§7).
+integral of the field changes by <= 1 %.
 """
 
 from __future__ import annotations

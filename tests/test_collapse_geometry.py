@@ -4,16 +4,13 @@ input, and the stress roughness against its definition.
 References: mass conservation (exact), the volume of the lattice body (the
 full ring pi r0^2 h0 in axisymmetry, L0 H0 W for the box), lattice counts by
 enumeration, Lube et al. 2004's law, and an independent implementation of the
-stress-roughness definition (``tests/roughness_reference.py``; also the
-project's original stand-alone tool where a copy is found beside the checkout).
+stress-roughness definition (``tests/roughness_reference.py``).
 """
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
-from pathlib import Path
 
 import meshio
 import numpy as np
@@ -29,20 +26,7 @@ from skfem_npfem.scenes.collapse_runs import lube2004_runout
 from skfem_npfem.scenes.sizing import lattice_particles
 from skfem_npfem.viz.scenery import scenery
 
-ROOT = Path(__file__).resolve().parents[1]
 R0, H0, RHO = 0.039, 0.078, 1800.0
-
-
-def original_tool():
-    """The stand-alone tool the measure was first defined by, if it is around."""
-    for parent in ROOT.parents:
-        path = parent / "shared" / "tools" / "stress_roughness.py"
-        if path.exists():
-            spec = importlib.util.spec_from_file_location("stress_roughness", path)
-            module = importlib.util.module_from_spec(spec)
-            spec.loader.exec_module(module)
-            return module
-    return None
 
 
 def run_cli(tmp_path, name, *sets):
@@ -216,9 +200,8 @@ def test_roughness_equals_the_reference_measure(tmp_path, geometry):
     # The per-step stress_roughness of the run equals the independent
     # implementation of the definition on every written VTU (1e-12 relative;
     # NaN where both find fewer than 10 interior particles), as do the public
-    # npfem.stress_roughness on the file and, where found, the original tool;
-    # the summary's stress_roughness is the last step's.
-    tool = original_tool()
+    # npfem.stress_roughness on the file; the summary's stress_roughness is the
+    # last step's.
     spacing = R0 / 8
     summ, out = run_cli(
         tmp_path, geometry, f"geometry={geometry}", f"spacing={spacing}",
@@ -233,22 +216,18 @@ def test_roughness_equals_the_reference_measure(tmp_path, geometry):
         dim = cells.shape[1] - 1
         stress = m.point_data["stress"]
         ref, _ = reference_roughness(cells, stress[:, dim - 1])
-        refs = [ref]
-        if tool is not None:
-            refs.append(tool.roughness(m.points[:, :dim], cells, stress[:, dim - 1])[0])
         ours = per_step[step]
         public = npfem.stress_roughness(cells, stress)
         if ours is None or not math.isfinite(ref):
             assert ours is None and not math.isfinite(public)
-            assert not any(math.isfinite(r) for r in refs)
+            assert not math.isfinite(ref)
             continue
         assert public == ours
-        for r in refs:
-            assert abs(ours - r) <= 1e-12 * r
+        assert abs(ours - ref) <= 1e-12 * ref
         compared += 1
     # 3D: the second step's mesh has ~2 800 internal facets where zero-volume
     # slivers of the (still nearly cubic) lattice were dropped, and no
-    # interior particle by the tool's definition (both give NaN there).
+    # interior particle by the definition (scene and reference both give NaN).
     assert compared >= (1 if geometry == "quarter-cylinder" else 2)
     last = summ["history"][-1]["stress_roughness"]
     assert summ["metrics"]["stress_roughness"] == last

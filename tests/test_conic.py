@@ -1,8 +1,9 @@
 """The Clarabel step: duals vs a direct solve, cone algebra, returns, errors.
 
-References: formulation.md §3-§5 (Δu = -z_eq, reactions, scaling), §4.4 (cones),
-§4.7 (frozen friction), §9 (elastic programs take 0 IPM iterations);
-benchmarks.md U11-U13.
+References: docs/theory.md, "The mixed step", "The displacement from the duals"
+and "Scaling" (Δu = -z_eq, reactions, scaling; the cones; elastic programs take 0
+IPM iterations), "Non-associated flow: frozen friction"; docs/verification.md,
+"The reference cases" (cone algebra, single-point return, simple shear).
 """
 
 from __future__ import annotations
@@ -138,7 +139,7 @@ def test_duals_equal_direct_displacement_solve(dim, comps, prescribe_top):
 
 def test_dynamic_theta_step_equals_direct_solve():
     # θ1 = θ2 = ½ with nonzero σ_n and v_n.  With σ = σ_n + D Bbar Δu and
-    # r = M~ Δu/Δt², the equilibrium G σ + r = f~ of formulation.md §3 reads
+    # r = M~ Δu/Δt², the equilibrium G σ + r = f~ (docs/theory.md) reads
     # (K + M~/Δt²) Δu = f/θ1 + M~ v_n/Δt - G σ_n/θ1,  M~ = M/(θ1θ2)
     # (G σ_n from σ plus ((1-θ1)/θ1) G σ_n from f~).
     dim, comps = 2, (0, 1, 3)
@@ -194,7 +195,7 @@ def test_elastic_program_has_only_equilibrium_rows_and_zero_iterations():
     # Only the zero cone of the free-dof equilibrium rows (no SOC, no cut-off).
     assert sol.sizes["rows"] == n_free
     assert sol.sizes["variables"] == 3 * data.operator.n_nodes
-    # Elastic-only programs are one KKT solve: 0 IPM iterations (formulation §9).
+    # Elastic-only programs are one KKT solve: 0 IPM iterations.
     assert sol.iterations == 0
     assert sol.status == "Solved"
 
@@ -210,7 +211,7 @@ def test_scaling_does_not_change_the_answer(prescribe_top):
     assert np.linalg.norm(on.sigma - off.sigma) < 1e-6 * np.linalg.norm(on.sigma)
 
 
-# ---------------------------------------------------- (d) cone algebra U11 ----
+# -------------------------------------------------------- (d) cone algebra ----
 def cone_residual(mat, dim, comps, sigma_full, sigma_n=None):
     """(k - a^T s - ||M s||) / k for one stress point, via material.cone()."""
     sigma_full = np.atleast_2d(sigma_full)
@@ -264,7 +265,7 @@ def test_drucker_prager_plane_strain_match_reproduces_mc_peak(phi, angle):
     p1 = N * p3 + 2 * C_COH * math.sqrt(N)
     sig = in_plane(-p3, -p1, angle)
     t = math.tan(f)
-    alpha = t / math.sqrt(9 + 12 * t * t)  # benchmarks.md conventions
+    alpha = t / math.sqrt(9 + 12 * t * t)  # the plane-strain match
     R = (p1 - p3) / 2
     pm = -(p1 + p3) / 2
     sig[2] = pm - 3 * alpha * R / math.sqrt(1 - 3 * alpha**2)
@@ -349,7 +350,7 @@ def test_frozen_friction_strength(cls):
         assert np.allclose(a_psi, math.sin(math.radians(psi)) * np.array([1, 1, 0]))
 
 
-# ---------------------------------------- (e) uniform-strain returns U12/U13 ----
+# -------------------------- (e) uniform-strain returns and simple shear ----
 def uniform_strain_step(mesh, mat, comps, grad, sigma_n_row, options=None, step=None):
     """All boundary nodes follow u = grad·x; interior nodes are free."""
     d, n = mesh.dim(), mesh.p.shape[1]
@@ -456,7 +457,8 @@ RETURN_TOL = 5e-5 * C_COH
 
 @pytest.mark.parametrize("factor", [0.5, 1.0, 10.0])
 def test_single_step_matches_radial_return_von_mises_plane_strain(factor):
-    # U12: elastic, just at yield and 10x past yield from a prestressed state.
+    # Single-point return: elastic, just at yield and 10x past yield from a
+    # prestressed state.
     sy = math.sqrt(3) * C_COH
     mat = VonMises(E, NU, sigma_y=sy)
     k = sy / math.sqrt(3)
@@ -486,9 +488,9 @@ def test_single_step_matches_radial_return_von_mises_plane_strain(factor):
 
 
 def test_single_step_matches_radial_return_drucker_prager_3d():
-    # U12 in 3D: DP (compression match) on a jittered tet patch, a random
-    # deviatoric strain increment well past yield; every node (interior ones
-    # free) equals the closed-form return.
+    # Single-point return in 3D: DP (compression match) on a jittered tet
+    # patch, a random deviatoric strain increment well past yield; every node
+    # (interior ones free) equals the closed-form return.
     mesh = jittered_block(3, n=3, size=(1.0, 1.0, 1.0), seed=12)
     mat = DruckerPrager(E, NU, c=C_COH, phi=30.0, match="compression")
     alpha, k = mat.alpha_k(30.0)

@@ -1,6 +1,7 @@
 """Rigid-wall contact: sign conventions, lagged Coulomb friction, impacts.
 
-Benchmarks (``benchmarks.md`` E7, ``formulation.md`` §3-§4, pitfalls 3, 8, 11):
+References (docs/verification.md, "Contact" and "The reference cases", block on an
+incline; docs/theory.md, "Pitfalls the implementation avoids"):
 
 * an elastic block on an inclined plane sticks when ``tan(theta) < mu`` and
   otherwise slides with ``s = a t^2 / 2``, ``a = g (sin(theta) - mu cos(theta))``;
@@ -10,7 +11,7 @@ Benchmarks (``benchmarks.md`` E7, ``formulation.md`` §3-§4, pitfalls 3, 8, 11)
 The block is built already lying on the plane ``n . x = 0`` with
 ``n = (-sin(theta), cos(theta))`` (gravity stays along ``-e_d``), and the lagged
 normal forces are initialised from the weight so that friction acts from the
-first step (pitfall 8).
+first step (docs/theory.md, "Wall friction: lagged normal forces").
 
 Backward Euler (``theta1 = theta2 = 1``) moves a uniformly accelerated body by
 exactly ``a t (t + dt) / 2`` after ``t / dt`` steps; the ``dt / t`` difference to
@@ -308,7 +309,7 @@ def test_missing_wall_force_columns():
         advance(p, model, 0.01, FixedMesh(mesh.t))
 
 
-# --- block on an incline (benchmarks.md E7) ----------------------------------
+# --- block on an incline -------------------------------------------------------
 
 
 def test_incline_sticks_below_friction_angle():
@@ -422,7 +423,8 @@ def test_drop_theta2_one_is_perfectly_plastic():
 
 
 def test_drop_theta2_half_bounces():
-    """Contrast (pitfall 3): theta2 = 1/2 makes the impact elastic."""
+    """Contrast: theta2 = 1/2 makes the impact elastic (docs/theory.md, "Time
+    integration: why θ2 = 1")."""
     _, _, t, yb, _, ymin, t_imp, _ = _drop(0.5, t_end=0.13)
     assert ymin.min() >= -1e-9
     assert yb[t > t_imp].max() > 1e-3  # measured 8.7 mm (theta2 = 1: 6e-5 m)

@@ -62,8 +62,8 @@ def test_summary_keys_match_the_documented_contract():
 def test_readme_first_script_runs_as_written(tmp_path):
     # The first Python block of README.md, run unchanged in a fresh interpreter.
     # Its printed numbers are checked against their analytic references: the
-    # elastic column's sigma_yy = -rho g (H - y) (E1; an elastic program is one
-    # KKT solve, 0 interior-point iterations) and Prandtl's q/c = 2 + pi (P1).
+    # elastic column's sigma_yy = -rho g (H - y) (an elastic program is one KKT
+    # solve, 0 interior-point iterations) and Prandtl's q/c = 2 + pi.
     readme = (ROOT / "README.md").read_text()
     script = re.search(r"```python\n(.*?)```", readme, re.S).group(1)
     (tmp_path / "first.py").write_text(script)

@@ -115,7 +115,7 @@ def test_gallery_has_a_page_per_demo(site):
 
 def test_gallery_examples_ran_and_show_their_figures(site):
     # The short examples run at build time: the one-step page shows the
-    # printed error of the column against sigma_yy = -rho g (H - y) (E1) and
+    # printed error of the elastic column against sigma_yy = -rho g (H - y) and
     # the figure the script saved.
     text = page_text(site, "gallery/demos-one_step_by_hand.html")
     err = float(re.search(r"sigma_yy relative L2 error: ([\d.e+-]+)", text)[1])

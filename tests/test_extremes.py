@@ -1,4 +1,4 @@
-"""Numerical stability at the extremes (issue 4): benchmarks.md T1, T5-T9.
+"""Numerical stability at the extremes (docs/extremes.md).
 
 The cases (parameters, expected physical answer or documented error, the
 check) live in :mod:`cases.extremes`, shared with

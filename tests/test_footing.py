@@ -89,9 +89,9 @@ def test_increments_equal_then_growing_and_landing_on_the_cap():
 @pytest.mark.parametrize(
     ("phi", "footing", "gate"),
     [
-        (0.0, "smooth", 0.03),  # P1: 2 + pi within 3 % (measured +0.39 %)
-        (20.0, "smooth", 0.03),  # P2: N_c(20) within 3 % (measured -1.34 %)
-        (30.0, "smooth", 0.05),  # P2: N_c(30) within 5 % (measured -3.41 %)
+        (0.0, "smooth", 0.03),  # Prandtl footing: 2 + pi within 3 % (measured +0.39 %)
+        (20.0, "smooth", 0.03),  # N_c footing: N_c(20) within 3 % (measured -1.34 %)
+        (30.0, "smooth", 0.05),  # N_c footing: N_c(30) within 5 % (measured -3.41 %)
         (30.0, "rough", 0.05),  # exact for rough too (measured -1.56 %)
     ],
 )

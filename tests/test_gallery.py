@@ -3,8 +3,8 @@
 Each script is run whole (``runpy``, as ``__main__``) with its figures sent to
 a temporary folder (``NPFEM_GALLERY_OUT``); the number it exposes is checked
 against an independent reference with the stated tolerance: the closed form of
-the elastic column (E1), Prandtl's q/c = 2 + pi for the smooth strip footing
-on weightless Tresca soil (P1), the experimental run-out band of the granular
+the elastic column, Prandtl's q/c = 2 + pi for the smooth strip footing
+on weightless Tresca soil, the experimental run-out band of the granular
 column collapse (Lube et al. 2005: 1.2 a; Lajeunesse et al. 2005: 1.8 a), and
 static equilibrium or mass conservation (floor reactions = weight, total mass
 = rho x the column's area).

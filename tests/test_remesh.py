@@ -97,7 +97,7 @@ def on_box_surface(x: np.ndarray, lo: float, hi: float, tol: float) -> np.ndarra
 
 
 # --------------------------------------------------------------------------- #
-# U1: unit square lattice
+# Alpha shape of a lattice: unit square
 
 
 @pytest.mark.parametrize("alpha", [0.8, 1.3, 2.0])

@@ -40,7 +40,7 @@ def constrained_modulus(E: float, nu: float = NU) -> float:
 
 
 def column_errors(overrides: dict) -> dict:
-    """Independent E1 errors from the particles of an elastic-column run."""
+    """Independent elastic-column errors from the particles of a run."""
     sim, metrics, _ = run_built("elastic-column", overrides)
     p = sim.particles
     dim = p.dim
@@ -67,7 +67,7 @@ def column_errors(overrides: dict) -> dict:
     return out
 
 
-# -------------------------------------------------------------- E1, static ----
+# ---------------------------------------------------- elastic column, static ----
 def test_elastic_column_static_2d_accuracy_and_convergence():
     errs = {s: column_errors({"spacing": s}) for s in (0.25, 0.125, 0.0625)}
     e = errs[0.125]
@@ -93,7 +93,7 @@ def test_elastic_column_static_2d_accuracy_and_convergence():
 
 
 def test_elastic_column_independent_of_cells_across():
-    # E1: 1, 2 or 8 cells across the width give the same settlement (0.1 %).
+    # Elastic column: 1, 2 or 8 cells across the width give the same settlement (0.1 %).
     s = [column_errors({"width": w})["metrics"]["settlement"] for w in (0.125, 1.0)]
     assert s[0] == pytest.approx(s[1], rel=1e-3)
 
@@ -107,7 +107,7 @@ def test_elastic_column_static_3d():
         assert errs[0.125][key] < errs[0.25][key], key
 
 
-# ------------------------------------------------------------- E2, dynamic ----
+# ------------------------------------------------ column period, dynamic ----
 def test_elastic_column_sudden_gravity_period():
     E = 1.0e8
     M = constrained_modulus(E)

@@ -1,8 +1,9 @@
 """Nodal (smoothing-cell) integration: patch tests and the scikit-fem identity.
 
-References: benchmarks.md U6 (cells partition the domain), U7 (smoothed strain
-exact for linear fields), U8 (divergence consistency), U9 (zero-energy modes);
-formulation.md §2 (G is the scikit-fem bilinear form (tau, v) -> ∫ tau·eps(v)).
+References (docs/verification.md, "The reference cases"): smoothing cells
+(they partition the domain), the patch test (smoothed strain exact for linear
+fields), divergence consistency, zero-energy modes; docs/theory.md, "Nodal
+integration" (G is the scikit-fem bilinear form (tau, v) -> ∫ tau·eps(v)).
 """
 
 from __future__ import annotations
@@ -141,8 +142,9 @@ def test_rows_annihilate_constants(make_mesh):
 
 
 def test_divergence_consistency_boundary_traction():
-    # U8: G @ (constant stress) is the consistent nodal force of the boundary
-    # traction sigma·n (interior nodes: zero).  Reference computed edge by edge.
+    # Divergence consistency: G @ (constant stress) is the consistent nodal
+    # force of the boundary traction sigma·n (interior nodes: zero).  Reference
+    # computed edge by edge.
     mesh, _ = jittered_square()
     n = mesh.p.shape[1]
     sig = np.array([1.3, -0.7, 0.4, 0.25])  # xx, yy, zz, xy
@@ -207,7 +209,8 @@ def test_G_equals_scikit_fem_bilinear_form(make_mesh, components):
     ni = nodal_integration(mesh, components)
     ref = _skfem_G(mesh, components)
     G = ni.G.toarray()
-    # Assembly identity of formulation.md §2 (1e-12 relative, Frobenius).
+    # Assembly identity of docs/theory.md, "Nodal integration" (1e-12 relative,
+    # Frobenius).
     assert np.linalg.norm(G - ref) < 1e-12 * np.linalg.norm(ref)
 
 
@@ -234,7 +237,7 @@ def _nodal_stiffness(mesh, E=1.0, nu=0.3):
     ],
 )
 def test_zero_energy_modes_are_rigid_only(make_mesh, n_rigid):
-    # U9: a free patch has exactly the rigid-body zero eigenvalues
+    # Zero-energy modes: a free patch has exactly the rigid-body zero eigenvalues
     # (|lambda| < 1e-10 max lambda); more zeros would be spurious modes.
     mesh, _ = make_mesh()
     K = _nodal_stiffness(mesh)

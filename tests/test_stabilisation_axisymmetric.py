@@ -1,4 +1,4 @@
-"""The element-residual stabilisation in axisymmetry: the hoop terms (issue 12).
+"""The element-residual stabilisation in axisymmetry: the hoop terms.
 
 References: the divergence of a body of revolution (hoop terms
 ``(s_rr - s_tt)/r`` and ``s_rz/r``) applied to closed-form fields; the

@@ -3,9 +3,10 @@
 
 The column-collapse scene reports ``volume_change``, the relative change of the
 alpha-shape mesh area between t = 0 and the end (docs/validation.md: -3 to -11 %
-for a >= 2; the G1 gate asks for 1 %).  Particle masses are exact, so the area is
-a diagnostic of the discretisation, not of mass conservation.  This script splits
-its change exactly into the two things a PFEM step does:
+for a >= 2; the validation's area gate asks for 1 %).  Particle masses are
+exact, so the area is a diagnostic of the discretisation, not of mass
+conservation.  This script splits its change exactly into the two things a PFEM
+step does:
 
 * **solve**: the area change of the step's own mesh when its nodes move by the
   solved increment Δu.  For a P1 triangle with displacement gradient G (constant

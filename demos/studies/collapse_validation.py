@@ -1,4 +1,4 @@
-"""Validation G1: 2D granular column collapse against the experimental laws.
+"""Validation: 2D granular column collapse against the experimental laws.
 
 Sweeps the aspect ratio ``a = H0/L0`` of the ``column-collapse`` scene (half
 column against a smooth wall, plane strain, Mohr-Coulomb phi = 30 deg, psi = 0,

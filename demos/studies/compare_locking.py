@@ -1,12 +1,12 @@
 #!/usr/bin/env python
 """Volumetric locking: Cook's membrane in plane strain, N-PFEM vs FEM P1 vs FEM P2.
 
-Cook's membrane (benchmarks.md E4): the trapezoid (0,0), (48,44), (48,60),
-(0,44), clamped at x = 0, with a uniform vertical shear of total force
-F = 100 on the edge x = 48; plane strain, E = 250, nu = 0.3, 0.49, 0.4999
-(case (c) of the catalogue at 0.4999).  Compared: the vertical displacement
-of the corner C = (48, 60) on n x n meshes (a tensor triangulation of the unit
-square mapped onto the trapezoid), n = 4, 8, 16, 32, for
+Cook's membrane (docs/verification.md, "The reference cases"): the trapezoid
+(0,0), (48,44), (48,60), (0,44), clamped at x = 0, with a uniform vertical shear
+of total force F = 100 on the edge x = 48; plane strain, E = 250, nu = 0.3,
+0.49, 0.4999 (the near-incompressible case at 0.4999). Compared: the vertical
+displacement of the corner C = (48, 60) on n x n meshes (a tensor triangulation
+of the unit square mapped onto the trapezoid), n = 4, 8, 16, 32, for
 
 * N-PFEM: the library's static step (``conic.solve_step``) with nodal
   integration, loads from the consistent P1 edge traction;
@@ -16,7 +16,7 @@ square mapped onto the trapezoid), n = 4, 8, 16, 32, for
 Reference: our own converged mixed solution, Taylor-Hood P2-P1 with the
 penalty coupling ``- p q / lambda`` (valid for every nu), assembled with
 scikit-fem on n = 32, 64, 128 and extrapolated (Richardson with the observed
-order).  The catalogue's independent value for nu = 0.4999 is 7.77 +- 0.01
+order).  The published value for nu = 0.4999 is 7.77 +- 0.01
 (Taylor-Hood 7.7286 / 7.7510 / 7.7616 at n = 32 / 64 / 128).
 
 Usage (from the repository root)::

@@ -3,14 +3,14 @@
 
 Two experiments, each for N-PFEM and FEM-remap P1/P2 x nearest/recovery:
 
-1. **At rest** (benchmarks.md T12): the geostatic elastic column (W = 1 m,
-   H = 4 m, E = 10 MPa, nu = 0.3, rho = 2000 kg/m^3, spacing 0.25 m) is
-   brought to equilibrium by one static step, then remeshed 100 times without
-   motion (small-strain steps: ``update_geometry=False`` and no objective
-   rotation; with geometry updates every static re-solve moves the settled
-   particles a little, which flips lattice diagonals and changes the N-PFEM
-   equilibrium too).  N-PFEM goes through the library's ``advance`` with an
-   ``AlphaShapeMesher`` every time (mesh rebuilt, cone program re-solved);
+1. **At rest** (remesh idempotence, docs/verification.md): the geostatic elastic
+   column (W = 1 m, H = 4 m, E = 10 MPa, nu = 0.3, rho = 2000 kg/m^3, spacing
+   0.25 m) is brought to equilibrium by one static step, then remeshed 100 times
+   without motion (small-strain steps: ``update_geometry=False`` and no
+   objective rotation; with geometry updates every static re-solve moves the
+   settled particles a little, which flips lattice diagonals and changes the
+   N-PFEM equilibrium too). N-PFEM goes through the library's ``advance`` with
+   an ``AlphaShapeMesher`` every time (mesh rebuilt, cone program re-solved);
    FEM-remap's Gauss-point state is transferred to each new mesh.  An alpha
    shape of unmoved particles is the same mesh every time (and FEM-remap then
    skips the transfer), so each FEM remesh uses a different jitter seed: the
@@ -68,7 +68,7 @@ def _rel(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def _column(spacing: float):
-    """Particles and static model of the column; no motion (T12)."""
+    """Particles and static model of the column; no motion."""
     scene = get_scene("elastic-column")
     sim = scene.build(scene.resolve({"spacing": spacing})).simulation
     return sim.particles, dataclasses.replace(
@@ -83,7 +83,7 @@ def _nodal(state) -> np.ndarray:
 
 
 def at_rest(n_remesh: int = 100, spacing: float = 0.25) -> dict:
-    """Experiment 1 (T12): drift of a column at rest under repeated remeshing."""
+    """Experiment 1: drift of a column at rest under repeated remeshing."""
     p, model = _column(spacing)
     mesher = AlphaShapeMesher(h=spacing, alpha=1.3)
     p0, _ = advance(p, model, 1.0, mesher)
@@ -259,7 +259,7 @@ def plot(result: dict, path: Path) -> None:
         ax.set_xlabel("remeshes")
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_ylabel("relative L2 change of particle stresses")
-    axes[0].set_title("column at rest, remeshed (T12)")
+    axes[0].set_title("column at rest, remeshed")
     axes[1].set_ylabel("RMS drift of q = sqrt(3 J2)")
     axes[1].set_title("pre-stressed block moved rigidly")
     axes[1].legend(fontsize=8)

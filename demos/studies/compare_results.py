@@ -14,9 +14,9 @@ that wall time and peak memory are each run's own:
 2. **Column collapse** a = 2 (scene ``column-collapse``), to rest: the
    normalised run-out ``(L_inf - L0)/L0`` against the experimental band
    [1.2 a, 1.8 a] = [2.4, 3.6] (Lube et al. 2005 to Lajeunesse et al. 2005,
-   benchmarks.md G1) and Lube's value at a = 2 (2.47, transition band), the
+   docs/validation.md) and Lube's value at a = 2 (2.47, transition band), the
    final height ``H_inf / L0`` against ``~1.0 a^0.4 = 1.32`` (Lube et al.,
-   quality [Q]), for N-PFEM, FEM-remap P1/P2 (recovery) and SPFEM.
+   approximate), for N-PFEM, FEM-remap P1/P2 (recovery) and SPFEM.
 3. **Cost** of each run: steps (SPFEM: also its explicit substeps), median
    time per step, total wall time, peak memory of the process.
 
@@ -62,7 +62,7 @@ SOILS = {
 }
 ASPECT = 2.0
 BAND = (1.2 * ASPECT, 1.8 * ASPECT)  # experimental run-out envelope at a = 2
-HEIGHT_LAW = ASPECT**0.4  # Lube et al. 2005, large a, [Q]
+HEIGHT_LAW = ASPECT**0.4  # Lube et al. 2005, large a, approximate
 
 
 def key(*labels: str) -> str:

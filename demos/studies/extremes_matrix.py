@@ -233,7 +233,7 @@ def markdown(rows: list[dict], summary: dict) -> str:
         "spacing 0.0625). At 50 deg the Prandtl mechanism reaches about 36 b "
         "from the footing edge, so that case needs a 45 b block.",
         "* Heavy cohesionless soil (N_gamma, 30 deg) lands above the exact "
-        "values: +6.4 % smooth, +0.8 % rough (P3 gates 7 % and 5 %).",
+        "values: +6.4 % smooth, +0.8 % rough (N_gamma footing gates 7 % and 5 %).",
         "* A single static step of a very soft column (E = 1 kPa, settlement "
         "29 H) is still the small-strain answer, but the objective stress "
         "rotation by the spin of that increment adds some shear (2.3 % of the "

@@ -847,7 +847,7 @@ def time_per_step() -> str:
             "MKL Pardiso",
             "fast preset (best backend)",
             "MKL, `reproducible=False`",
-            "reference (issue)",
+            "reference (straightforward implementation)",
             "target",
             "met",
         ],

@@ -17,7 +17,8 @@ co-circular ties of a lattice with its lifted jitter), a geostatic stress
 ``s_zz = -rho g (h0 - z)``, ``s_rr = s_tt = K0 s_zz`` (``s_xx = s_yy`` in 3D),
 masses ``rho V_i`` from the initial mesh, and floor forces equal to the weight
 of the lattice column standing on each base particle (the lagged normal force of
-the first step's floor friction, formulation.md pitfall 8).
+the first step's floor friction: docs/theory.md, "Wall friction: lagged normal
+forces").
 
 The seed case (:data:`SEED`) is the reference paper's column: ``r0 = 3.9`` cm,
 ``h0 = 7.8`` cm, ``rho = 1800``, ``E = 10`` MPa, ``nu = 0.3``, ``phi = 30``,

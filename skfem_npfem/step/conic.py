@@ -1,6 +1,6 @@
 """One N-PFEM time step as a Clarabel cone program.
 
-The mixed (stress-based) step of ``formulation.md`` §3-§5:
+The mixed (stress-based) step of docs/theory.md ("The mixed step", "Scaling"):
 
     minimise   1/2 sum_p V_p (s_p - s_n,p)^T C (s_p - s_n,p)
                + 1/2 sum_j dt^2/m~_j r_j^2
@@ -18,7 +18,7 @@ The mixed (stress-based) step of ``formulation.md`` §3-§5:
    ``s*``, a length ``h`` and a displacement scale ``U*`` (``s* h / E`` for
    static steps, smaller when inertia dominates: :func:`displacement_scale`);
    without it the interior-point method needs several times the iterations or
-   fails (pitfall 5);
+   fails (docs/theory.md, "Scaling");
 3. **solve** (:func:`~skfem_npfem.step.solver.solve_clarabel`), with the refined
    retry;
 4. **recover** (:func:`recover`): the displacement increment is the multiplier
@@ -205,7 +205,7 @@ class Scaled:
 
 
 def scale_program(prog: Program, program: Assembled, scaling: bool = True) -> Scaled:
-    """Stage 2: non-dimensionalise (formulation.md §5).
+    """Stage 2: non-dimensionalise (docs/theory.md, "Scaling").
 
     Variables and rows in stress units are divided by ``s*``, those in force
     units by ``F* = s* h^(d-1)``; the objective by ``J* = F* U*``.
@@ -276,7 +276,8 @@ def recover(
     # Elastic points have no plastic strain (avoid round-off noise of B du - C ds).
     deps_p[np.array([not m.plastic for m in data.materials])[data.material]] = 0.0
     if d == 2 and 2 not in comp:
-        # Plane strain: sigma_zz is elastic with eps_zz = 0 (formulation.md §4.6).
+        # Plane strain: sigma_zz is elastic with eps_zz = 0 (docs/theory.md,
+        # "The mixed step").
         nu = np.array([m.nu for m in data.materials])[data.material]
         sigma[:, 2] = data.sigma_n[:, 2] + nu * (dsig[:, 0] + dsig[:, 1])
     # Reactions on prescribed dofs: R = G s + r - f~.
@@ -393,11 +394,11 @@ def stress_scale(prog: Program) -> float:
 
 
 def displacement_scale(prog: Program, F_star: float, h: float) -> float:
-    """Displacement scale ``U* = F* / (k_el + k_in)`` (formulation.md §5).
+    """Displacement scale ``U* = F* / (k_el + k_in)`` (docs/theory.md, "Scaling").
 
     ``k_el = E h^(d-2)`` is the stiffness of one smoothing cell and
     ``k_in = m~ / dt^2`` (mean modified nodal mass, dynamic steps only) its
-    inertia.  The static choice of §5, ``U* = s* h / E``, is the ``k_in = 0``
+    inertia.  The static choice, ``U* = s* h / E``, is the ``k_in = 0``
     case; it stays right while the CFL number ``c dt / h`` is of order one or
     larger.  For small time steps the increment is governed by inertia,
     ``du ~ F* dt^2 / m~``, which is ``(c dt / h)^2`` times the static scale: the

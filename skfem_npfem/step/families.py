@@ -1,6 +1,6 @@
 """The physical pieces of one step's cone program, one small function each.
 
-Objective terms (``formulation.md`` §3, in the stress increments ``ds``):
+Objective terms (docs/theory.md, "The mixed step"; in the stress increments ``ds``):
 
 * :func:`elastic_energy` ``1/2 sum_p V_p ds_p^T C ds_p``;
 * :func:`inertia` ``1/2 sum_j dt^2/m~_j r_j^2`` (dynamic steps);

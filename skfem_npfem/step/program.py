@@ -239,7 +239,8 @@ class Program:
         Start-of-step stresses on the variable components.
     mt, ftilde : ndarray (d*N,)
         Modified nodal masses ``m / (theta1 theta2)`` (dynamic) and the
-        generalised external force ``f~`` (formulation.md §3).
+        generalised external force ``f~`` (docs/theory.md, "Time discretisation
+        and the min–max principle").
     fric : ndarray
         Contacts with friction (``mu_lambda > 0``).
     layout : Layout
@@ -294,7 +295,7 @@ class Program:
                     self.yield_cones.append((points, cone))
 
     def _generalised_force(self) -> np.ndarray:
-        """``f~``: the external force plus inertia of the theta scheme (§3)."""
+        """``f~``: the external force plus inertia of the theta scheme."""
         data = self.data
         f = np.asarray(data.force, float).reshape(-1)
         if data.dynamic:

@@ -202,9 +202,10 @@ def move_particles(
 
     Active particles take the increments ``du_active`` of the step's solution
     (theta-scheme velocities and accelerations in dynamic steps); the others
-    move ballistically under gravity (formulation.md §2); particles behind a
-    wall are put back on it.  Shared by every method that moves the particles
-    with the nodal increments of an implicit step (N-PFEM, FEM-remap).
+    move ballistically under gravity (docs/theory.md, "Nodal integration",
+    inactive particles); particles behind a wall are put back on it.  Shared by
+    every method that moves the particles with the nodal increments of an
+    implicit step (N-PFEM, FEM-remap).
 
     Returns
     -------

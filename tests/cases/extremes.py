@@ -1,4 +1,4 @@
-"""The extremes matrix (issue 4): benchmarks.md T1, T5-T9.
+"""The extremes matrix: numerical stability at the edges of the parameters.
 
 A matrix of short runs with parameters pushed to the edges: Poisson's ratio,
 Young's modulus, time step, friction angle, cohesion, length scale,

@@ -1,8 +1,9 @@
 """Extremes matrix, ``elastic-column`` cases: nu, E, dt and length scale.
 
-References: E1 column ``s_v = -rho g (H - z)``, ``s_h = nu/(1-nu) s_v``, top
-settlement ``rho g H^2 / (2 M)`` (M: constrained modulus); E2 first oedometric
-period ``T = 4 H / c_p``.  Measured numbers are at the default mesh (spacing
+References (docs/verification.md, "The reference cases"): the elastic column
+``s_v = -rho g (H - z)``, ``s_h = nu/(1-nu) s_v``, top settlement
+``rho g H^2 / (2 M)`` (M: constrained modulus); the column period, first
+oedometric period ``T = 4 H / c_p``.  Measured numbers are at the default mesh (spacing
 0.125 m: 297 particles) with Clarabel's default tolerance 1e-8.
 """
 
@@ -27,7 +28,7 @@ from .framework import (
 
 
 def column_errors(sim, rho=RHO, g=G, height=H, nu=NU) -> dict:
-    """E1 errors recomputed from the particles (independent of scene metrics)."""
+    """Elastic-column errors recomputed from the particles (not scene metrics)."""
     p = sim.particles
     z0 = p.x[:, -1] - p.u[:, -1]
     sv_ex = -rho * g * (height - z0)
@@ -42,7 +43,10 @@ def column_errors(sim, rho=RHO, g=G, height=H, nu=NU) -> dict:
 
 
 def checkerboard_index(sim, scale: float) -> float:
-    """T1: max over mesh edges of |p_i - p_j| / scale (p: nodal mean stress)."""
+    """Checkerboard index: max over mesh edges of |p_i - p_j| / scale.
+
+    ``p`` is the nodal mean stress.
+    """
     t = sim.mesh_source.t
     e = np.unique(np.sort(np.hstack([t[[0, 1]], t[[1, 2]], t[[0, 2]]]).T, 1), axis=0)
     pm = sim.particles.stress[:, :3].mean(axis=1)
@@ -65,14 +69,15 @@ for _nu in (0.0, 0.3, 0.49, 0.4999):
         "nu",
         "elastic-column",
         {"nu": _nu, "mode": "static"},
-        "E1/T8: no locking: s_v and s_h rel. L2 <= 1 % (s_h error over |s_v|), "
-        "top settlement rho g H^2/(2M) within 1 %; T1: checkerboard index "
+        "incompressible limit, no locking: s_v and s_h rel. L2 <= 1 % (s_h error over "
+        "|s_v|), "
+        "top settlement rho g H^2/(2M) within 1 %; checkerboard index "
         "max |p_i - p_j|/(rho g H) over mesh edges <= 5 %",
     )
     def _col_nu(nu=_nu):
         # Measured: s_v 0.41/0.34/0.046/0.0088 %, settlement < 1e-5 for
-        # nu = 0/0.3/0.49/0.4999 (nodal integration does not lock); T1 index
-        # 2.3-3.2 %, which is the linear pressure gradient rho g h (1+2K0)/3
+        # nu = 0/0.3/0.49/0.4999 (nodal integration does not lock); checkerboard
+        # index 2.3-3.2 %, which is the linear pressure gradient rho g h (1+2K0)/3
         # itself: the part beyond the exact field is 0.02 % at nu = 0.4999.
         sim, e, settle, its = column_static(nu=nu)
         err = max(e["sv"], e["sh"], abs(settle))
@@ -80,7 +85,7 @@ for _nu in (0.0, 0.3, 0.49, 0.4999):
         return Outcome(
             err <= 1e-2 and t1 <= 5e-2 and all_finite(sim.particles),
             f"s_v {e['sv']:.2e}, s_h {e['sh']:.2e}, settlement {settle:+.2e}, "
-            f"T1 index {t1:.1%}",
+            f"checkerboard index {t1:.1%}",
             err,
             its,
         )
@@ -93,7 +98,8 @@ for _E in (1.0e3, 1.0e6, 1.0e10):
         "E",
         "elastic-column",
         {"E": _E, "mode": "static"},
-        "T7: s_v rel. L2 <= 1 % whatever E, E-independent s_v (<= 1 % from "
+        "soft and stiff extremes: s_v rel. L2 <= 1 % whatever E, E-independent s_v "
+        "(<= 1 % from "
         "the default E = 1e7), settlement follows 1/M within 0.5 %",
     )
     def _col_E(E=_E):
@@ -142,7 +148,8 @@ def geostatic(sim) -> None:
     "dt",
     "elastic-column",
     {"mode": "dynamic", "dt": 1e-6, "steps": 10, "theta": 1},
-    "T6: before the base signal arrives (c_p t << H) the top falls freely with "
+    "very small dt: before the base signal arrives (c_p t << H) the top falls freely "
+    "with "
     "backward Euler: v = g t to 1e-9; w = g dt^2 n(n+1)/2 to 1e-4 (positions "
     "carry x + du in double precision)",
 )
@@ -170,7 +177,8 @@ for _dt in (1e-9, 1e-6, 1e-3):
         "dt",
         "elastic-column",
         {"mode": "dynamic", "dt": _dt, "steps": 20, "start": "geostatic"},
-        "T6: a column at rest in equilibrium stays at rest: |v| <= 1e-10 g t, "
+        "very small dt: a column at rest in equilibrium stays at rest: |v| <= 1e-10 g "
+        "t, "
         "stress change <= 1e-10 rho g H over 20 steps",
     )
     def _col_rest(dt=_dt):
@@ -197,7 +205,7 @@ for _dt in (1e-9, 1e-6, 1e-3):
     "dt",
     "elastic-column",
     {"mode": "dynamic", "dt": 1e-3, "steps": 40},
-    "E2: t = 0.04 s < T/4 = 0.049 s: the top is still in free fall, "
+    "column period: t = 0.04 s < T/4 = 0.049 s: the top is still in free fall, "
     "w = g dt^2 n(n+1)/2 within 1 %",
 )
 def _col_dt_mid():
@@ -222,7 +230,8 @@ for _dt, _slow in ((1.0, False), (10.0, False), (2000.0, True)):
         "dt",
         "elastic-column",
         {"mode": "dynamic", "dt": _dt, "steps": 1},
-        "T5: one backward-Euler step from rest is the static answer damped by "
+        "quasi-static limit: one backward-Euler step from rest is the static answer "
+        "damped by "
         "a = 1/(1+(w1 dt)^2) per mode: settlement deviation = -(32/pi^3) a "
         "(first-mode share of the top settlement) within 5 % of that, stress "
         "deviation <= 1.05 a (1e-9 once a < 1e-9)",

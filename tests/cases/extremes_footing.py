@@ -1,7 +1,8 @@
 """Extremes matrix, ``strip-footing`` cases: nu, E, phi, c and length scale.
 
-References: P1 ``q/c = 2 + pi``; P2 ``N_c(phi)`` (``bearing_factor_reference``);
-P3 ``N_gamma`` (Martin 2005: 7.653 smooth and 14.75 rough at 30 deg).  Measured
+References (docs/verification.md, "The reference cases"): the Prandtl footing
+``q/c = 2 + pi``; the N_c footing ``N_c(phi)`` (``bearing_factor_reference``); the
+N_gamma footing (Martin 2005: 7.653 smooth and 14.75 rough at 30 deg).  Measured
 numbers are at the default mesh (spacing 0.125 m: 576 particles).
 """
 
@@ -35,7 +36,8 @@ for _nu in (0.0, 0.4999):
         "nu",
         "strip-footing",
         {"material": "tresca", "nu": _nu, "steps": 6},
-        "T8: no locking: q/c within [0, +1 %] of 2 + pi, plateau (last two "
+        "incompressible limit, no locking: q/c within [0, +1 %] of 2 + pi, plateau "
+        "(last two "
         "loads within 0.2 %)",
     )
     def _foot_nu(nu=_nu):
@@ -64,7 +66,8 @@ for _E, _c in _FOOT_E.items():
         "E",
         "strip-footing",
         {"material": "tresca", "E": _E, "c": _c, "settlement": 100 * _c / _E},
-        "T7/T9: q/c of 2 + pi within 1 % for E/c from 1e2 to 1e6 (settlement "
+        "soft and stiff extremes, rigid-plastic limit: q/c of 2 + pi within 1 % for "
+        "E/c from 1e2 to 1e6 (settlement "
         "100 c b/E), equal to the E = 1e8 run within 1e-6",
     )
     def _foot_E(E=_E, c=_c):
@@ -89,7 +92,8 @@ for _E, _c in _FOOT_E.items():
     "E",
     "strip-footing",
     {"material": "tresca", "E": 1e10, "settlement": 0.01, "steps": 1},
-    "T9: E/c = 1e6, the whole settlement (100x the elastic range) in one step: "
+    "rigid-plastic limit: E/c = 1e6, the whole settlement (100x the elastic range) in "
+    "one step: "
     "the first solve succeeds and q/c is within 1 % of 2 + pi",
 )
 def _foot_rigid():
@@ -128,7 +132,7 @@ for _phi, (_extra, _lo, _hi) in _PHI.items():
         "phi",
         "strip-footing",
         {"material": "mohr-coulomb", "phi": _phi, **_extra},
-        f"P2: weightless Mohr-Coulomb, N = q/c vs N_c(phi) (bearing_factor_"
+        f"N_c footing: weightless Mohr-Coulomb, N = q/c vs N_c(phi) (bearing_factor_"
         f"reference) within [{_lo:+.0%}, {_hi:+.0%}] (measured band), plateau "
         "within 0.2 %",
     )
@@ -151,7 +155,7 @@ for _phi, (_extra, _lo, _hi) in _PHI.items():
     "phi",
     "strip-footing",
     {"material": "mohr-coulomb", "phi": 30, "spacing": 0.0625, "domain": 10},
-    "P2 convergence: N_c(30) error shrinks under refinement, within [-3 %, 0]",
+    "N_c footing convergence: N_c(30) error shrinks under refinement, within [-3 %, 0]",
     slow=True,
 )
 def _foot_phi30_fine():
@@ -175,7 +179,8 @@ def _foot_phi30_fine():
     "phi",
     "strip-footing",
     {"material": "mohr-coulomb", "phi": 50, "domain": 45, "grading": 1.2},
-    "P2 convergence: N_c(50) error shrinks with a finer far field, within [-9 %, 0]",
+    "N_c footing convergence: N_c(50) error shrinks with a finer far field, within "
+    "[-9 %, 0]",
     slow=True,
 )
 def _foot_phi50_fine():
@@ -209,8 +214,9 @@ for _foot in ("smooth", "rough"):
             "settlement": 0.1,
             "steps": 5,
         },
-        "P3: heavy cohesionless soil, N_gamma = q/(gamma b) above the exact "
-        "7.653 (smooth) / 14.75 (rough) within the P3 gate, +7 % / +5 %",
+        "N_gamma footing: heavy cohesionless soil, N_gamma = q/(gamma b) above the "
+        "exact "
+        "7.653 (smooth) / 14.75 (rough) within the N_gamma gates, +7 % / +5 %",
     )
     def _foot_ngamma(footing_=_foot):
         # Measured 8.139 (+6.4 %, smooth) and 14.874 (+0.8 %, rough).
@@ -266,7 +272,8 @@ def elastic_footing_pressure(sim, settlement: float, b: float = 1.0) -> float:
         "steps": 3,
         "plateau_tol": 0,
     },
-    "T9 converse: a strength that is never reached gives the elastic answer: "
+    "rigid-plastic limit, converse: a strength that is never reached gives the "
+    "elastic answer: "
     "q proportional to the settlement (1e-9) and equal to a direct NS-FEM "
     "solve (1e-6)",
 )

@@ -64,7 +64,8 @@ for _E in (1.0e3, 1.0e7, 1.0e10):
             "dt",
             "api",
             {"material": "mohr-coulomb", "E": _E, "dt": _dt, "steps": 3},
-            "T6 with yield cones (strictly inside): a column at rest stays at "
+            "very small dt with yield cones (strictly inside): a column at rest stays "
+            "at "
             "rest, |v| <= 1e-6 g t and stress change <= 1e-6 rho g H",
         )
         def _mc_rest(E=_E, dt=_dt):
@@ -89,7 +90,7 @@ for _E in (1.0e3, 1.0e7, 1.0e10):
     {"duplicate_distance": "1e-7 h", "mesher": "AlphaShapeMesher"},
     "a particle 1e-7 h from another: alpha_shape hides it (inactive, moved "
     "ballistically); the step solves, everything is finite and the column "
-    "stresses of the others stay within 1 % (E1)",
+    "stresses of the others stay within 1 % (elastic column)",
 )
 def _near_duplicate():
     h = 0.125

@@ -32,7 +32,7 @@ __all__ = [
 RHO, G, H, W, NU, E_COL = 2000.0, 9.81, 4.0, 1.0, 0.3, 1.0e7  # column defaults
 C_FOOT = 1.0e4  # footing default cohesion, Pa
 PRANDTL = 2.0 + math.pi
-N_GAMMA_30 = {"smooth": 7.653, "rough": 14.75}  # benchmarks.md P3 (Martin 2005)
+N_GAMMA_30 = {"smooth": 7.653, "rough": 14.75}  # N_gamma footing (Martin 2005)
 
 
 @dataclass
