@@ -8,12 +8,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Any
 
 from ..errors import ParameterError
-
-if TYPE_CHECKING:
-    from .simulation import Simulation
 
 __all__ = ["AtRest"]
 
@@ -69,7 +66,7 @@ class AtRest:
                 "reference", self.reference, "'max_kinetic' or 'potential_drop'"
             )
 
-    def __call__(self, sim: Simulation) -> bool:  # noqa: D102
+    def __call__(self, sim: Any) -> bool:  # noqa: D102
         recs = sim.records
         if not recs or sim.time < self.min_time * (1 - 1e-12):
             return False

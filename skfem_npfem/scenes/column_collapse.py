@@ -57,240 +57,34 @@ from ..particles import Particles
 from ..run.simulation import AtRest, Simulation
 from ..step.model import Model
 from ..step.stages import Step
-from .base import Param, Renamed, Scene, SceneRun
+from .base import Renamed, Scene, SceneRun
+from .collapse_params import (  # noqa: F401
+    COLLAPSE_STABILISATION,
+    COLLAPSE_VOLUME_CORRECTION,
+    MATERIALS,
+    MAX_STIFFNESS_RATIO,
+    MAX_STRENGTH_RATIO,
+    METRICS,
+    PARAMS,
+    VOLUME_CORRECTION_STRAIN,
+)
+from .collapse_runout import (
+    collapse_time,
+    detached_fraction,
+    detached_warnings,
+    front,
+    mass_front,
+    rest_warnings,
+)
 from .common import (
     check_size,
     check_soil,
-    elastic_params,
     fidelity_from,
-    fidelity_params,
     make_writer,
     solver_from,
-    solver_params,
 )
-from .limits import SPACING
-from .methods import METHOD_METRICS, METHOD_PARAMS, with_method
+from .methods import with_method
 from .scenery import Scenery, box, number, time_label
-
-MATERIALS = ("mohr-coulomb", "drucker-prager")
-#: Largest cohesion in units of rho g H0 (beyond it, displacements of a
-#: standing column grow with c: measured 3x at 1.4e4, 36x at 1.4e5).
-MAX_STRENGTH_RATIO = 1e4
-#: Largest Young's modulus in units of rho g H0 (measured over 0.3 s: 1.4e9
-#: and 1.9e9 run, 9.9e9 fails at step 38, 2.5e12 at step 5).
-MAX_STIFFNESS_RATIO = 2e9
-
-#: Default stabilisation factor beta of N-PFEM in this scene (docs/validation.md:
-#: the measured roughness and run-out against it).
-COLLAPSE_STABILISATION = 30.0
-#: Default volume-correction rate kappa of N-PFEM in plane strain
-#: (docs/validation.md, "At the default spacing"), for a material whose own
-#: volume barely changes: psi = 0 and an elastic strain scale rho g H0 / E of
-#: at most VOLUME_CORRECTION_STRAIN.  The correction returns every change of
-#: the mesh volume against sum m / rho, so dilatancy (psi > 0) and the elastic
-#: volume change of a soft column (the E = 1 kPa pancake of the extremes
-#: matrix swells by 40 % as its initial stresses relax) would be undone; for
-#: those the default is 0.
-COLLAPSE_VOLUME_CORRECTION = 0.05
-VOLUME_CORRECTION_STRAIN = 1e-2
-#: Detached mass fraction above which the summary warns that the 99 % mass
-#: front may be set by grains outside the main body (coarse runs shed a few
-#: grains that fly ahead of the deposit).
-DETACHED_WARNING = 0.01
-
-PARAMS = [
-    Param("aspect", 2.0, "-", "aspect ratio a = H0/L0", float, lo=0, lo_open=True),
-    Param(
-        "half_width",
-        0.2,
-        "m",
-        "column half-width L0 (the width of the half column)",
-        float,
-        lo=0,
-        lo_open=True,
-    ),
-    Param(
-        "symmetric",
-        True,
-        "-",
-        "true: half column against a smooth wall at x = 0; false: free-standing "
-        "column of width 2 L0 centred at x = 0",
-        bool,
-    ),
-    Param(
-        "spacing",
-        None,
-        "m",
-        "particle (lattice) spacing (default L0/22: 1 035 particles at a = 2)",
-        float,
-        **SPACING,
-    ),
-    Param("material", "mohr-coulomb", "-", "yield criterion", str, MATERIALS),
-    Param("rho", 1800.0, "kg/m^3", "density", float, lo=0, lo_open=True),
-    *elastic_params(1.0e7),
-    Param(
-        "phi",
-        30.0,
-        "deg",
-        "friction angle",
-        float,
-        lo=0,
-        hi=90,
-        lo_open=True,
-        hi_open=True,
-    ),
-    Param("psi", 0.0, "deg", "dilation angle (<= phi)", float, lo=0, hi=90),
-    Param("c", 0.0, "Pa", "cohesion", float, lo=0),
-    Param(
-        "floor_friction",
-        None,
-        "deg",
-        "floor friction angle (default: phi)",
-        float,
-        lo=0,
-        hi=90,
-        hi_open=True,
-    ),
-    Param(
-        "K0",
-        0.5,
-        "-",
-        "initial s_xx / s_yy (at-rest coefficient). 0.5 is Jaky's 1 - sin phi "
-        "at the default phi = 30; it is not recomputed from phi (unlike "
-        "strip-footing's default 1 - sin phi), so a change of phi changes the "
-        "material, not the initial stresses. For phi < 19.5 it lies outside "
-        "the yield cone and is refused: set K0 too (e.g. 1 - sin phi)",
-        float,
-        lo=0,
-        lo_open=True,
-    ),
-    Param(
-        "gravity",
-        GRAVITY,
-        "m/s^2",
-        "gravitational acceleration",
-        float,
-        lo=0,
-        lo_open=True,
-    ),
-    Param(
-        "dt",
-        5e-3,
-        "s",
-        "time step (halved on solver failure)",
-        float,
-        lo=0,
-        lo_open=True,
-    ),
-    Param(
-        "max_displacement",
-        None,
-        "-",
-        "adaptive dt: keep the largest particle displacement per step below this "
-        "fraction of the spacing (default: off, fixed dt)",
-        float,
-        lo=0,
-        lo_open=True,
-    ),
-    Param("t_end", 1.0, "s", "end time", float, lo=0, lo_open=True),
-    Param(
-        "rest_fraction",
-        1e-3,
-        "-",
-        "stop when the kinetic energy < rest_fraction * its maximum (0: never)",
-        float,
-        lo=0,
-        hi=1,
-        hi_open=True,
-    ),
-    Param(
-        "min_time",
-        None,
-        "s",
-        "earliest stop at rest (default 2 sqrt(H0/g))",
-        float,
-        lo=0,
-    ),
-    Param(
-        "alpha",
-        1.3,
-        "-",
-        "alpha-shape factor (circumradius < alpha h)",
-        float,
-        lo=1.0,
-        hi=3.0,
-    ),
-    Param(
-        "theta1",
-        1.0,
-        "-",
-        "time-integration parameter theta1",
-        float,
-        lo=0.5,
-        hi=1.0,
-    ),
-    Param(
-        "theta2",
-        1.0,
-        "-",
-        "time-integration parameter theta2 (impact restitution 1/theta2 - 1: "
-        "1/2 makes impacts elastic, keep 1)",
-        float,
-        lo=0.5,
-        hi=1.0,
-    ),
-    Param("output_every", 5, "-", "write a VTU every k steps", int, lo=1),
-    Param(
-        "checkpoint_every",
-        20,
-        "-",
-        "checkpoint every k steps (with --out)",
-        int,
-        lo=1,
-    ),
-    *METHOD_PARAMS,
-    *fidelity_params(
-        COLLAPSE_STABILISATION,
-        " in plane strain, 0 in 3D and axisymmetry",
-        COLLAPSE_VOLUME_CORRECTION,
-        f" in plane strain with psi = 0 and rho g H0 / E <= "
-        f"{VOLUME_CORRECTION_STRAIN:g}",
-    ),
-    *solver_params(),
-]
-
-METRICS = {
-    "runout": "final run-out L_inf: the 99 % mass front, m (from x = 0 when "
-    "symmetric, else half the width between the 0.5 % and 99.5 % mass quantiles)",
-    "normalised_runout": "(L_inf - L0) / L0",
-    "runout_main_body": "edge of the meshed main body (largest cluster with gaps "
-    "below 3 spacings), m",
-    "normalised_runout_main_body": "(runout_main_body - L0) / L0: the run-out of "
-    "the main body, free of detached grains",
-    "detached_mass_fraction": "mass outside the main body (inactive grains and "
-    "small clusters) / total mass at the end; above "
-    f"{DETACHED_WARNING:.0%} a warning says the 99 % front may be set by them",
-    "runout_tip": "the farthest grain, m",
-    "reference_runout_lube": "Lube et al. 2005: 1.2 a (a <= 1.8), 1.9 a^(2/3) "
-    "(a >= 2.8), log-linear in between",
-    "final_height": "H_inf / L0 (highest particle of the main body)",
-    "height_ratio": "H_inf / H0",
-    "collapse_time": "time the front stops (stays within one spacing of its final "
-    "position), s; null when the run ended before rest (t_end)",
-    "collapse_time_normalised": "collapse_time / sqrt(H0 / g)",
-    "at_rest": "the run ended by the at-rest rule (not t_end); false: the run-out "
-    "and height are not final (see warnings)",
-    "warnings": "list of one-line warnings (the run reached t_end before the "
-    f"at-rest rule stopped it; detached mass above {DETACHED_WARNING:.0%}); the "
-    "CLI prints each on stderr",
-    "volume_change": "relative mesh-volume (area) change, end vs t = 0",
-    "mass_change": "relative change of the total particle mass (0: exact)",
-    "max_kinetic_energy": "largest kinetic energy, J (per metre of depth)",
-    "final_kinetic_energy": "kinetic energy at the end, J",
-    "n_inactive_final": "particles outside every element at the end (ballistic)",
-    "n_particles": "number of particles",
-    **METHOD_METRICS,
-}
 
 
 def lattice(x0: float, x1: float, height: float, spacing: float) -> np.ndarray:
@@ -301,19 +95,6 @@ def lattice(x0: float, x1: float, height: float, spacing: float) -> np.ndarray:
         np.linspace(x0, x1, nx + 1), np.linspace(0.0, height, ny + 1), indexing="ij"
     )
     return np.column_stack([X.ravel(), Y.ravel()])
-
-
-def mass_front(x: np.ndarray, mass: np.ndarray, symmetric: bool) -> float:
-    """Run-out as a mass quantile (see the module notes)."""
-
-    def quantile(q: float) -> float:
-        order = np.argsort(x[:, 0])
-        cum = np.cumsum(mass[order]) - 0.5 * mass[order]
-        return float(np.interp(q * mass.sum(), cum, x[order, 0]))
-
-    if symmetric:
-        return quantile(0.99)
-    return 0.5 * (quantile(0.995) - quantile(0.005))
 
 
 def initial_particles(
@@ -352,56 +133,6 @@ def initial_particles(
     wall_force = np.zeros((x.shape[0], n_walls))
     wall_force[base[order], floor_id] = rho * gravity * height * width
     return p.replace(wall_force=wall_force)
-
-
-def front(x: np.ndarray, body: np.ndarray, symmetric: bool) -> tuple[float, float]:
-    """Run-out and height of the main body (see the module notes)."""
-    xb = x[body]
-    if xb.shape[0] == 0:
-        return float("nan"), float("nan")
-    runout = xb[:, 0].max() if symmetric else 0.5 * (xb[:, 0].max() - xb[:, 0].min())
-    return float(runout), float(xb[:, 1].max())
-
-
-def detached_fraction(mass: np.ndarray, body: np.ndarray) -> float:
-    """Mass outside the main body (mask ``body``) as a fraction of the total."""
-    total = float(mass.sum())
-    return float(mass[~body].sum()) / total if total > 0 else 0.0
-
-
-def detached_warnings(
-    scene: str, fraction: float | None, runout: float, main: float | None, L0: float
-) -> list[str]:
-    """The warning of a run whose detached mass exceeds :data:`DETACHED_WARNING`.
-
-    ``runout`` is the 99 % mass front and ``main`` the edge of the main body
-    (None where the geometry has none), both in m; ``L0`` the initial width.
-    """
-    if fraction is None or not fraction > DETACHED_WARNING:
-        return []
-    msg = (
-        f"{scene}: {fraction:.1%} of the mass is detached from the main body "
-        f"(above {DETACHED_WARNING:.0%}), so the 99 % mass front "
-        f"(runout = {runout:.4g} m, normalised {(runout - L0) / L0:.3g}) may be "
-        "set by stray grains"
-    )
-    if main is not None:
-        msg += (
-            f"; the main body reaches {main:.4g} m (normalised_runout_main_body = "
-            f"{(main - L0) / L0:.3g})"
-        )
-    return [msg + "; a finer spacing sheds fewer grains"]
-
-
-def collapse_time(times: np.ndarray, runout: np.ndarray, tol: float) -> float:
-    """First time after which the run-out stays within ``tol`` of its final value."""
-    if runout.size == 0:
-        return float("nan")
-    moving = np.flatnonzero(np.abs(runout - runout[-1]) > tol)
-    if moving.size == 0:
-        return float(times[0])
-    k = moving[-1] + 1
-    return float(times[min(k, times.size - 1)])
 
 
 def _check(values: dict[str, Any]) -> float:
@@ -511,34 +242,6 @@ def _front_recorder(h: float, symmetric: bool):
         return False
 
     return record_front
-
-
-def rest_warnings(sim_: Simulation, values: dict[str, Any], stop: AtRest | None):
-    """One warning if the run reached ``t_end`` before the at-rest rule stopped it.
-
-    Also issued as a :class:`UserWarning` (the CLI prints it on stderr).  None
-    without the rule (``rest_fraction = 0``) or before ``t_end`` (an
-    interrupted run).
-    """
-    t_end, recs = values["t_end"], sim_.records
-    if stop is None or not recs or sim_.time < t_end * (1 - 1e-12) or stop(sim_):
-        return []
-    if sim_.time < stop.min_time * (1 - 1e-12):
-        why = f"before the earliest stop at rest, min_time = {stop.min_time:.4g} s"
-    else:
-        peak = max(r.kinetic_energy for r in recs)
-        share = recs[-1].kinetic_energy / peak if peak > 0 else math.nan
-        why = (
-            f"while the kinetic energy was still {share:.3g} of its maximum "
-            f"(rest: below rest_fraction = {stop.fraction:g})"
-        )
-    msg = (
-        f"column-collapse: the run ended at t_end = {t_end:g} s {why}; the material "
-        "is not at rest, so the run-out and height are not final (at_rest = "
-        "false): raise t_end"
-    )
-    warnings.warn(msg, stacklevel=3)
-    return [msg]
 
 
 def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):

@@ -31,16 +31,32 @@ import numpy as np
 from ..constants import GRAVITY
 from ..errors import CheckpointError, ParameterError
 from ..io import atomic_path, check_writable_dir, read_pvd, read_step
+from .colours import (  # noqa: F401
+    _EPS_P_FLOOR,
+    _PLASTIC_QUANTILE,
+    _SAMPLE,
+    _STRESS_INDEX,
+    _UNITS,
+    _extend,
+    _robust_range,
+    _style,
+)
 from .figures import Frames2D, crop, load_settlement_figure
 from .render import (
     Renderer,
     Step,
-    Style,
     check_rendering,
     import_pyvista,
     write_animation,
 )
 from .scenery import scenery
+from .snapshots import (  # noqa: F401
+    _frame_indices,
+    _pick_snapshots,
+    _time_label,
+    _time_unit,
+    _TimeUnit,
+)
 
 __all__ = ["FIELDS", "plot_results"]
 
@@ -58,24 +74,9 @@ FIELDS: dict[str, str] = {
     "displacement": "displacement magnitude",
 }
 
-_STRESS_INDEX = {
-    "stress_xx": 0,
-    "stress_yy": 1,
-    "stress_zz": 2,
-    "stress_xy": 3,
-    "stress_yz": 4,
-    "stress_zx": 5,
-}
-_UNITS = {"plastic_strain_eq": "-", "velocity": "m/s", "displacement": "m"}
 _ANIMATIONS = ("gif", "mp4", "none")
 _DEFAULT_FIELD = "stress_yy"
 _GRAVITY = GRAVITY
-#: Values per step pooled for the colour range, and the share cut at each end.
-_SAMPLE, _TAIL = 4000, 0.01
-#: Top of the plastic-strain colour range: this quantile of the plastic values.
-_PLASTIC_QUANTILE = 0.95
-#: Smallest top of the colour range of the plastic strain (round-off below it).
-_EPS_P_FLOOR = 1e-6
 
 
 def _find_pvd(result_dir: Path) -> Path:
@@ -148,71 +149,6 @@ def _read(path: Path, time: float, fields: Sequence[str]) -> tuple[Step, int]:
     return step, dim
 
 
-def _robust_range(values: np.ndarray, name: str = "") -> tuple[float, float]:
-    """Range of pooled values without the outermost 1 % on either side.
-
-    Plastic strain: 0 up to the 95th percentile of the plastic values (those
-    above 1e-6 of the largest), so that a thin band of very large strains (the
-    grains sliding on the floor) does not leave the body in one colour.
-    """
-    if not values.size:
-        return 0.0, 0.0
-    if name == "plastic_strain_eq":
-        plastic = values[values > 1e-6 * values.max()]
-        if plastic.size:
-            return 0.0, float(np.quantile(plastic, _PLASTIC_QUANTILE))
-        return 0.0, float(values.max())
-    lo, hi = np.quantile(values, [_TAIL, 1 - _TAIL])
-    return float(lo), float(hi)
-
-
-def _extend(style: Style, lo: float, hi: float) -> str:
-    """Colour bar arrows for values beyond the range (SI values lo..hi)."""
-    a, b = (v * style.scale for v in style.clim)
-    tol = 1e-9 * max(abs(a), abs(b), 1e-300)
-    low, high = lo < a - tol, hi > b + tol
-    return {(0, 0): "neither", (1, 0): "min", (0, 1): "max"}.get(
-        (int(low), int(high)), "both"
-    )
-
-
-def _style(name: str, lo: float, hi: float, fixed: bool = False) -> Style:
-    """Colour range, colour map and unit scale of a field.
-
-    With ``fixed`` the range ``lo..hi`` (SI units) is used as given.
-    """
-    if name in _STRESS_INDEX or name == "pressure":
-        big = max(abs(lo), abs(hi))
-        scale, unit = next(
-            ((s, u) for s, u in ((1e6, "MPa"), (1e3, "kPa")) if big >= s),
-            (1.0, "Pa"),
-        )
-        if fixed and hi > lo:
-            cmap = "coolwarm" if lo < 0 < hi else "viridis"
-            return Style((lo / scale, hi / scale), cmap, scale, unit)
-        if big == 0:
-            return Style((-1.0, 1.0), "coolwarm", scale, unit)
-        if hi <= 0.05 * big:  # (nearly) compression only: min..0
-            return Style((lo / scale, 0.0), "viridis", scale, unit)
-        if lo >= -0.05 * big:  # (nearly) tension only: 0..max
-            return Style((0.0, hi / scale), "viridis", scale, unit)
-        return Style((-big / scale, big / scale), "coolwarm", scale, unit)
-    cmap = "plasma" if name == "plastic_strain_eq" else "viridis"
-    if fixed and hi > lo:
-        return Style((lo, hi), cmap, 1.0, _UNITS[name])
-    top = max(hi, _EPS_P_FLOOR) if name == "plastic_strain_eq" else hi
-    if not top > 0:
-        top = 1.0
-    return Style((0.0, top), cmap, 1.0, _UNITS[name])
-
-
-def _time_label(value: float) -> str:
-    """Short decimal text of a time for file names (4 significant digits)."""
-    return np.format_float_positional(
-        value, precision=4, unique=True, fractional=False, trim="-"
-    )
-
-
 def _resolve_fields(field_arg: str | Sequence[str], dim: int) -> list[str]:
     """List of field names to draw (the default gives two fields)."""
     if isinstance(field_arg, str):
@@ -228,13 +164,6 @@ def _resolve_fields(field_arg: str | Sequence[str], dim: int) -> list[str]:
         if name not in FIELDS:
             raise ParameterError("field", name, "one of " + ", ".join(FIELDS))
     return list(dict.fromkeys(names))
-
-
-def _frame_indices(n: int, max_frames: int) -> np.ndarray:
-    """Evenly spread step indices (first and last included), at most max_frames."""
-    if n <= max_frames:
-        return np.arange(n)
-    return np.unique(np.round(np.linspace(0, n - 1, max_frames)).astype(int))
 
 
 def _check_args(
@@ -283,83 +212,6 @@ def _check_args(
     if not all(math.isfinite(t) for t in req):
         raise ParameterError("times", times, "finite numbers")
     return req
-
-
-@dataclass(frozen=True)
-class _TimeUnit:
-    """How snapshot times are given, shown and put in file names.
-
-    Attributes
-    ----------
-    prefix : str
-        File-name prefix of the value: ``t`` (time) or ``s`` (the footing's
-        settlement, its pseudo-time).
-    name : str
-        Unit in messages (``t/sqrt(H0/g)``, ``s``, ``m of settlement``).
-    scale : float
-        Seconds (pseudo-time) per unit.
-    """
-
-    prefix: str = "t"
-    name: str = "s"
-    scale: float = 1.0
-
-    def text(self, value: float) -> str:
-        """``value`` with its unit, e.g. ``t/sqrt(H0/g) = 5.25``."""
-        if self.prefix == "s":
-            return f"settlement {value:.4g} m"
-        if self.name == "s":
-            return f"t = {value:.4g} s"
-        return f"{self.name} = {value:.4g}"
-
-
-def _time_unit(sc, normalised: bool) -> _TimeUnit:
-    """The unit of ``times`` for a result with scenery ``sc``."""
-    if sc.footing is not None:  # pseudo-time is the settlement, m
-        return _TimeUnit("s", "m of settlement")
-    if normalised and sc.tau is not None:
-        h0 = "h0" if "h0" in sc.label(0.0) else "H0"
-        return _TimeUnit("t", f"t/sqrt({h0}/g)", sc.tau)
-    return _TimeUnit()
-
-
-def _pick_snapshots(
-    ts: np.ndarray, req: list[float] | None, unit: _TimeUnit | None = None
-) -> dict[int, float]:
-    """Map step index -> label (in ``unit``) of each snapshot.
-
-    A requested time within half a step of a stored step keeps its value as
-    the label; one outside the stored steps is labelled with the time of the
-    step drawn (and a warning says so, in the same unit).
-    """
-    unit = _TimeUnit() if unit is None else unit
-    scale = unit.scale
-    if not req:  # 5 evenly spaced times, labelled with the step times
-        picks = (np.argmin(np.abs(ts - t)) for t in np.linspace(ts[0], ts[-1], 5))
-        return {int(i): float(ts[i] / scale) for i in dict.fromkeys(picks)}
-    dt = float(np.median(np.diff(ts))) if len(ts) > 1 else 0.0
-    snaps: dict[int, float] = {}
-    for label in req:
-        t_s = label * scale
-        i = int(np.argmin(np.abs(ts - t_s)))
-        if abs(ts[i] - t_s) > 0.5 * dt + 1e-9 * max(1.0, abs(t_s)):
-            shown = float(np.float64(f"{ts[i] / scale:.4g}"))
-            seconds = (
-                ""
-                if unit.name in ("s", "m of settlement")
-                else (f" (t = {ts[i]:.4g} s)")
-            )
-            warnings.warn(
-                f"{unit.text(label)} is outside the stored steps "
-                f"({ts[0] / scale:.4g}..{ts[-1] / scale:.4g} {unit.name}); drawing "
-                f"the step at {unit.text(shown)}{seconds}, saved as "
-                f"_{unit.prefix}{_time_label(shown)}",
-                UserWarning,
-                stacklevel=3,
-            )
-            label = shown
-        snaps.setdefault(i, label)
-    return snaps
 
 
 @dataclass

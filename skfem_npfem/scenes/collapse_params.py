@@ -1,0 +1,260 @@
+"""The plane-strain column collapse's parameters, metrics and default settings.
+
+The defaults the scene runs at (the stabilisation factor, the volume correction
+and when it applies, the limits of the material scales it accepts) are named
+constants here, so that studies and tests can refer to them.
+"""
+
+from __future__ import annotations
+
+from ..constants import GRAVITY
+from .base import Param
+from .collapse_runout import (
+    DETACHED_WARNING,
+)
+from .common import (
+    elastic_params,
+    fidelity_params,
+    solver_params,
+)
+from .limits import SPACING
+from .methods import METHOD_METRICS, METHOD_PARAMS
+
+__all__ = [
+    "COLLAPSE_STABILISATION",
+    "COLLAPSE_VOLUME_CORRECTION",
+    "MATERIALS",
+    "MAX_STIFFNESS_RATIO",
+    "MAX_STRENGTH_RATIO",
+    "METRICS",
+    "PARAMS",
+    "VOLUME_CORRECTION_STRAIN",
+]
+
+
+MATERIALS = ("mohr-coulomb", "drucker-prager")
+
+
+#: Largest cohesion in units of rho g H0 (beyond it, displacements of a
+#: standing column grow with c: measured 3x at 1.4e4, 36x at 1.4e5).
+MAX_STRENGTH_RATIO = 1e4
+
+
+#: Largest Young's modulus in units of rho g H0 (measured over 0.3 s: 1.4e9
+#: and 1.9e9 run, 9.9e9 fails at step 38, 2.5e12 at step 5).
+MAX_STIFFNESS_RATIO = 2e9
+
+
+#: Default stabilisation factor beta of N-PFEM in this scene (docs/validation.md:
+#: the measured roughness and run-out against it).
+COLLAPSE_STABILISATION = 30.0
+
+
+#: Default volume-correction rate kappa of N-PFEM in plane strain
+#: (docs/validation.md, "At the default spacing"), for a material whose own
+#: volume barely changes: psi = 0 and an elastic strain scale rho g H0 / E of
+#: at most VOLUME_CORRECTION_STRAIN.  The correction returns every change of
+#: the mesh volume against sum m / rho, so dilatancy (psi > 0) and the elastic
+#: volume change of a soft column (the E = 1 kPa pancake of the extremes
+#: matrix swells by 40 % as its initial stresses relax) would be undone; for
+#: those the default is 0.
+COLLAPSE_VOLUME_CORRECTION = 0.05
+
+
+VOLUME_CORRECTION_STRAIN = 1e-2
+
+
+PARAMS = [
+    Param("aspect", 2.0, "-", "aspect ratio a = H0/L0", float, lo=0, lo_open=True),
+    Param(
+        "half_width",
+        0.2,
+        "m",
+        "column half-width L0 (the width of the half column)",
+        float,
+        lo=0,
+        lo_open=True,
+    ),
+    Param(
+        "symmetric",
+        True,
+        "-",
+        "true: half column against a smooth wall at x = 0; false: free-standing "
+        "column of width 2 L0 centred at x = 0",
+        bool,
+    ),
+    Param(
+        "spacing",
+        None,
+        "m",
+        "particle (lattice) spacing (default L0/22: 1 035 particles at a = 2)",
+        float,
+        **SPACING,
+    ),
+    Param("material", "mohr-coulomb", "-", "yield criterion", str, MATERIALS),
+    Param("rho", 1800.0, "kg/m^3", "density", float, lo=0, lo_open=True),
+    *elastic_params(1.0e7),
+    Param(
+        "phi",
+        30.0,
+        "deg",
+        "friction angle",
+        float,
+        lo=0,
+        hi=90,
+        lo_open=True,
+        hi_open=True,
+    ),
+    Param("psi", 0.0, "deg", "dilation angle (<= phi)", float, lo=0, hi=90),
+    Param("c", 0.0, "Pa", "cohesion", float, lo=0),
+    Param(
+        "floor_friction",
+        None,
+        "deg",
+        "floor friction angle (default: phi)",
+        float,
+        lo=0,
+        hi=90,
+        hi_open=True,
+    ),
+    Param(
+        "K0",
+        0.5,
+        "-",
+        "initial s_xx / s_yy (at-rest coefficient). 0.5 is Jaky's 1 - sin phi "
+        "at the default phi = 30; it is not recomputed from phi (unlike "
+        "strip-footing's default 1 - sin phi), so a change of phi changes the "
+        "material, not the initial stresses. For phi < 19.5 it lies outside "
+        "the yield cone and is refused: set K0 too (e.g. 1 - sin phi)",
+        float,
+        lo=0,
+        lo_open=True,
+    ),
+    Param(
+        "gravity",
+        GRAVITY,
+        "m/s^2",
+        "gravitational acceleration",
+        float,
+        lo=0,
+        lo_open=True,
+    ),
+    Param(
+        "dt",
+        5e-3,
+        "s",
+        "time step (halved on solver failure)",
+        float,
+        lo=0,
+        lo_open=True,
+    ),
+    Param(
+        "max_displacement",
+        None,
+        "-",
+        "adaptive dt: keep the largest particle displacement per step below this "
+        "fraction of the spacing (default: off, fixed dt)",
+        float,
+        lo=0,
+        lo_open=True,
+    ),
+    Param("t_end", 1.0, "s", "end time", float, lo=0, lo_open=True),
+    Param(
+        "rest_fraction",
+        1e-3,
+        "-",
+        "stop when the kinetic energy < rest_fraction * its maximum (0: never)",
+        float,
+        lo=0,
+        hi=1,
+        hi_open=True,
+    ),
+    Param(
+        "min_time",
+        None,
+        "s",
+        "earliest stop at rest (default 2 sqrt(H0/g))",
+        float,
+        lo=0,
+    ),
+    Param(
+        "alpha",
+        1.3,
+        "-",
+        "alpha-shape factor (circumradius < alpha h)",
+        float,
+        lo=1.0,
+        hi=3.0,
+    ),
+    Param(
+        "theta1",
+        1.0,
+        "-",
+        "time-integration parameter theta1",
+        float,
+        lo=0.5,
+        hi=1.0,
+    ),
+    Param(
+        "theta2",
+        1.0,
+        "-",
+        "time-integration parameter theta2 (impact restitution 1/theta2 - 1: "
+        "1/2 makes impacts elastic, keep 1)",
+        float,
+        lo=0.5,
+        hi=1.0,
+    ),
+    Param("output_every", 5, "-", "write a VTU every k steps", int, lo=1),
+    Param(
+        "checkpoint_every",
+        20,
+        "-",
+        "checkpoint every k steps (with --out)",
+        int,
+        lo=1,
+    ),
+    *METHOD_PARAMS,
+    *fidelity_params(
+        COLLAPSE_STABILISATION,
+        " in plane strain, 0 in 3D and axisymmetry",
+        COLLAPSE_VOLUME_CORRECTION,
+        f" in plane strain with psi = 0 and rho g H0 / E <= "
+        f"{VOLUME_CORRECTION_STRAIN:g}",
+    ),
+    *solver_params(),
+]
+
+
+METRICS = {
+    "runout": "final run-out L_inf: the 99 % mass front, m (from x = 0 when "
+    "symmetric, else half the width between the 0.5 % and 99.5 % mass quantiles)",
+    "normalised_runout": "(L_inf - L0) / L0",
+    "runout_main_body": "edge of the meshed main body (largest cluster with gaps "
+    "below 3 spacings), m",
+    "normalised_runout_main_body": "(runout_main_body - L0) / L0: the run-out of "
+    "the main body, free of detached grains",
+    "detached_mass_fraction": "mass outside the main body (inactive grains and "
+    "small clusters) / total mass at the end; above "
+    f"{DETACHED_WARNING:.0%} a warning says the 99 % front may be set by them",
+    "runout_tip": "the farthest grain, m",
+    "reference_runout_lube": "Lube et al. 2005: 1.2 a (a <= 1.8), 1.9 a^(2/3) "
+    "(a >= 2.8), log-linear in between",
+    "final_height": "H_inf / L0 (highest particle of the main body)",
+    "height_ratio": "H_inf / H0",
+    "collapse_time": "time the front stops (stays within one spacing of its final "
+    "position), s; null when the run ended before rest (t_end)",
+    "collapse_time_normalised": "collapse_time / sqrt(H0 / g)",
+    "at_rest": "the run ended by the at-rest rule (not t_end); false: the run-out "
+    "and height are not final (see warnings)",
+    "warnings": "list of one-line warnings (the run reached t_end before the "
+    f"at-rest rule stopped it; detached mass above {DETACHED_WARNING:.0%}); the "
+    "CLI prints each on stderr",
+    "volume_change": "relative mesh-volume (area) change, end vs t = 0",
+    "mass_change": "relative change of the total particle mass (0: exact)",
+    "max_kinetic_energy": "largest kinetic energy, J (per metre of depth)",
+    "final_kinetic_energy": "kinetic energy at the end, J",
+    "n_inactive_final": "particles outside every element at the end (ballistic)",
+    "n_particles": "number of particles",
+    **METHOD_METRICS,
+}
