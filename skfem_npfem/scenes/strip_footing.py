@@ -67,7 +67,7 @@ MATERIALS = ("tresca", "mohr-coulomb", "drucker-prager")
 SPACING, DOMAIN = 0.125, 5.0
 #: The same with ``analysis=limit``: one program is cheap, so the default is
 #: finer and the block wider (the Prandtl mechanism reaches 16 b at phi = 40).
-LIMIT_SPACING, LIMIT_DOMAIN = 0.05, 10.0
+LIMIT_SPACING, LIMIT_DOMAIN = 0.04, 10.0
 
 #: Default minimum settlement in units of ``(c + gamma b) b / E``.
 SETTLEMENT_SCALE = 100.0

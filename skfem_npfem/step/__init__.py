@@ -10,17 +10,21 @@ The data flow of :func:`advance` (in :mod:`.stages`) goes through these modules:
   stabilisation and the volume correction;
 * :mod:`.conic` -- scaling, Clarabel's problem and the solution read back from the
   duals (:class:`StepSolution`);
+* :mod:`.limit` -- the same operator and cones without elasticity or time: the
+  collapse multiplier and the factor of safety as cone programs;
 * :mod:`.solver`, :mod:`.backends` -- solver options and the direct linear solvers;
 * :mod:`.kinematics` -- stress rotation, strain measures, energies.
 """
 
 from .conic import StepSolution, solve_step
+from .limit import LimitResult, limit_analysis, strength_reduction
 from .model import Model
 from .program import StepData
 from .solver import SolverOptions
 from .stages import StepRecord, StepResult, advance
 
 __all__ = [
+    "LimitResult",
     "Model",
     "SolverOptions",
     "StepData",
@@ -28,5 +32,7 @@ __all__ = [
     "StepResult",
     "StepSolution",
     "advance",
+    "limit_analysis",
     "solve_step",
+    "strength_reduction",
 ]
