@@ -150,6 +150,7 @@ def limit_analysis(
     tied: list[np.ndarray] | None = None,
     options: SolverOptions | None = None,
     plastic_fraction: float = PLASTIC_FRACTION,
+    max_multiplier: float | None = None,
 ) -> LimitResult:
     """Collapse multiplier of a reference load, as one cone program.
 
@@ -177,6 +178,10 @@ def limit_analysis(
         Clarabel settings.
     plastic_fraction : float
         Threshold of :attr:`LimitResult.plastic`.
+    max_multiplier : float, optional
+        Cap on ``lambda`` (one more row).  A cohesionless body under its own
+        weight carries any multiple of it or none, so its multiplier is
+        unbounded or zero; with a cap the program says which.
 
     Returns
     -------
@@ -255,19 +260,29 @@ def limit_analysis(
     cones: list = [clarabel.ZeroConeT(n_red)]
     for blk in blocks:
         cones += blk.cones
-    # Scaling: stresses by s*, force rows by F* = s* h^(d-1), lambda by the
-    # multiplier at which the reference load over the section reaches s*.
+    if max_multiplier is not None:
+        cap = sp.csc_matrix(([1.0], ([0], [nsig])), shape=(1, nsig + 1))
+        A = sp.vstack([A, cap], format="csc")
+        b = np.concatenate([b, [float(max_multiplier)]])
+        cones.append(clarabel.NonnegativeConeT(1))
+    # Scaling: stresses by s* (the largest strength, or a load over the
+    # section), force rows by F* = s* h^(d-1), lambda by the multiplier at
+    # which the reference load over the section reaches s*.
     h = float(np.sum(operator.volumes) / max(N, 1)) ** (1.0 / d)
     s_star = max([float(np.max(c.k, initial=0.0)) for _, c in prog.yield_cones])
     section = float(np.sum(operator.volumes)) ** ((d - 1) / d)
-    s_star = max(s_star, float(np.abs(f0).sum()) / section)
+    s_star = max(
+        s_star, float(np.abs(f0).sum()) / section, float(np.abs(f1).sum()) / section
+    )
     if not s_star > 0:
         s_star = 1.0
     F_star = s_star * h ** (d - 1)
     lam_star = s_star * section / float(np.abs(f1).sum())
     col = np.concatenate([np.full(nsig, s_star), [lam_star]])
     row = np.concatenate(
-        [np.full(n_red, 1 / F_star)] + [np.full(blk.rows, 1 / s_star) for blk in blocks]
+        [np.full(n_red, 1 / F_star)]
+        + [np.full(blk.rows, 1 / s_star) for blk in blocks]
+        + [np.full(int(max_multiplier is not None), 1 / lam_star)]
     )
     A_hat = (sp.diags(row) @ A @ sp.diags(col)).tocsc()
     q_hat = np.zeros(nsig + 1)
@@ -390,7 +405,12 @@ def strength_reduction(
     ``y = log lambda`` against ``x = log F``: the first step assumes that
     slope (-1), which ends a cohesive problem in two programs, and the
     following ones are secant steps, kept inside the bracket of a sign change
-    once one is known (Illinois rule).  It stops when ``|log lambda| <= tol``.
+    once one is known (regula falsi).  It stops when ``|log lambda| <= tol``.
+
+    A cohesionless body (every ``c = 0``) carries any multiple of its weight
+    or none, so ``lambda`` jumps from 0 to infinity at ``F``: there ``F`` is
+    bracketed by bisection on feasibility (the multiplier capped at 2 reaches
+    1 or not) to a relative width ``max(tol, 2e-3)`` (9-12 programs).
 
     Parameters
     ----------
@@ -412,7 +432,7 @@ def strength_reduction(
         within ``max_programs``.
     """
 
-    def solve(F: float) -> LimitResult:
+    def solve(F: float, cap: float | None = None) -> LimitResult:
         mats = [reduced_strength(m, F) for m in materials]
         return limit_analysis(
             operator,
@@ -422,8 +442,14 @@ def strength_reduction(
             fixed=fixed,
             tied=tied,
             options=options,
+            max_multiplier=cap,
         )
 
+    def solve_capped(F: float) -> LimitResult:
+        return solve(F, CAP)
+
+    if all(getattr(m, "c", 1.0) == 0.0 for m in materials):
+        return _bisection(solve_capped, tol, max_programs)
     iterates: list = []
     x, res = 0.0, solve(1.0)
     y = math.log(res.multiplier)
@@ -462,6 +488,54 @@ def strength_reduction(
     return SafetyResult(
         factor_of_safety=math.exp(x),
         limit=res,
+        programs=len(iterates),
+        iterates=iterates,
+        multiplier_unreduced=first,
+    )
+
+
+#: Multiplier cap of the feasibility programs of a cohesionless body.
+CAP = 2.0
+#: Relative width at which the bisection of a cohesionless body stops (at least).
+BISECTION_TOL = 2e-3
+
+
+def _bisection(solve, tol: float, max_programs: int) -> SafetyResult:
+    """Bisection on feasibility (capped multiplier >= 1) for a cohesionless body."""
+    iterates: list = []
+
+    def feasible(F: float) -> tuple[bool, LimitResult]:
+        res = solve(F)
+        iterates.append((F, res.multiplier))
+        return res.multiplier >= 1.0, res
+
+    ok, res = feasible(1.0)
+    first = res.multiplier
+    lo, hi = (1.0, None) if ok else (None, 1.0)
+    good = res if ok else None
+    while lo is None or hi is None:
+        F = 2 * lo if hi is None else hi / 2
+        ok, res = feasible(F)
+        if ok:
+            lo, good = F, res
+        else:
+            hi = F
+        if len(iterates) >= max_programs:
+            break
+    while hi / lo - 1 > max(tol, BISECTION_TOL) and len(iterates) < max_programs:
+        F = math.sqrt(lo * hi)
+        ok, res = feasible(F)
+        if ok:
+            lo, good = F, res
+        else:
+            hi = F
+    if hi is None or lo is None or hi / lo - 1 > max(tol, BISECTION_TOL):
+        raise ParameterError(
+            "max_programs", max_programs, "more programs for the bisection"
+        )
+    return SafetyResult(
+        factor_of_safety=math.sqrt(lo * hi),
+        limit=good if good is not None else res,
         programs=len(iterates),
         iterates=iterates,
         multiplier_unreduced=first,

@@ -1,0 +1,147 @@
+"""The ``slope`` scene and cross-sections from polygons.
+
+References: Bishop & Morgenstern (1960) stability charts, FoS = 1.38 for a
+2:1 homogeneous slope with phi' = 20 deg and c'/(gamma H) = 0.05 on a firm base
+(Griffiths & Lane 1999, example 1, where finite elements give 1.4); the
+infinite-slope factor of safety ``tan(phi)/tan(beta)`` of a dry cohesionless
+slope; polygon areas (exact).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_bad_input import check_cli_error, run_cli
+
+import skfem_npfem as npfem
+from skfem_npfem.mesh.regions import Region, check_regions, fill_regions
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "docs" / "examples" / "two_layer_slope.json"
+
+#: Griffiths & Lane (1999), example 1: Bishop & Morgenstern's chart value.
+BISHOP_MORGENSTERN_FOS = 1.38
+#: Tolerance at spacing H/10 (measured +1.8 %; +0.6 % at H/20, +0.2 % at H/30).
+FOS_TOL = 0.03
+
+GRIFFITHS_LANE = {
+    "analysis": "limit",
+    "height": 10.0,
+    "angle": math.degrees(math.atan(0.5)),
+    "foundation_depth": 0.0,
+    "crest_length": 20.0,
+    "toe_length": 15.0,
+    "c": 1.0e4,
+    "phi": 20.0,
+    "gamma": 2.0e4,
+    "spacing": 1.0,
+}
+
+
+def test_fill_regions_area_and_materials():
+    """Two regions sharing an edge: mesh area exact, nodes by region."""
+    a = np.array([[0, 0], [4, 0], [4, 1], [0, 1]], float)
+    b = np.array([[0, 1], [4, 1], [2, 3], [0, 3]], float)
+    pts, tri, region = fill_regions([Region("a", a), Region("b", b)], 0.25)
+    v = pts[tri.T]
+    area = 0.5 * np.abs(
+        (v[:, 1, 0] - v[:, 0, 0]) * (v[:, 2, 1] - v[:, 0, 1])
+        - (v[:, 1, 1] - v[:, 0, 1]) * (v[:, 2, 0] - v[:, 0, 0])
+    )
+    assert area.sum() == pytest.approx(4.0 + 6.0, rel=1e-12)
+    assert np.all(region[pts[:, 1] < 1 - 1e-9] == 0)
+    assert np.all(region[pts[:, 1] > 1 + 1e-9] == 1)
+    assert np.all(region[np.isclose(pts[:, 1], 1.0)] == 0)  # shared: first region
+
+
+@pytest.mark.parametrize(
+    ("regions", "needle"),
+    [
+        ([[[0, 0], [1, 1], [1, 0], [0, 1]]], "self-intersecting"),
+        (
+            [[[0, 0], [2, 0], [2, 2], [0, 2]], [[1, 1], [3, 1], [3, 3], [1, 3]]],
+            "overlap",
+        ),
+        ([[[0, 0], [0.1, 0], [0.1, 0.1], [0, 0.1]]], "smaller than the spacing"),
+    ],
+)
+def test_check_regions_refuses(regions, needle):
+    """Bad polygons: one ParameterError naming the region."""
+    with pytest.raises(npfem.ParameterError, match=needle):
+        check_regions([Region("m", np.array(r, float)) for r in regions], 0.5)
+
+
+@pytest.mark.parametrize(
+    ("edit", "needles"),
+    [
+        (lambda d: d["regions"][0]["polygon"].pop(), ("polygon", "open")),
+        (
+            lambda d: d["regions"][1].update(material="rock"),
+            ("regions[1].material", "'rock'", "clay, fill"),
+        ),
+        (
+            lambda d: d["regions"][1].update(
+                polygon=[[0, 2], [10, 2], [22, 4], [14, 12], [0, 12], [0, 2]]
+            ),
+            ("regions[1]", "overlap"),
+        ),
+        (
+            lambda d: d["regions"][1].update(
+                polygon=[[0, 4], [14, 12], [10, 4], [0, 12], [0, 4]]
+            ),
+            ("self-intersecting",),
+        ),
+        (lambda d: d["materials"]["clay"].update(colour=1), ("colour",)),
+    ],
+)
+def test_bad_geometry_file_one_error_line(tmp_path, edit, needles):
+    """Each bad cross-section file: exit 2 and one `error:` line."""
+    data = json.loads(EXAMPLE.read_text())
+    edit(data)
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(data))
+    code, err = run_cli(
+        ["run", "slope", "--set", f"geometry={path}", "--set", "analysis=limit"]
+    )
+    check_cli_error(code, err, *needles)
+
+
+def test_classic_slope_factor_of_safety():
+    """2:1 slope, phi 20, c/(gamma H) 0.05: FoS within 3 % of Bishop-Morgenstern."""
+    m = npfem.run_scene("slope", GRIFFITHS_LANE)["metrics"]
+    assert m["limit_status"] in ("Solved", "AlmostSolved")
+    assert abs(m["factor_of_safety"] / BISHOP_MORGENSTERN_FOS - 1) < FOS_TOL
+    assert abs(m["collapse_multiplier"] - 1) < 1e-3  # lambda(F) = 1
+    assert 2 <= m["cone_programs"] <= 10
+
+
+def test_cohesionless_slope_infinite_slope_value():
+    """Dry sand slope: FoS = tan(phi)/tan(beta) (surface sliding), within 4 %."""
+    m = npfem.run_scene(
+        "slope",
+        {
+            "analysis": "limit",
+            "c": 0.0,
+            "phi": 35.0,
+            "angle": 30.0,
+            "height": 4.0,
+            "foundation_depth": 1.0,
+            "spacing": 0.4,
+        },
+    )["metrics"]
+    ref = math.tan(math.radians(35.0)) / math.tan(math.radians(30.0))
+    assert abs(m["factor_of_safety"] / ref - 1) < 0.04
+
+
+def test_cross_section_file_runs():
+    """The shipped example: two materials, a factor of safety, one line each."""
+    s = npfem.run_scene(
+        "slope", {"geometry": str(EXAMPLE), "analysis": "limit", "spacing": 1.0}
+    )
+    m = s["metrics"]
+    assert m["factor_of_safety"] > 0.5
+    assert 0 < m["plastic_fraction"] < 0.5
