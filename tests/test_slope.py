@@ -120,7 +120,7 @@ def test_classic_slope_factor_of_safety():
 
 
 def test_cohesionless_slope_infinite_slope_value():
-    """Dry sand slope: FoS = tan(phi)/tan(beta) (surface sliding), within 4 %."""
+    """Dry sand: tan(phi)/tan(beta) within 5 % at H/10 (+3.9 %; +1.5 % at H/20)."""
     m = npfem.run_scene(
         "slope",
         {
@@ -134,7 +134,7 @@ def test_cohesionless_slope_infinite_slope_value():
         },
     )["metrics"]
     ref = math.tan(math.radians(35.0)) / math.tan(math.radians(30.0))
-    assert abs(m["factor_of_safety"] / ref - 1) < 0.04
+    assert abs(m["factor_of_safety"] / ref - 1) < 0.05
 
 
 def test_cross_section_file_runs():
@@ -145,3 +145,50 @@ def test_cross_section_file_runs():
     m = s["metrics"]
     assert m["factor_of_safety"] > 0.5
     assert 0 < m["plastic_fraction"] < 0.5
+
+
+#: The column collapse's bound on the meshed volume change (test_column_collapse).
+VOLUME_LIMIT = 0.18
+#: Deposit surface slope above phi allowed, deg, over 3 spacings: the surface
+#: is read from the highest particle per column (+-h/2 of noise).
+SLOPE_TOL = 5.0
+
+
+@pytest.fixture(scope="module")
+def runout():
+    """A small dry-sand cut (86 particles) that fails and runs out to rest."""
+    return npfem.run_scene(
+        "slope",
+        {
+            "runout": True,
+            "c": 0.0,
+            "phi": 30.0,
+            "angle": 60.0,
+            "height": 2.0,
+            "foundation_depth": 0.4,
+            "spacing": 0.4,
+            "crest_length": 1.6,
+            "toe_length": 4.0,
+        },
+    )
+
+
+def test_runout_conserves_mass_and_comes_to_rest(runout):
+    """Mass exact; meshed volume within the collapse's bound; at rest."""
+    m = runout["metrics"]
+    assert m["mass_change"] == 0.0
+    assert abs(m["volume_change"]) < VOLUME_LIMIT
+    assert m["at_rest"]
+    assert m["initial_equilibrium_residual"] < 1e-10  # gravity switched on
+    assert m["reduction"] == 1.0  # F < 1: it fails as it is
+    assert m["factor_of_safety"] < 1.0
+    assert m["runout"] > 0 and m["crest_settlement"] > 0
+    above_toe = 2.0 * 1.6 + 0.5 * 2.0 * 2.0 / math.tan(math.radians(60.0))
+    assert 0 < m["moved_volume"] < above_toe  # part of the slope slides
+
+
+def test_runout_deposit_statically_admissible(runout):
+    """Cohesionless deposit: no steeper than phi + 5 deg; its own FoS >= 1."""
+    m = runout["metrics"]
+    assert m["deposit_max_slope"] <= 30.0 + SLOPE_TOL
+    assert m["deposit_factor_of_safety"] >= 1.0

@@ -193,6 +193,8 @@ METRICS = {
     "mass_change": "relative change of the total mass over the run-out",
     "volume_change": "relative change of the meshed volume over the run-out",
     "at_rest": "the run-out ended by the at-rest rule (not t_end)",
+    "deposit_factor_of_safety": "factor of safety of the final deposit with the "
+    "run-out's strengths (a second limit analysis; >= 1: statically admissible)",
     "n_particles": "number of particles",
     **LIMIT_METRICS,
 }
@@ -451,6 +453,7 @@ def build(
             "mass_change": None,
             "volume_change": None,
             "at_rest": None,
+            "deposit_factor_of_safety": None,
             "n_particles": len(pts),
         }
         if run_out:
@@ -520,6 +523,7 @@ def runout_metrics(sim, state, values, h, x_toe, y_toe, x_crest, y_crest) -> dic
     )
     summ = sim.summary()
     stop = state.get("stop")
+    deposit_fos = deposit_factor_of_safety(sim, values)
     return {
         "reduction": state.get("reduction"),
         "runout": max(runout, 0.0),
@@ -531,7 +535,35 @@ def runout_metrics(sim, state, values, h, x_toe, y_toe, x_crest, y_crest) -> dic
         "mass_change": summ["mass_change"],
         "volume_change": summ["volume_change"],
         "at_rest": bool(stop is not None and stop(sim)),
+        "deposit_factor_of_safety": deposit_fos,
     }
+
+
+def deposit_factor_of_safety(sim: Simulation, values: dict[str, Any]) -> float:
+    """Factor of safety of the final deposit with the run-out's strengths.
+
+    A second limit analysis, on the alpha-shape mesh of the particles at the
+    end of the run (supports as at the start); at least 1 when the deposit is
+    statically admissible.
+    """
+    p = sim.particles
+    active, t = sim.mesh_source(p.x)
+    mesh = MeshTri(np.ascontiguousarray(p.x[active].T), np.ascontiguousarray(t))
+    ni = nodal_integration(mesh, (0, 1, 3))
+    material = np.asarray(p.material)[active]
+    rho = np.array([m.rho for m in sim.model.materials])[material]
+    load = np.zeros((active.size, 2))
+    load[:, 1] = -rho * GRAVITY * ni.volumes
+    fixed = np.asarray(p.fixed, bool)[active]
+    res = strength_reduction(
+        ni,
+        sim.model.materials,
+        material,
+        load,
+        fixed=fixed,
+        options=solver_from(values),
+    )
+    return float(res.factor_of_safety)
 
 
 def slope_scenery(p: dict, folder: Path | None = None) -> Scenery:
