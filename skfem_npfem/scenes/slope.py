@@ -518,9 +518,7 @@ def runout_metrics(sim, state, values, h, x_toe, y_toe, x_crest, y_crest) -> dic
         vol = float(np.sum(w / rho))
     xs = np.arange(final[:, 0].min(), final[:, 0].max() + 1e-9, h)
     ys = _surface_height(final, xs, 0.75 * h)
-    slope = (
-        np.degrees(np.arctan(np.abs(np.diff(ys[::3]) / (3 * h)))) if ys.size > 3 else []
-    )
+    slope = deposit_slopes(xs, ys, final[moved, 0], h)
     summ = sim.summary()
     stop = state.get("stop")
     deposit_fos = deposit_factor_of_safety(sim, values)
@@ -531,12 +529,36 @@ def runout_metrics(sim, state, values, h, x_toe, y_toe, x_crest, y_crest) -> dic
         "mass_centre_travel": travel,
         "moved_volume": vol,
         "deposit_profile": [[float(a), float(b)] for a, b in zip(xs, ys, strict=True)],
-        "deposit_max_slope": float(np.nanmax(slope)) if len(slope) else 0.0,
+        "deposit_max_slope": float(np.max(slope, initial=0.0)),
         "mass_change": summ["mass_change"],
         "volume_change": summ["volume_change"],
         "at_rest": bool(stop is not None and stop(sim)),
         "deposit_factor_of_safety": deposit_fos,
     }
+
+
+def deposit_slopes(
+    xs: np.ndarray, ys: np.ndarray, moved_x: np.ndarray, h: float, window: int = 5
+) -> np.ndarray:
+    """Surface slopes (deg) of least-squares lines over ``window`` columns.
+
+    Only windows over moved material count (the deposit, not the ground it
+    came to rest on); a line through ``window`` columns averages out the
+    one-particle steps of the highest-particle profile.
+    """
+    ok = np.isfinite(ys)
+    xs, ys = xs[ok], ys[ok]
+    if xs.size < window or moved_x.size == 0:
+        return np.zeros(0)
+    idx = np.arange(xs.size - window + 1)[:, None] + np.arange(window)
+    X, Y = xs[idx], ys[idx]
+    Xc = X - X.mean(axis=1, keepdims=True)
+    b = np.sum(Xc * (Y - Y.mean(axis=1, keepdims=True)), axis=1) / np.sum(Xc**2, axis=1)
+    lo, hi = X[:, 0] - 0.5 * h, X[:, -1] + 0.5 * h
+    has = (
+        np.searchsorted(np.sort(moved_x), hi) - np.searchsorted(np.sort(moved_x), lo)
+    ) > 0
+    return np.degrees(np.arctan(np.abs(b[has])))
 
 
 def deposit_factor_of_safety(sim: Simulation, values: dict[str, Any]) -> float:

@@ -393,7 +393,7 @@ def strength_reduction(
     fixed: np.ndarray | None = None,
     tied: list[np.ndarray] | None = None,
     tol: float = 1e-4,
-    max_programs: int = 20,
+    max_programs: int = 30,
     options: SolverOptions | None = None,
 ) -> SafetyResult:
     """Factor of safety ``F``: the strength reduction with collapse multiplier 1.
@@ -404,13 +404,16 @@ def strength_reduction(
     ``lambda(1) / F`` for purely cohesive materials; the iteration works on
     ``y = log lambda`` against ``x = log F``: the first step assumes that
     slope (-1), which ends a cohesive problem in two programs, and the
-    following ones are secant steps, kept inside the bracket of a sign change
-    once one is known (regula falsi).  It stops when ``|log lambda| <= tol``.
+    following ones are secant steps through the last two iterates, kept inside
+    the bracket ``lambda >= 1 > lambda`` once one is known.  It stops when
+    ``|log lambda| <= tol``.
 
-    A cohesionless body (every ``c = 0``) carries any multiple of its weight
-    or none, so ``lambda`` jumps from 0 to infinity at ``F``: there ``F`` is
-    bracketed by bisection on feasibility (the multiplier capped at 2 reaches
-    1 or not) to a relative width ``max(tol, 2e-3)`` (9-12 programs).
+    A cohesionless part carries any multiple of its weight or none, so
+    ``lambda`` can jump between 0 and infinity (the programs cap it at
+    :data:`CAP`).  Where an iterate is at 0 or at the cap, the next one halves
+    or doubles ``F`` until the bracket is found, then bisects it
+    (geometrically) down to a relative width ``max(tol, 2e-3)``: 9-12
+    programs for a dry sand slope.
 
     Parameters
     ----------
@@ -432,7 +435,7 @@ def strength_reduction(
         within ``max_programs``.
     """
 
-    def solve(F: float, cap: float | None = None) -> LimitResult:
+    def solve(F: float) -> LimitResult:
         mats = [reduced_strength(m, F) for m in materials]
         return limit_analysis(
             operator,
@@ -442,101 +445,67 @@ def strength_reduction(
             fixed=fixed,
             tied=tied,
             options=options,
-            max_multiplier=cap,
+            max_multiplier=CAP,
         )
 
-    def solve_capped(F: float) -> LimitResult:
-        return solve(F, CAP)
+    def interior(lam: float) -> bool:
+        return FLOOR < lam < (1 - 1e-6) * CAP
 
-    if all(getattr(m, "c", 1.0) == 0.0 for m in materials):
-        return _bisection(solve_capped, tol, max_programs)
     iterates: list = []
-    x, res = 0.0, solve(1.0)
-    y = math.log(res.multiplier)
-    iterates.append((1.0, res.multiplier))
-    first = res.multiplier
-    lo = hi = None  # (x, y) with y > 0 and y < 0
-    x_prev = y_prev = None
-    while abs(y) > tol:
+    points: list[tuple[float, float]] = []  # (log F, log lambda), interior only
+    lo = hi = None  # log F with lambda >= 1, and with lambda < 1
+    best = None
+    x = 0.0
+    width = math.log1p(max(tol, BISECTION_TOL))
+    while True:
         if len(iterates) >= max_programs:
             raise ParameterError(
                 "max_programs",
                 max_programs,
-                f"more programs (last F = {math.exp(x):.6g}, "
-                f"multiplier {math.exp(y):.6g})",
+                f"more programs (last F = {iterates[-1][0]:.6g}, "
+                f"multiplier {iterates[-1][1]:.6g})",
             )
-        if y > 0:
-            lo = (x, y)
+        res = solve(math.exp(x))
+        lam = res.multiplier
+        iterates.append((math.exp(x), lam))
+        if lam >= 1.0:
+            lo, best = x, res
         else:
-            hi = (x, y)
-        if x_prev is None or y == y_prev:
+            hi = x
+        inside = interior(lam)
+        if inside:
+            y = math.log(lam)
+            if abs(y) <= tol:
+                F, best = math.exp(x), res
+                break
+            points.append((x, y))
+        if lo is not None and hi is not None and hi - lo <= width:
+            F = math.exp(0.5 * (lo + hi))
+            break
+        if inside and len(points) >= 2 and points[-1][1] != points[-2][1]:
+            (x0, y0), (x1, y1) = points[-2], points[-1]
+            x_new = x1 - y1 * (x1 - x0) / (y1 - y0)
+        elif inside:
             x_new = x + y  # lambda ~ 1/F
         else:
-            x_new = x - y * (x - x_prev) / (y - y_prev)
-        if (
-            lo is not None
-            and hi is not None
-            and not (min(lo[0], hi[0]) < x_new < max(lo[0], hi[0]))
-        ):
-            # Illinois-style regula falsi inside the bracket.
-            x_new = lo[0] - lo[1] * (hi[0] - lo[0]) / (hi[1] - lo[1])
-        x_prev, y_prev = x, y
+            x_new = x + (math.log(2.0) if lam >= 1.0 else -math.log(2.0))
+        if lo is not None and hi is not None:
+            if not (inside and lo < x_new < hi):
+                x_new = 0.5 * (lo + hi)
         x = x_new
-        res = solve(math.exp(x))
-        y = math.log(res.multiplier)
-        iterates.append((math.exp(x), res.multiplier))
     return SafetyResult(
-        factor_of_safety=math.exp(x),
-        limit=res,
+        factor_of_safety=F,
+        limit=best if best is not None else res,
         programs=len(iterates),
         iterates=iterates,
-        multiplier_unreduced=first,
+        multiplier_unreduced=iterates[0][1],
     )
 
 
-#: Multiplier cap of the feasibility programs of a cohesionless body.
-CAP = 2.0
-#: Relative width at which the bisection of a cohesionless body stops (at least).
+#: Multiplier cap of the programs of :func:`strength_reduction` (a
+#: cohesionless body's multiplier is otherwise unbounded when it stands).
+CAP = 1.0e3
+#: Multipliers below this count as "carries nothing" in :func:`strength_reduction`.
+FLOOR = 1.0e-3
+#: Relative width at which a bisection of :func:`strength_reduction` stops.
 BISECTION_TOL = 2e-3
-
-
-def _bisection(solve, tol: float, max_programs: int) -> SafetyResult:
-    """Bisection on feasibility (capped multiplier >= 1) for a cohesionless body."""
-    iterates: list = []
-
-    def feasible(F: float) -> tuple[bool, LimitResult]:
-        res = solve(F)
-        iterates.append((F, res.multiplier))
-        return res.multiplier >= 1.0, res
-
-    ok, res = feasible(1.0)
-    first = res.multiplier
-    lo, hi = (1.0, None) if ok else (None, 1.0)
-    good = res if ok else None
-    while lo is None or hi is None:
-        F = 2 * lo if hi is None else hi / 2
-        ok, res = feasible(F)
-        if ok:
-            lo, good = F, res
-        else:
-            hi = F
-        if len(iterates) >= max_programs:
-            break
-    while hi / lo - 1 > max(tol, BISECTION_TOL) and len(iterates) < max_programs:
-        F = math.sqrt(lo * hi)
-        ok, res = feasible(F)
-        if ok:
-            lo, good = F, res
-        else:
-            hi = F
-    if hi is None or lo is None or hi / lo - 1 > max(tol, BISECTION_TOL):
-        raise ParameterError(
-            "max_programs", max_programs, "more programs for the bisection"
-        )
-    return SafetyResult(
-        factor_of_safety=math.sqrt(lo * hi),
-        limit=good if good is not None else res,
-        programs=len(iterates),
-        iterates=iterates,
-        multiplier_unreduced=first,
-    )
