@@ -367,8 +367,8 @@ class SafetyResult:
     factor_of_safety : float
         ``F`` with gravity multiplier 1 for ``c/F``, ``tan(phi)/F``.
     limit : LimitResult
-        The limit analysis at the last iterate (its mechanism is the failure
-        mechanism at ``F``).
+        The limit analysis at ``F`` (its mechanism is the failure mechanism);
+        after a bisection, the one just above ``F`` (on the failing side).
     programs : int
         Cone programs solved.
     iterates : list of (F, multiplier)
@@ -454,7 +454,7 @@ def strength_reduction(
     iterates: list = []
     points: list[tuple[float, float]] = []  # (log F, log lambda), interior only
     lo = hi = None  # log F with lambda >= 1, and with lambda < 1
-    best = None
+    best = failing = None
     x = 0.0
     width = math.log1p(max(tol, BISECTION_TOL))
     while True:
@@ -471,7 +471,7 @@ def strength_reduction(
         if lam >= 1.0:
             lo, best = x, res
         else:
-            hi = x
+            hi, failing = x, res
         inside = interior(lam)
         if inside:
             y = math.log(lam)
@@ -480,7 +480,9 @@ def strength_reduction(
                 break
             points.append((x, y))
         if lo is not None and hi is not None and hi - lo <= width:
-            F = math.exp(0.5 * (lo + hi))
+            # The mechanism: the one of the failing side (at the cap the
+            # feasible side's duals describe the cap, not a collapse).
+            F, best = math.exp(0.5 * (lo + hi)), failing
             break
         if inside and len(points) >= 2 and points[-1][1] != points[-2][1]:
             (x0, y0), (x1, y1) = points[-2], points[-1]
