@@ -119,6 +119,32 @@ def test_classic_slope_factor_of_safety():
     assert 2 <= m["cone_programs"] <= 10
 
 
+#: Tresca vertical cut: 3.7752 <= gamma H_c / c <= 3.7776 (Kammoun et al. 2010).
+VERTICAL_CUT = 3.7764
+
+
+def test_vertical_cut_stability_number():
+    """Tresca cut: gamma H F / c within 7 % of 3.776 at H/10 (+5.5 %, H/20 +2.2 %)."""
+    m = npfem.run_scene(
+        "slope",
+        {
+            "analysis": "limit",
+            "material": "tresca",
+            "angle": 90.0,
+            "height": 10.0,
+            "foundation_depth": 10.0,
+            "crest_length": 15.0,
+            "toe_length": 15.0,
+            "c": 1.0e4,
+            "gamma": 2.0e4,
+            "spacing": 1.0,
+        },
+    )["metrics"]
+    number = m["factor_of_safety"] * 2.0e4 * 10.0 / 1.0e4
+    assert abs(number / VERTICAL_CUT - 1) < 0.07
+    assert m["cone_programs"] == 2  # cohesive: lambda(F) = lambda(1) / F
+
+
 def test_cohesionless_slope_infinite_slope_value():
     """Dry sand: tan(phi)/tan(beta) within 5 % at H/10 (+3.9 %; +1.5 % at H/20)."""
     m = npfem.run_scene(
