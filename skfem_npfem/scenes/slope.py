@@ -336,18 +336,22 @@ def initial_stress(
 
 
 def _surface_height(x: np.ndarray, at: np.ndarray, width: float = 0.0) -> np.ndarray:
-    """Highest particle y within ``width`` (default: the nearest column) of ``at``."""
-    order = np.argsort(x[:, 0])
-    xs, ys = x[order, 0], x[order, 1]
+    """Highest particle y near each of ``at`` (NaN where there is none).
+
+    The particles are binned in columns ``width`` wide (default: half the
+    median gap between distinct x); a query takes the highest particle of its
+    column and the two neighbouring ones (within ``width`` to ``2 width``).
+    """
     if width <= 0:
-        width = 0.5 * float(np.median(np.diff(np.unique(np.round(xs, 9))))) + 1e-12
-    lo = np.searchsorted(xs, at - width, "left")
-    hi = np.searchsorted(xs, at + width, "right")
-    out = np.full(at.shape, np.nan)
-    for k in range(at.size):  # one query per profile point (few hundred)
-        if hi[k] > lo[k]:
-            out[k] = ys[lo[k] : hi[k]].max()
-    return out
+        gaps = np.diff(np.unique(np.round(x[:, 0], 9)))
+        width = 0.5 * float(np.median(gaps)) if gaps.size else 1.0
+    x0 = min(float(x[:, 0].min()), float(np.min(at))) - 2 * width
+    b = np.floor((x[:, 0] - x0) / width).astype(int)
+    qb = np.floor((np.asarray(at) - x0) / width).astype(int)
+    top = np.full(max(int(b.max()), int(qb.max())) + 2, -np.inf)
+    np.maximum.at(top, b, x[:, 1])
+    out = np.maximum(np.maximum(top[qb - 1], top[qb]), top[qb + 1])
+    return np.where(np.isfinite(out), out, np.nan)
 
 
 def factor_of_safety(values, mesh, mats, material, fixed):
