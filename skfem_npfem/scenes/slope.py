@@ -17,7 +17,8 @@ Stages, in one run:
    ``s_h = K0 s_v`` (not in equilibrium under a slope: the residual says how
    far);
 2. **factor of safety** by strength reduction (``c/F``, ``tan(phi)/F``) with
-   the collapse mechanism, from limit analysis on the particles' mesh
+   the collapse mechanism (with an output folder: ``mechanism.npz`` and
+   ``mechanism.png``), from limit analysis on the particles' mesh
    (:func:`~skfem_npfem.step.limit.strength_reduction`;
    ``analysis=limit`` runs this stage only);
 3. **failure and run-out**, with ``runout=true``: the strengths divided by
@@ -405,14 +406,7 @@ def build(
                 **limit_metrics(res.limit, ni_.volumes, res.programs, state["t_fos"]),
             }
             if out is not None:
-                np.savez(
-                    Path(out) / "mechanism.npz",
-                    x=pts,
-                    triangles=tri,
-                    velocity=res.limit.velocity,
-                    dissipation=res.limit.dissipation,
-                    plastic=res.limit.plastic,
-                )
+                save_mechanism(Path(out), pts, tri, res, ni_.volumes)
         return state["fos_metrics"]
 
     run_out = values["runout"] and not limit_only
@@ -483,6 +477,26 @@ def build(
     stop = AtRest(values["rest_fraction"], 2 * math.sqrt(H / GRAVITY))
     state["stop"] = stop
     return SceneRun(sim, {"t_end": values["t_end"], "stop": stop}, metrics)
+
+
+def save_mechanism(folder: Path, pts, tri, res, volumes) -> None:
+    """``mechanism.npz`` and, with matplotlib, ``mechanism.png`` in ``folder``."""
+    lim = res.limit
+    np.savez(
+        folder / "mechanism.npz",
+        x=pts,
+        triangles=tri,
+        velocity=lim.velocity,
+        dissipation=lim.dissipation,
+        plastic=lim.plastic,
+    )
+    try:
+        from ..viz.figures import mechanism_figure
+    except ImportError:  # pragma: no cover - the viz extra is not installed
+        return
+    title = f"collapse mechanism at F = {res.factor_of_safety:.3f}"
+    fig = mechanism_figure(pts, tri, lim.velocity, lim.dissipation, volumes, title)
+    fig.savefig(folder / "mechanism.png")
 
 
 def reduced_strength_flow(material: Material, factor: float) -> Material:
