@@ -218,3 +218,21 @@ def test_runout_deposit_statically_admissible(runout):
     m = runout["metrics"]
     assert m["deposit_max_slope"] <= 30.0 + SLOPE_TOL
     assert m["deposit_factor_of_safety"] >= 1.0
+
+
+def test_finer_where_asked_and_t_junctions():
+    """A region with its own spacing: more particles there, area still exact."""
+    a = np.array([[0, 0], [4, 0], [4, 1], [0, 1]], float)  # top edge whole
+    b = np.array([[0, 1], [2, 1], [2, 3], [0, 3]], float)  # T-junction at (2, 1)
+    coarse = fill_regions([Region("a", a), Region("b", b)], 0.25)
+    fine = fill_regions([Region("a", a), Region("b", b, spacing=0.1)], 0.25)
+    for pts, tri, _ in (coarse, fine):
+        v = pts[tri.T]
+        area = 0.5 * np.abs(
+            (v[:, 1, 0] - v[:, 0, 0]) * (v[:, 2, 1] - v[:, 0, 1])
+            - (v[:, 1, 1] - v[:, 0, 1]) * (v[:, 2, 0] - v[:, 0, 0])
+        )
+        assert area.sum() == pytest.approx(4.0 + 4.0, rel=1e-12)
+        assert area.min() > 0.02 * 0.1**2  # no slivers at the T-junction
+    in_b = lambda r: int(np.sum(r[2] == 1))  # noqa: E731
+    assert in_b(fine) > 4 * in_b(coarse)  # (0.25 / 0.1)^2 = 6.25 per area

@@ -19,15 +19,17 @@ The geometry file of the ``slope`` scene (:func:`read_cross_section`) is JSON::
       },
       "regions": [
         {"material": "clay", "polygon": [[0, 0], [40, 0], [40, 5], [0, 5], [0, 0]]},
-        {"material": "sand", "polygon": [[0, 5], [15, 5], [25, 15], [0, 15], [0, 5]]}
+        {"material": "sand", "polygon": [[0, 5], [25, 5], [15, 15], [0, 15], [0, 5]]}
       ],
       "supports": {"base": "fixed", "sides": "rollers"}
     }
 
 Lengths in m, stresses in Pa, angles in degrees, unit weights ``gamma`` in
-N/m^3.  A material may also give ``E``, ``nu`` and ``psi`` (defaults: the
-scene's).  Polygons are closed: the last vertex repeats the first.  The base
-is the lowest ``y`` of the section (``fixed``: both velocities zero;
+N/m^3.  A region may give its own ``"spacing"`` (finer where asked: a thin
+layer, the zone where a slip is expected); edges it shares with coarser
+regions take its points.  A material may also give ``E``, ``nu`` and ``psi``
+(defaults: the scene's).  Polygons are closed: the last vertex repeats the
+first.  The base is the lowest ``y`` of the section (``fixed``: both velocities zero;
 ``rollers``: vertical only), the sides its smallest and largest ``x``
 (``rollers``: horizontal velocity zero; ``free``: no support).
 """
@@ -40,7 +42,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial import Delaunay
+from scipy.spatial import Delaunay, cKDTree
 
 from ..errors import ParameterError
 
@@ -61,10 +63,15 @@ BASES, SIDES = ("fixed", "rollers"), ("rollers", "free")
 
 @dataclass
 class Region:
-    """One region: a closed polygon (first vertex not repeated) and a material."""
+    """One region: a closed polygon (first vertex not repeated) and a material.
+
+    ``spacing``: the region's own particle spacing (finer where asked); None
+    takes the section's.
+    """
 
     material: str
     polygon: np.ndarray
+    spacing: float | None = None
 
 
 @dataclass
@@ -157,11 +164,12 @@ def check_regions(regions: list[Region], spacing: float) -> None:
                 "a simple polygon: its edges cross each other (self-intersecting)",
             )
         area = abs(_area(poly))
-        if area < spacing**2:
+        hr = spacing if r.spacing is None else r.spacing
+        if area < hr**2:
             raise ParameterError(
                 f"regions[{k}]",
                 f"area {area:.4g} m^2",
-                f"at least spacing^2 = {spacing**2:.4g} m^2 (a region smaller than "
+                f"at least spacing^2 = {hr**2:.4g} m^2 (a region smaller than "
                 "the spacing holds no particle; refine the spacing or drop it)",
             )
     # Overlap: an edge crossing, or a lattice point strictly inside two regions.
@@ -209,32 +217,49 @@ def fill_regions(
         Region index of every point (the first listed on shared edges).
     """
     h = float(spacing)
-    bnd = []
-    for r in regions:
-        a, b = r.polygon, np.roll(r.polygon, -1, axis=0)
+    hs = [h if r.spacing is None else float(r.spacing) for r in regions]
+    # Vertices first, then edge points region by region from the finest.
+    verts = [np.concatenate([r.polygon for r in regions])]
+    bnd, local = [], []
+    for k in np.argsort(hs, kind="stable"):
+        a, b = regions[k].polygon, np.roll(regions[k].polygon, -1, axis=0)
         for p0, p1 in zip(a, b, strict=True):
-            n = max(1, math.ceil(np.linalg.norm(p1 - p0) / h - 1e-9))
-            t = np.arange(n)[:, None] / n
+            n = max(1, math.ceil(np.linalg.norm(p1 - p0) / hs[k] - 1e-9))
+            t = np.arange(1, n)[:, None] / n
             bnd.append(p0 + t * (p1 - p0))
-    bnd = np.concatenate(bnd)
+            local.append(np.full(n - 1, hs[k]))
+    bnd = np.concatenate(verts + bnd)
+    local = np.concatenate([np.zeros(len(verts[0])), *local])
     scale = max(float(np.ptp(bnd)), h)
     _, first = np.unique(np.round(bnd / (1e-9 * scale)), axis=0, return_index=True)
-    bnd = bnd[np.sort(first)]
+    first = np.sort(first)
+    bnd, local = bnd[first], local[first]
+    # Edges shared by regions of different spacings (or T-junctions) give
+    # points closer than their spacing: keep the earlier (finer) one.
+    pairs = cKDTree(bnd).query_pairs(0.3 * min(hs), output_type="ndarray")
+    if pairs.size:
+        i, j = pairs.min(axis=1), pairs.max(axis=1)
+        close = np.linalg.norm(bnd[i] - bnd[j], axis=1) < 0.3 * np.maximum(
+            local[j], 1e-300
+        )
+        keep = np.ones(len(bnd), bool)
+        keep[j[close & (local[j] > 0)]] = False
+        bnd = bnd[keep]
     inner = []
-    for r in regions:
+    edges_a = np.concatenate([r.polygon for r in regions])
+    edges_b = np.concatenate([np.roll(r.polygon, -1, axis=0) for r in regions])
+    for r, hr in zip(regions, hs, strict=True):
         lo, hi = r.polygon.min(axis=0), r.polygon.max(axis=0)
-        gx = np.arange(lo[0] + h / 2, hi[0], h)
-        gy = np.arange(lo[1] + h / 2, hi[1], h * math.sqrt(3) / 2)
+        gx = np.arange(lo[0] + hr / 2, hi[0], hr)
+        gy = np.arange(lo[1] + hr / 2, hi[1], hr * math.sqrt(3) / 2)
         X, Y = np.meshgrid(gx, gy)
-        X = X + (np.arange(gy.size)[:, None] % 2) * h / 2  # triangular lattice
+        X = X + (np.arange(gy.size)[:, None] % 2) * hr / 2  # triangular lattice
         grid = np.column_stack([X.ravel(), Y.ravel()])
         grid = grid[point_in_polygon(grid, r.polygon)]
+        if grid.size:
+            grid = grid[_segment_distance(grid, edges_a, edges_b) >= 0.5 * hr]
         inner.append(grid)
     inner = np.concatenate(inner) if inner else np.zeros((0, 2))
-    if inner.size:
-        edges_a = np.concatenate([r.polygon for r in regions])
-        edges_b = np.concatenate([np.roll(r.polygon, -1, axis=0) for r in regions])
-        inner = inner[_segment_distance(inner, edges_a, edges_b) >= 0.5 * h]
     pts = np.concatenate([bnd, inner])
     tri = Delaunay(pts).simplices
     cen = pts[tri].mean(axis=1)
@@ -332,7 +357,15 @@ def read_cross_section(path: str | Path) -> CrossSection:
                 "a closed polygon: at least 3 vertices and the last one repeating "
                 "the first (this one is open)",
             )
-        regions.append(Region(r["material"], poly[:-1]))
+        hr = r.get("spacing")
+        if hr is not None and not (
+            isinstance(hr, int | float)
+            and not isinstance(hr, bool)
+            and math.isfinite(hr)
+            and hr > 0
+        ):
+            raise ParameterError(f"regions[{k}].spacing", hr, "a length > 0 (m)")
+        regions.append(Region(r["material"], poly[:-1], hr))
     supports = {"base": "fixed", "sides": "rollers"}
     for key, val in dict(data.get("supports", {})).items():
         allowed = {"base": BASES, "sides": SIDES}.get(key)
