@@ -201,6 +201,9 @@ METRICS = {
     "stage_wall_time": "seconds per stage: initial_stress, factor_of_safety (all "
     "its cone programs), runout (the steps)",
     **LIMIT_METRICS,
+    "collapse_multiplier": "gravity multiplier of the unreduced strengths (the "
+    "first program; capped at 1e3: a cohesionless slope that stands carries "
+    "any multiple of its weight)",
 }
 
 
@@ -404,6 +407,8 @@ def build(
                 "factor_of_safety": res.factor_of_safety,
                 "fos_iterates": [list(map(float, it)) for it in res.iterates],
                 **limit_metrics(res.limit, ni_.volumes, res.programs, state["t_fos"]),
+                # The gravity multiplier of the slope as it is (F = 1).
+                "collapse_multiplier": res.multiplier_unreduced,
             }
             if out is not None:
                 save_mechanism(Path(out), pts, tri, res, ni_.volumes)
