@@ -64,6 +64,13 @@ from .run.rest import AtRest
 from .run.simulation import Simulation
 from .scenes import SCENES, get_scene, run_scene
 from .step.conic import ConeSolution, solve_step
+from .step.limit import (
+    LimitResult,
+    SafetyResult,
+    limit_analysis,
+    reduced_strength,
+    strength_reduction,
+)
 from .step.model import Model
 from .step.program import ConeInput
 from .step.records import Step, StepRecord, skfem_fields
@@ -112,6 +119,14 @@ __all__ += [
     "StepRecord",
     "advance",
     "solve_step",
+]
+#: Limit analysis: collapse multipliers and factors of safety in one program.
+__all__ += [
+    "LimitResult",
+    "SafetyResult",
+    "limit_analysis",
+    "reduced_strength",
+    "strength_reduction",
 ]
 #: Sweeps.
 __all__ += ["sweep"]

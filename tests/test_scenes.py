@@ -191,23 +191,24 @@ def test_prandtl_convergence():
 
 def test_lengths_are_limited_like_the_other_lengths():
     # spacing, radius and depth accepted any positive value, although every
-    # other length is limited to [1e-4, 1e4] m (docs/output.md).
+    # other length is limited to [1e-4, 1e4] m (docs/output.md); a spacing may
+    # go down to 1e-6 m, so that a body of the smallest size can be resolved.
     from skfem_npfem import ParameterError
 
-    for scene, name in (
-        ("column-collapse", "spacing"),
-        ("column-collapse", "radius"),
-        ("column-collapse", "depth"),
-        ("strip-footing", "spacing"),
-        ("elastic-column", "spacing"),
+    for scene, name, lo in (
+        ("column-collapse", "spacing", 1e-6),
+        ("column-collapse", "radius", 1e-4),
+        ("column-collapse", "depth", 1e-4),
+        ("strip-footing", "spacing", 1e-6),
+        ("elastic-column", "spacing", 1e-6),
     ):
         param = {p.name: p for p in get_scene(scene).params}[name]
-        assert param.allowed() == "a finite number in [0.0001, 10000]"
-        for bad in (1e-5, 2e4):
+        assert param.allowed() == f"a finite number in [{lo:g}, 10000]"
+        for bad in (lo / 10, 2e4):
             with pytest.raises(ParameterError) as info:
                 get_scene(scene).resolve({name: bad})
             assert info.value.name == name
-        assert param.check(1e-4) == 1e-4 and param.check(1e4) == 1e4
+        assert param.check(lo) == lo and param.check(1e4) == 1e4
 
 
 def test_parameter_help_says_what_each_scene_does():

@@ -38,6 +38,7 @@ from ..mesh.smoothing import nodal_integration
 from ..mesh.sources import FixedMesh
 from ..particles import Particles
 from ..run.simulation import Simulation
+from ..step.limit import limit_analysis
 from ..step.model import Model
 from .base import Param, Renamed, Scene, SceneRun
 from .common import (
@@ -49,12 +50,25 @@ from .common import (
     solver_from,
     solver_params,
 )
-from .limits import SPACING
+from .limit_mode import (
+    LIMIT_METRICS,
+    analysis_param,
+    check_limit_method,
+    limit_metrics,
+    limit_scene_run,
+)
+from .limits import SPACING as SPACING_RANGE
 from .methods import METHOD_METRICS, method_params, with_method
 from .plateau import PlateauRule
 from .scenery import Scenery, box, number
 
 MATERIALS = ("tresca", "mohr-coulomb", "drucker-prager")
+
+#: Default element size under the footing and block size / b (incremental).
+DEFAULT_SPACING, DEFAULT_DOMAIN = 0.125, 5.0
+#: The same with ``analysis=limit``: one program is cheap, so the default is
+#: finer and the block wider (the Prandtl mechanism reaches 16 b at phi = 40).
+LIMIT_SPACING, LIMIT_DOMAIN = 0.04, 10.0
 
 #: Default minimum settlement in units of ``(c + gamma b) b / E``.
 SETTLEMENT_SCALE = 100.0
@@ -123,7 +137,15 @@ PARAMS = [
     ),
     Param("footing", "smooth", "-", "footing-soil interface", str, ("smooth", "rough")),
     Param("half_width", 1.0, "m", "footing half-width b", float, **_POSITIVE),
-    Param("spacing", 0.125, "m", "element size under the footing", float, **SPACING),
+    Param(
+        "spacing",
+        None,
+        "m",
+        f"element size under the footing (default {DEFAULT_SPACING:g}; "
+        f"{LIMIT_SPACING:g} with analysis=limit)",
+        float,
+        **SPACING_RANGE,
+    ),
     Param(
         "grading",
         1.15,
@@ -135,9 +157,10 @@ PARAMS = [
     ),
     Param(
         "domain",
-        5.0,
+        None,
         "-",
-        "soil block size / b (width and depth)",
+        f"soil block size / b (width and depth; default {DEFAULT_DOMAIN:g}, "
+        f"{LIMIT_DOMAIN:g} with analysis=limit)",
         float,
         lo=2.0,
         hi=50.0,
@@ -201,6 +224,7 @@ PARAMS = [
         "small-strain limit analysis",
         bool,
     ),
+    analysis_param("settlement steps to the load plateau"),
     *method_params(
         ("npfem", "fem-remap"),
         missing="spfem is not available in strip-footing: it is explicit "
@@ -236,6 +260,7 @@ METRICS = {
         k: "spfem only: always null here (spfem is not available in this scene)"
         for k in ("explicit_steps", "stable_dt", "explicit_dt")
     },
+    **LIMIT_METRICS,
 }
 
 
@@ -368,7 +393,9 @@ def plateau_rule(values: dict[str, Any]) -> PlateauRule:
 def build(
     values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
 ) -> SceneRun:
-    """Build the strip-footing simulation."""
+    """Build the strip-footing simulation (or its limit analysis)."""
+    resolve_defaults(values)
+    check_limit_method(values)
     mesh = soil_mesh(values)
     mat, phi = soil_material(values)
     rule = plateau_rule(values)
@@ -407,8 +434,12 @@ def build(
         # finished run takes no further step.
         return rule.stop_reason(load_curve(sim_)) is not None
 
-    sim.callbacks.append(record)
     ref = prandtl_nc(phi) if gamma == 0 and c > 0 else None
+    if values["analysis"] == "limit":
+        return limit_scene_run(
+            sim, lambda: footing_limit(values, mesh, mat, particles, foot, ref)
+        )
+    sim.callbacks.append(record)
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
         curve = load_curve(sim_)
@@ -453,6 +484,63 @@ def locking_note(values: dict[str, Any], phi: float) -> str:
     return f"fem-remap with P1 elements under {flow}"
 
 
+def resolve_defaults(values: dict[str, Any]) -> dict[str, Any]:
+    """Fill ``spacing`` and ``domain`` left at None (they depend on ``analysis``)."""
+    limit = values.get("analysis") == "limit"
+    if values.get("spacing") is None:
+        values["spacing"] = LIMIT_SPACING if limit else DEFAULT_SPACING
+    if values.get("domain") is None:
+        values["domain"] = LIMIT_DOMAIN if limit else DEFAULT_DOMAIN
+    return values
+
+
+def footing_limit(
+    values: dict[str, Any],
+    mesh: MeshTri,
+    mat: Material,
+    particles: Particles,
+    foot: np.ndarray,
+    ref: float | None,
+) -> dict[str, Any]:
+    """The footing's collapse load as one cone program (``analysis=limit``).
+
+    The footing is rigid: the vertical velocities of its nodes are one unknown
+    (and a rough footing's horizontal ones are zero), so the reference load --
+    ``c b`` (``gamma b^2`` for c = 0) on the half model -- needs no
+    distribution.  The soil's weight is the dead load.  The multiplier is then
+    the bearing factor ``q / c`` (``q / (gamma b)``).
+    """
+    b, c, gamma = values["half_width"], values["c"], unit_weight(values)
+    ni = nodal_integration(mesh, (0, 1, 2, 3) if mat.needs_zz(2) else (0, 1, 3))
+    n = particles.n
+    fixed = np.asarray(particles.fixed, bool).copy()
+    foot = np.flatnonzero(foot)
+    fixed[foot, 1] = False  # the footing's vertical dofs: one tied unknown
+    load = np.zeros((n, 2))
+    load[foot, 1] = -(c if c > 0 else gamma * b) * b / foot.size
+    dead = np.zeros((n, 2))
+    dead[:, 1] = -gamma * ni.volumes
+    res = limit_analysis(
+        ni,
+        [mat],
+        np.zeros(n, int),
+        load,
+        dead_load=dead,
+        fixed=fixed,
+        tied=[2 * foot + 1],
+        options=solver_from(values),
+    )
+    factor = res.multiplier
+    return {
+        "q_ult": factor * (c if c > 0 else gamma * b),
+        "bearing_factor": factor,
+        "bearing_factor_reference": ref,
+        "relative_error": None if ref is None else factor / ref - 1.0,
+        "n_particles": int(n),
+        **limit_metrics(res, ni.volumes, 1),
+    }
+
+
 def load_curve(sim: Simulation) -> list[list[float]]:
     """``[settlement, pressure]`` of every recorded step."""
     return [
@@ -472,6 +560,7 @@ def footing_scenery(p: dict, folder: Path | None = None) -> Scenery:
     latest checkpoint there; steps are labelled by their settlement.
     """
     s = Scenery(scene="strip-footing")
+    p = resolve_defaults(dict(p))
     b, domain = number(p, "half_width"), number(p, "domain")
     if b is None or domain is None:
         return s

@@ -24,7 +24,7 @@ from ..io import atomic_path
 from .render import Step, Style
 from .scenery import Scenery, mass_front
 
-__all__ = ["Frames2D", "View", "load_settlement_figure"]
+__all__ = ["Frames2D", "View", "load_settlement_figure", "mechanism_figure"]
 
 _DPI = 100
 _BODY = "#303030"
@@ -210,6 +210,43 @@ def load_settlement_figure(
     ax.grid(True, lw=0.4, alpha=0.6)
     ax.set_title("load-settlement curve")
     ax.legend(loc="lower left", fontsize=9)
+    return fig
+
+
+def mechanism_figure(
+    x: np.ndarray,
+    triangles: np.ndarray,
+    velocity: np.ndarray,
+    dissipation: np.ndarray,
+    volumes: np.ndarray | None = None,
+    title: str = "collapse mechanism",
+    size: tuple[int, int] = (900, 420),
+):
+    """A limit analysis's mechanism: dissipation density and velocity arrows.
+
+    ``x`` (N, 2), ``triangles`` (3, m), ``velocity`` (N, 2) and
+    ``dissipation`` (N,) as :class:`~skfem_npfem.LimitResult` gives them; the
+    colour is the dissipation per cell volume (``volumes``, default 1), the
+    fastest arrow is a tenth of the section's width long.
+    """
+    fig = _new_figure(size)
+    ax = fig.add_subplot(1, 1, 1)
+    dens = dissipation / (1.0 if volumes is None else volumes)
+    pc = ax.tripcolor(
+        x[:, 0], x[:, 1], triangles.T, dens, shading="gouraud", cmap="magma_r"
+    )
+    fig.colorbar(pc, ax=ax, label="dissipation density")
+    speed = float(np.max(np.linalg.norm(velocity, axis=1), initial=0.0))
+    if speed > 0:
+        scale = speed / (0.1 * float(np.ptp(x[:, 0])))
+        ax.quiver(
+            x[:, 0], x[:, 1], velocity[:, 0], velocity[:, 1],
+            color=_REF, width=0.002, angles="xy", scale_units="xy", scale=scale,
+        )  # fmt: skip
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(title)
     return fig
 
 

@@ -1,0 +1,377 @@
+"""Cross-sections from polygons: checked regions filled with particles and a mesh.
+
+A cross-section is a list of simple, closed polygons (one per region, each
+with a material).  :func:`check_regions` refuses what cannot be meshed (open or
+self-intersecting polygons, overlapping regions, regions smaller than the
+spacing) with one :class:`~skfem_npfem.errors.ParameterError` each, and
+:func:`fill_regions` puts particles on the boundaries (spacing ``h`` along
+every edge, shared edges once) and on a lattice inside (kept at least
+``h/2`` from the boundaries), triangulates them (Delaunay) and keeps the
+triangles whose centroid lies in a region.  A node on an edge shared by two
+regions takes the material of the first region listed.
+
+The geometry file of the ``slope`` scene (:func:`read_cross_section`) is JSON::
+
+    {
+      "materials": {
+        "clay": {"c": 10000, "phi": 20, "rho": 2000},
+        "sand": {"c": 0, "phi": 35, "rho": 1900, "E": 5e7, "nu": 0.3}
+      },
+      "regions": [
+        {"material": "clay", "polygon": [[0, 0], [40, 0], [40, 5], [0, 5], [0, 0]]},
+        {"material": "sand", "polygon": [[0, 5], [25, 5], [15, 15], [0, 15], [0, 5]]}
+      ],
+      "supports": {"base": "fixed", "sides": "rollers"}
+    }
+
+Lengths in m, stresses in Pa, angles in degrees, densities ``rho`` in
+kg/m^3 (the unit weight is ``rho g``).  A region may give its own
+``"spacing"`` (finer where asked: a thin layer, the zone where a slip is expected); edges it shares with coarser
+regions take its points.  A material may also give ``E``, ``nu`` and ``psi``
+(defaults: the scene's).  Polygons are closed: the last vertex repeats the
+first.  The base is the lowest ``y`` of the section (``fixed``: both velocities zero;
+``rollers``: vertical only), the sides its smallest and largest ``x``
+(``rollers``: horizontal velocity zero; ``free``: no support).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial import Delaunay, cKDTree
+
+from ..errors import ParameterError
+
+__all__ = [
+    "CrossSection",
+    "Region",
+    "check_regions",
+    "fill_regions",
+    "point_in_polygon",
+    "read_cross_section",
+]
+
+#: Keys a material of a geometry file may have.
+MATERIAL_KEYS = ("c", "phi", "psi", "rho", "E", "nu")
+#: Allowed supports.
+BASES, SIDES = ("fixed", "rollers"), ("rollers", "free")
+
+
+@dataclass
+class Region:
+    """One region: a closed polygon (first vertex not repeated) and a material.
+
+    ``spacing``: the region's own particle spacing (finer where asked); None
+    takes the section's.
+    """
+
+    material: str
+    polygon: np.ndarray
+    spacing: float | None = None
+
+
+@dataclass
+class CrossSection:
+    """A cross-section: regions, materials (name -> properties), supports."""
+
+    regions: list[Region]
+    materials: dict[str, dict[str, float]]
+    supports: dict[str, str] = field(
+        default_factory=lambda: {"base": "fixed", "sides": "rollers"}
+    )
+
+
+def point_in_polygon(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
+    """Even-odd test of ``points`` (n, 2) against a polygon (m, 2), vectorised."""
+    x, y = points[:, 0][:, None], points[:, 1][:, None]
+    x0, y0 = poly[:, 0][None, :], poly[:, 1][None, :]
+    x1, y1 = np.roll(poly[:, 0], -1)[None, :], np.roll(poly[:, 1], -1)[None, :]
+    crosses = (y0 > y) != (y1 > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xc = x0 + (y - y0) * (x1 - x0) / (y1 - y0)
+    return np.count_nonzero(crosses & (x < xc), axis=1) % 2 == 1
+
+
+def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance of every point (n, 2) to the nearest of the segments a-b (m, 2)."""
+    d = b - a
+    L2 = np.maximum(np.einsum("md,md->m", d, d), 1e-300)
+    rel = points[:, None, :] - a[None, :, :]
+    t = np.clip(np.einsum("nmd,md->nm", rel, d) / L2, 0.0, 1.0)
+    near = a[None] + t[..., None] * d[None]
+    return np.min(np.linalg.norm(points[:, None, :] - near, axis=2), axis=1)
+
+
+def _area(poly: np.ndarray) -> float:
+    x, y = poly[:, 0], poly[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def _proper_crossings(p: np.ndarray, q: np.ndarray, skip_adjacent: bool) -> bool:
+    """Whether an edge of polygon p properly crosses an edge of q."""
+    a, b = p, np.roll(p, -1, axis=0)
+    c, d = q, np.roll(q, -1, axis=0)
+
+    def orient(u, v, w):
+        return (v[..., 0] - u[..., 0]) * (w[..., 1] - u[..., 1]) - (
+            v[..., 1] - u[..., 1]
+        ) * (w[..., 0] - u[..., 0])
+
+    A, B = a[:, None, :], b[:, None, :]
+    C, D = c[None, :, :], d[None, :, :]
+    scale = max(float(np.ptp(p)), float(np.ptp(q)), 1e-300) ** 2
+    eps = 1e-12 * scale
+    o1, o2 = orient(A, B, C), orient(A, B, D)
+    o3, o4 = orient(C, D, A), orient(C, D, B)
+    cross = (o1 * o2 < -eps * eps) & (o3 * o4 < -eps * eps)
+    cross &= (np.abs(o1) > eps) & (np.abs(o2) > eps)
+    cross &= (np.abs(o3) > eps) & (np.abs(o4) > eps)
+    if skip_adjacent:
+        n = len(p)
+        i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+        cross &= (np.abs(i - j) > 1) & ~(
+            ((i == 0) & (j == n - 1)) | ((j == 0) & (i == n - 1))
+        )
+    return bool(np.any(cross))
+
+
+def check_regions(regions: list[Region], spacing: float) -> None:
+    """Refuse polygons that cannot be meshed at ``spacing``.
+
+    Raises
+    ------
+    ParameterError
+        A polygon with fewer than 3 distinct vertices, a self-intersecting
+        one, two regions that overlap, or a region whose area is below
+        ``spacing^2`` (it would hold no particle inside).
+    """
+    if not regions:
+        raise ParameterError("regions", [], "at least one region (a closed polygon)")
+    for k, r in enumerate(regions):
+        poly = r.polygon
+        if len(np.unique(np.round(poly, 12), axis=0)) < 3:
+            raise ParameterError(
+                f"regions[{k}].polygon", poly.tolist(), "at least 3 distinct vertices"
+            )
+        if _proper_crossings(poly, poly, skip_adjacent=True):
+            raise ParameterError(
+                f"regions[{k}].polygon",
+                f"{len(poly)} vertices",
+                "a simple polygon: its edges cross each other (self-intersecting)",
+            )
+        area = abs(_area(poly))
+        hr = spacing if r.spacing is None else r.spacing
+        if area < hr**2:
+            raise ParameterError(
+                f"regions[{k}]",
+                f"area {area:.4g} m^2",
+                f"at least spacing^2 = {hr**2:.4g} m^2 (a region smaller than "
+                "the spacing holds no particle; refine the spacing or drop it)",
+            )
+    # Overlap: an edge crossing, or a lattice point strictly inside two regions.
+    lo = np.min([r.polygon.min(axis=0) for r in regions], axis=0)
+    hi = np.max([r.polygon.max(axis=0) for r in regions], axis=0)
+    step = spacing / 2
+    gx = np.arange(lo[0] + step / 2, hi[0], step)
+    gy = np.arange(lo[1] + step / 2, hi[1], step)
+    grid = np.column_stack([g.ravel() for g in np.meshgrid(gx, gy)])
+    inside = []
+    for r in regions:
+        mask = point_in_polygon(grid, r.polygon)
+        a, b = r.polygon, np.roll(r.polygon, -1, axis=0)
+        if mask.any():
+            far = _segment_distance(grid[mask], a, b) > 1e-9 * spacing
+            idx = np.flatnonzero(mask)
+            mask[idx[~far]] = False
+        inside.append(mask)
+    for i in range(len(regions)):
+        for j in range(i + 1, len(regions)):
+            both = inside[i] & inside[j]
+            crossing = _proper_crossings(
+                regions[i].polygon, regions[j].polygon, skip_adjacent=False
+            )
+            if both.any() or crossing:
+                raise ParameterError(
+                    f"regions[{j}]",
+                    f"material {regions[j].material!r}",
+                    f"regions that do not overlap (it overlaps regions[{i}]); "
+                    "neighbouring regions share edges",
+                )
+
+
+def fill_regions(
+    regions: list[Region], spacing: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Particles and triangles of the regions at ``spacing``.
+
+    Returns
+    -------
+    points : ndarray (n, 2)
+    triangles : ndarray (3, m) int
+        Counter-clockwise triangles (scikit-fem's ``t``).
+    region : ndarray (n,) int
+        Region index of every point (the first listed on shared edges).
+    """
+    h = float(spacing)
+    hs = [h if r.spacing is None else float(r.spacing) for r in regions]
+    # Vertices first, then edge points region by region from the finest.
+    verts = [np.concatenate([r.polygon for r in regions])]
+    bnd, local = [], []
+    for k in np.argsort(hs, kind="stable"):
+        a, b = regions[k].polygon, np.roll(regions[k].polygon, -1, axis=0)
+        for p0, p1 in zip(a, b, strict=True):
+            n = max(1, math.ceil(np.linalg.norm(p1 - p0) / hs[k] - 1e-9))
+            t = np.arange(1, n)[:, None] / n
+            bnd.append(p0 + t * (p1 - p0))
+            local.append(np.full(n - 1, hs[k]))
+    bnd = np.concatenate(verts + bnd)
+    local = np.concatenate([np.zeros(len(verts[0])), *local])
+    scale = max(float(np.ptp(bnd)), h)
+    _, first = np.unique(np.round(bnd / (1e-9 * scale)), axis=0, return_index=True)
+    first = np.sort(first)
+    bnd, local = bnd[first], local[first]
+    # Edges shared by regions of different spacings (or T-junctions) give
+    # points closer than their spacing: keep the earlier (finer) one.
+    pairs = cKDTree(bnd).query_pairs(0.3 * min(hs), output_type="ndarray")
+    if pairs.size:
+        i, j = pairs.min(axis=1), pairs.max(axis=1)
+        close = np.linalg.norm(bnd[i] - bnd[j], axis=1) < 0.3 * np.maximum(
+            local[j], 1e-300
+        )
+        keep = np.ones(len(bnd), bool)
+        keep[j[close & (local[j] > 0)]] = False
+        bnd = bnd[keep]
+    inner = []
+    edges_a = np.concatenate([r.polygon for r in regions])
+    edges_b = np.concatenate([np.roll(r.polygon, -1, axis=0) for r in regions])
+    for r, hr in zip(regions, hs, strict=True):
+        lo, hi = r.polygon.min(axis=0), r.polygon.max(axis=0)
+        gx = np.arange(lo[0] + hr / 2, hi[0], hr)
+        gy = np.arange(lo[1] + hr / 2, hi[1], hr * math.sqrt(3) / 2)
+        X, Y = np.meshgrid(gx, gy)
+        X = X + (np.arange(gy.size)[:, None] % 2) * hr / 2  # triangular lattice
+        grid = np.column_stack([X.ravel(), Y.ravel()])
+        grid = grid[point_in_polygon(grid, r.polygon)]
+        if grid.size:
+            grid = grid[_segment_distance(grid, edges_a, edges_b) >= 0.5 * hr]
+        inner.append(grid)
+    inner = np.concatenate(inner) if inner else np.zeros((0, 2))
+    pts = np.concatenate([bnd, inner])
+    tri = Delaunay(pts).simplices
+    cen = pts[tri].mean(axis=1)
+    owner = np.full(len(tri), -1)
+    for k in range(len(regions) - 1, -1, -1):
+        owner[point_in_polygon(cen, regions[k].polygon)] = k
+    v = pts[tri]
+    area2 = (v[:, 1, 0] - v[:, 0, 0]) * (v[:, 2, 1] - v[:, 0, 1]) - (
+        v[:, 1, 1] - v[:, 0, 1]
+    ) * (v[:, 2, 0] - v[:, 0, 0])
+    keep = (owner >= 0) & (np.abs(area2) > 1e-10 * h * h)
+    tri, owner, area2 = tri[keep], owner[keep], area2[keep]
+    tri[area2 < 0] = tri[area2 < 0][:, [0, 2, 1]]
+    used = np.unique(tri)
+    new = np.full(len(pts), -1)
+    new[used] = np.arange(used.size)
+    region = np.full(used.size, len(regions))
+    np.minimum.at(region, new[tri].ravel(), np.repeat(owner, 3))
+    return pts[used], new[tri].T, region
+
+
+def read_cross_section(path: str | Path) -> CrossSection:
+    """Read and check the JSON geometry file (format in the module notes).
+
+    Raises
+    ------
+    ParameterError
+        For a file that cannot be read or parsed, a missing or unknown key, an
+        open polygon, a region whose material is not in ``materials``, or a
+        bad support.  Geometry checks that need the spacing are
+        :func:`check_regions`.
+    """
+    p = Path(path)
+    try:
+        data = json.loads(p.read_text())
+    except OSError as err:
+        raise ParameterError(
+            "geometry", str(path), f"a readable file ({err.strerror})"
+        ) from None
+    except json.JSONDecodeError as err:
+        raise ParameterError(
+            "geometry", str(path), f"a JSON file (line {err.lineno}: {err.msg})"
+        ) from None
+    if not isinstance(data, dict) or "regions" not in data or "materials" not in data:
+        raise ParameterError(
+            "geometry", str(path), "a JSON object with 'materials' and 'regions'"
+        )
+    mats = data["materials"]
+    if not isinstance(mats, dict) or not mats:
+        raise ParameterError("materials", mats, "an object: name -> properties")
+    materials: dict[str, dict[str, float]] = {}
+    for name, props in mats.items():
+        if not isinstance(props, dict):
+            raise ParameterError(f"materials.{name}", props, "an object of properties")
+        bad = sorted(set(props) - set(MATERIAL_KEYS))
+        if bad:
+            raise ParameterError(
+                f"materials.{name}",
+                bad[0],
+                "properties among " + ", ".join(MATERIAL_KEYS),
+            )
+        for key, val in props.items():
+            if (
+                isinstance(val, bool)
+                or not isinstance(val, int | float)
+                or not math.isfinite(val)
+            ):
+                raise ParameterError(f"materials.{name}.{key}", val, "a finite number")
+        materials[name] = {k: float(v) for k, v in props.items()}
+    regions = []
+    for k, r in enumerate(data["regions"]):
+        if not isinstance(r, dict) or "polygon" not in r or "material" not in r:
+            raise ParameterError(
+                f"regions[{k}]", r, "an object with 'material' and 'polygon'"
+            )
+        if r["material"] not in materials:
+            raise ParameterError(
+                f"regions[{k}].material",
+                r["material"],
+                "one of the materials of the file: " + ", ".join(materials),
+            )
+        try:
+            poly = np.asarray(r["polygon"], dtype=float)
+        except (TypeError, ValueError):
+            poly = np.zeros((0,))
+        if poly.ndim != 2 or poly.shape[1] != 2 or not np.all(np.isfinite(poly)):
+            raise ParameterError(
+                f"regions[{k}].polygon", r["polygon"], "a list of [x, y] vertices"
+            )
+        if len(poly) < 4 or not np.allclose(poly[0], poly[-1]):
+            raise ParameterError(
+                f"regions[{k}].polygon",
+                f"{len(poly)} vertices, from {poly[0].tolist() if len(poly) else None} "
+                f"to {poly[-1].tolist() if len(poly) else None}",
+                "a closed polygon: at least 3 vertices and the last one repeating "
+                "the first (this one is open)",
+            )
+        hr = r.get("spacing")
+        if hr is not None and not (
+            isinstance(hr, int | float)
+            and not isinstance(hr, bool)
+            and math.isfinite(hr)
+            and hr > 0
+        ):
+            raise ParameterError(f"regions[{k}].spacing", hr, "a length > 0 (m)")
+        regions.append(Region(r["material"], poly[:-1], hr))
+    supports = {"base": "fixed", "sides": "rollers"}
+    for key, val in dict(data.get("supports", {})).items():
+        allowed = {"base": BASES, "sides": SIDES}.get(key)
+        if allowed is None:
+            raise ParameterError("supports", key, "keys base and sides")
+        if val not in allowed:
+            raise ParameterError(f"supports.{key}", val, "one of " + ", ".join(allowed))
+        supports[key] = val
+    return CrossSection(regions, materials, supports)

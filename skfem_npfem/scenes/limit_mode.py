@@ -1,0 +1,96 @@
+"""The ``analysis=limit`` mode of a scene: one cone program, no time stepping.
+
+A scene with the parameter ``analysis`` (:func:`analysis_param`) builds its
+particles, walls and model as usual; with ``analysis=limit`` its
+:class:`~skfem_npfem.scenes.base.SceneRun` runs no step and its metrics come
+from :func:`~skfem_npfem.step.limit.limit_analysis` (or
+:func:`~skfem_npfem.step.limit.strength_reduction`) on the initial mesh.  The
+solve happens once, when the metrics are first asked for
+(:func:`limit_scene_run`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..step.limit import LimitResult
+from .base import Param, SceneRun
+
+__all__ = [
+    "ANALYSES",
+    "LIMIT_METRICS",
+    "analysis_param",
+    "check_limit_method",
+    "limit_metrics",
+    "limit_scene_run",
+]
+
+#: Values of the ``analysis`` parameter.
+ANALYSES = ("incremental", "limit")
+
+#: Metrics every limit-mode summary has.
+LIMIT_METRICS = {
+    "collapse_multiplier": "analysis=limit: collapse multiplier of the reference "
+    "load, one cone program on the initial mesh",
+    "limit_status": "analysis=limit: Clarabel status of the (last) limit program",
+    "cone_programs": "analysis=limit: cone programs solved",
+    "plastic_fraction": "analysis=limit: volume fraction of the plastic zone of the "
+    "collapse mechanism",
+    "limit_wall_time": "analysis=limit: seconds spent building and solving the "
+    "limit programs",
+}
+
+
+def analysis_param(incremental: str) -> Param:
+    """The ``analysis`` parameter; ``incremental`` says what the default runs."""
+    return Param(
+        "analysis",
+        "incremental",
+        "-",
+        f"incremental: {incremental}; limit: the collapse multiplier as one cone "
+        "program on the initial mesh (no elasticity, no steps)",
+        str,
+        ANALYSES,
+    )
+
+
+def check_limit_method(values: dict[str, Any]) -> None:
+    """Refuse a baseline method together with ``analysis=limit``."""
+    method = values.get("method", "npfem")
+    if values.get("analysis") == "limit" and method != "npfem":
+        raise ParameterError(
+            "method", method, "npfem with analysis=limit (one N-PFEM cone program)"
+        )
+
+
+def limit_metrics(
+    res: LimitResult,
+    volumes: np.ndarray,
+    programs: int,
+    wall_time: float | None = None,
+) -> dict:
+    """The :data:`LIMIT_METRICS` of a limit result (``wall_time``: of all programs)."""
+    volumes = np.asarray(volumes, float)
+    return {
+        "collapse_multiplier": float(res.multiplier),
+        "limit_status": res.status,
+        "cone_programs": int(programs),
+        "plastic_fraction": float(volumes[res.plastic].sum() / volumes.sum()),
+        "limit_wall_time": float(res.wall_time if wall_time is None else wall_time),
+    }
+
+
+def limit_scene_run(sim: Any, compute: Callable[[], dict]) -> SceneRun:
+    """A run of no steps whose metrics are ``compute()`` (solved once, cached)."""
+    cache: dict = {}
+
+    def metrics(_sim: Any) -> dict:
+        if "m" not in cache:
+            cache["m"] = compute()
+        return cache["m"]
+
+    return SceneRun(sim, {"steps": 0}, metrics)
