@@ -26,8 +26,8 @@ The geometry file of the ``slope`` scene (:func:`read_cross_section`) is JSON::
 
 Lengths in m, stresses in Pa, angles in degrees, densities ``rho`` in
 kg/m^3 (the unit weight is ``rho g``).  A region may give its own
-``"spacing"`` (finer where asked: a thin layer, the zone where a slip is expected); edges it shares with coarser
-regions take its points.  A material may also give ``E``, ``nu`` and ``psi``
+``"spacing"`` (finer where asked: a thin layer, the zone where a slip is
+expected); edges it shares with coarser regions take its points.  A material may also give ``E``, ``nu`` and ``psi``
 (defaults: the scene's).  Polygons are closed: the last vertex repeats the
 first.  The base is the lowest ``y`` of the section (``fixed``: both velocities zero;
 ``rollers``: vertical only), the sides its smallest and largest ``x``
