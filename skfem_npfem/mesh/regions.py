@@ -24,15 +24,14 @@ The geometry file of the ``slope`` scene (:func:`read_cross_section`) is JSON::
       "supports": {"base": "fixed", "sides": "rollers"}
     }
 
-Lengths in m, stresses in Pa, angles in degrees, densities ``rho`` in
-kg/m^3 (the unit weight is ``rho g``).  A region may give its own
-``"spacing"`` (finer where asked: a thin layer, the zone where a slip is
-expected); edges it shares with coarser regions take its points.  A material may also give ``E``, ``nu`` and ``psi``
-(defaults: the scene's).  Polygons are closed: the last vertex repeats the
-first.  The base is the lowest ``y`` of the section (``fixed``: both velocities zero;
-``rollers``: vertical only), the sides its smallest and largest ``x``
-(``rollers``: horizontal velocity zero; ``free``: no support).
-"""
+Lengths in m, stresses in Pa, angles in degrees, densities ``rho`` in kg/m^3 (the
+unit weight is ``rho g``). A region may give its own ``"spacing"`` (finer where
+asked: a thin layer, the zone where a slip is expected); edges it shares with
+coarser regions take its points. A material may also give ``E``, ``nu`` and ``psi``
+(defaults: the scene's). Polygons are closed: the last vertex repeats the first. The
+base is the lowest ``y`` of the section (``fixed``: both velocities zero;
+``rollers``: vertical only), the sides its smallest and largest ``x`` (``rollers``:
+horizontal velocity zero; ``free``: no support). """
 
 from __future__ import annotations
 
