@@ -31,7 +31,8 @@ coarser regions take its points. A material may also give ``E``, ``nu`` and ``ps
 (defaults: the scene's). Polygons are closed: the last vertex repeats the first. The
 base is the lowest ``y`` of the section (``fixed``: both velocities zero;
 ``rollers``: vertical only), the sides its smallest and largest ``x`` (``rollers``:
-horizontal velocity zero; ``free``: no support). """
+horizontal velocity zero; ``free``: no support).
+"""
 
 from __future__ import annotations
 
