@@ -335,11 +335,13 @@ PAGE_HEAD = """# Choosing a method: N-PFEM, FEM with remapping or the explicit S
 docs/validation/comparison/speed_accuracy.json: do not edit by hand; rerun
 `python demos/studies/speed_accuracy.py --page-only` after changing the generator. -->
 
-Every number on this page comes from `demos/studies/speed_accuracy.py`: each method
-and setting runs the same scene (`skfem-npfem run SCENE --set method=...`) over
-particle spacings and time steps, each configuration in its own process (so
-that wall time and peak memory are its own), on a Dask cluster
-(`skfem_npfem.sweeps.run_tasks`). The methods:
+Which method and setting reaches an accuracy in the least wall time, and which is
+the most accurate within a wall-time budget, on a limit load and on a granular
+flow. Every number on this page comes from `demos/studies/speed_accuracy.py`.
+"""
+
+METHODS_TEXT = """The methods, each through the same scene (`skfem-npfem run SCENE --set
+method=...`):
 
 * **N-PFEM** (`method=npfem`): nodal integration, one cone program per step;
   `accuracy=high` (interior-point tolerance 1e-8) or `fast` (1e-6).
@@ -350,15 +352,45 @@ that wall time and peak memory are its own), on a Dask cluster
   differences and a closed-form return mapping, substeps at 0.9 x the stable
   step. It is explicit and dynamic, so the quasi-static footing has no SPFEM run.
 
-Errors: the footing's `|q/c / (2 + pi) - 1|` at the detected load plateau; the
-collapse's relative error of the normalised run-out `(L_inf - L0)/L0`
-against the finest N-PFEM run. That reference is N-PFEM's own converged answer:
-another method's error also contains the difference between its converged
-answer and N-PFEM's, which is why the run-out itself is shown beside the
-experimental band (1.2 a to 1.8 a at a = 2: [2.4, 3.6]). `R` is the stress
-roughness of the final state ([scenes.md](scenes.md), `stress_roughness`).
-Wall times are per run, on the machine and at the load of the study (below).
+Each configuration runs in its own process (so that wall time and peak memory
+are its own), on a Dask cluster (`skfem_npfem.sweeps.run_tasks`). `R` is the
+stress roughness of the final state ([scenes.md](scenes.md),
+`stress_roughness`). Wall times are per run, on the machine and at the load of
+the study (the study line under "Results").
 """
+
+
+def _ints(values) -> str:
+    """``[4, 8, 12]`` -> ``4, 8 and 12``."""
+    text = [f"{v:g}" for v in values]
+    return text[0] if len(text) == 1 else ", ".join(text[:-1]) + " and " + text[-1]
+
+
+def _cases(result: dict) -> str:
+    """The two problems, their references and the grid of the study."""
+    grids, ref = result["grids"], result["reference"]
+    (fn, fs), (cn, cdt) = grids["footing"], grids["collapse"]
+    band = ref.get("band") or list(BAND)
+    return (
+        "## The cases and their references\n\n"
+        "* **Prandtl footing** (scene `strip-footing`: Tresca, weightless soil, "
+        "smooth footing, run to the detected load plateau). Reference: "
+        f"Prandtl's limit load q/c = 2 + pi = {_fmt(ref['footing'], 5)} (exact, "
+        "limit analysis; [verification](verification.md)). Error: "
+        "`|q/c / (2 + pi) - 1|` at the plateau. Grid: b/h = "
+        f"{_ints(fn)} (footing half-width over element size), {_ints(fs)} equal "
+        "settlement increments up to the minimum settlement.\n"
+        "* **Column collapse, a = 2** (scene `column-collapse`, to rest). "
+        "Reference: the normalised run-out `(L_inf - L0)/L0` of the finest "
+        "N-PFEM run (accuracy high, L0/h = "
+        f"{grids['reference'][0]}, dt = {grids['reference'][1]:g} s), "
+        "N-PFEM's own converged answer; the error is the relative difference "
+        "from it. Another method's error also contains the difference between "
+        "its converged answer and N-PFEM's, which is why the run-out itself is "
+        "shown beside the experimental band, 1.2 a (Lube et al. 2005) to 1.8 a "
+        f"(Lajeunesse et al. 2005): [{band[0]:g}, {band[1]:g}] at a = 2. Grid: "
+        f"L0/h = {_ints(cn)}, dt = {_ints(cdt)} s.\n\n" + METHODS_TEXT
+    )
 
 
 def _fmt(v, digits: int = 3) -> str:
@@ -566,7 +598,7 @@ def _step_cost(result: dict) -> tuple[str, list[str]]:
                 notes.append(
                     f"{problem}: {label}'s steps are cheaper, {value / ref:.2g} times "
                     "N-PFEM's per particle (whether that pays depends on its error, "
-                    "in the tables below)"
+                    "in the tables under Results)"
                 )
     head = [
         "problem",
@@ -622,11 +654,15 @@ def _defaults_note(recorded: dict) -> str:
 
 
 def write_page(result: dict, path: Path | None) -> str:
-    """The Markdown of docs/choosing.md from a study's JSON."""
+    """The Markdown of docs/choosing.md from a study's JSON.
+
+    In reference order: the cases and their references, the results (tables
+    and the figure), what they mean for a user's choice, the command.
+    """
     rows = result["rows"]
     n_ok = sum(r["ok"] for r in rows.values())
     ref = result["reference"]
-    parts = [PAGE_HEAD]
+    parts = [PAGE_HEAD, _cases(result), "## Results\n"]
     note = _defaults_note(result.get("npfem_defaults") or {})
     if note:
         parts.append(note)
@@ -641,7 +677,6 @@ def write_page(result: dict, path: Path | None) -> str:
         )
         + "The machine is shared: timings are indicative.\n"
     )
-    head_end = len(parts)  # the summary sections go after the study line
     notes, advice = [], []
     for problem, title in (
         ("footing", "Prandtl footing"),
@@ -650,7 +685,7 @@ def write_page(result: dict, path: Path | None) -> str:
         text, loses, short = _choices(result, problem)
         notes += [f"{title}: {s}" for s in loses]
         advice += [f"{title}, {s}" for s in short]
-        parts.append(f"## {title}\n")
+        parts.append(f"### {title}\n")
         if problem == "collapse":
             cr = ref.get("collapse_run") or {}
             parts.append(
@@ -658,7 +693,6 @@ def write_page(result: dict, path: Path | None) -> str:
                 f"s: (L∞−L0)/L0 = {_fmt(ref['collapse'], 4)} "
                 f"(wall {_fmt(cr.get('wall_time'))} s).\n"
             )
-        if problem == "collapse":
             text = _noise_floor(result) + "\n" + text
         parts.append(text + "\n")
         parts.append("All runs (Pareto: on its setting's front):\n")
@@ -666,8 +700,20 @@ def write_page(result: dict, path: Path | None) -> str:
     notes += _roughness_notes(result)
     cost_table, cost_notes = _step_cost(result)
     notes += cost_notes
-    parts.append("## Cost per step\n\n" + cost_table + "\n")
-    summary = ["## Where N-PFEM does not pay off\n"]
+    parts.append("### Cost per step\n\n" + cost_table + "\n")
+    parts.append(
+        "### Figure\n\n![error against wall time per method, with each method's "
+        "Pareto front; collapse run-out against the experimental band]"
+        "(validation/comparison/speed_accuracy.png)\n"
+    )
+    pick = ["## What this means for your choice\n", "### Which method to pick\n"]
+    pick += [f"* {s}." for s in advice]
+    pick.append(
+        '\nThe tables under "Results" give every accuracy target and budget; '
+        "the runs behind them are listed per problem."
+    )
+    parts.append("\n".join(pick) + "\n")
+    summary = ["### Where N-PFEM does not pay off\n"]
     if notes:
         summary += [f"* {s}." for s in notes]
     else:
@@ -675,24 +721,14 @@ def write_page(result: dict, path: Path | None) -> str:
             "In this study N-PFEM was the cheapest run for every error "
             "reached and the most accurate within every budget."
         )
-    parts.insert(head_end, "\n".join(summary) + "\n")
-    pick = ["## Which method to pick\n"]
-    pick += [f"* {s}." for s in advice]
-    pick.append(
-        "\nThe tables below give every accuracy target and budget; the runs "
-        "behind them are listed per problem."
-    )
-    parts.insert(head_end, "\n".join(pick) + "\n")
-    parts.append(
-        "## Figure\n\n![error against wall time per method, with each method's "
-        "Pareto front; collapse run-out against the experimental band]"
-        "(validation/comparison/speed_accuracy.png)\n"
-    )
+    parts.append("\n".join(summary) + "\n")
     parts.append(
         "## Reproduce\n\n```\npython demos/studies/speed_accuracy.py --workers 2   "
-        "# full study, resumable\npython demos/studies/speed_accuracy.py --subset "
-        "--workers 2\npython demos/studies/speed_accuracy.py --page-only   # page and "
-        "figure from the JSON\n```\n"
+        "# full study, resumable\n```\n\nThe runs live in "
+        "`out/comparison/speed_accuracy/` (`--work`); a rerun continues "
+        "interrupted runs and reuses finished ones of the same library source. "
+        "`--subset` runs a reduced grid; `--page-only` rebuilds this page and "
+        "its figure from the committed JSON.\n"
     )
     text = "\n".join(parts)
     if path is not None:

@@ -973,6 +973,91 @@ def full_runs() -> str:
     )
 
 
+#: Rows of the reference implementation's times per step (suite.json's
+#: ``reference_s_per_step`` and ``targets_s_per_step``), as the page names them.
+REFERENCE_ROWS = {
+    "collapse-1k": "collapse 1k",
+    "collapse-4k": "collapse 4k",
+    "collapse-16k": "collapse 16k",
+    "block3d-3k": "3D, 3.4k particles (block3d-3k, cylinder3d-4k)",
+    "block3d-11k": "3D, 10.7k particles (block3d-11k, cylinder3d-10k)",
+}
+
+
+def _seconds(x) -> str:
+    """A time per step as the reference quotes it: 0.2, 9.0, 17, 75."""
+    return "—" if x is None else (f"{x:.1f}" if x < 10 else f"{x:.0f}")
+
+
+@table(f"{RESULTS}/suite.json")
+def reference_timings() -> str:
+    """The reference implementation's s/step per backend, and the suite's targets."""
+    data = load(f"{RESULTS}/suite.json")
+    refs, targets = data["reference_s_per_step"], data["targets_s_per_step"]
+    out = []
+    for case, label in REFERENCE_ROWS.items():
+        ref = refs.get(case, {})
+        cells = [_seconds(ref.get(b)) for b in ("qdldl", "faer", "mkl")]
+        out.append([label, *cells, _seconds(targets.get(case))])
+    return md(["case", "qdldl", "faer", "MKL Pardiso", "target (best backend)"], out)
+
+
+AXI_VS_3D = tuple(f"{RESULTS}/cylinder_axi_vs_3d_{n}.json" for n in (6, 8))
+
+
+@table(*AXI_VS_3D)
+def cylinder_axi_vs_3d() -> str:
+    """The seed column to rest, 3D quarter against axisymmetric section (reduced)."""
+
+    def wall(x: float) -> str:
+        return f"{x:.0f}" if x >= 100 else f"{x:.1f}"
+
+    out = []
+    for rel in AXI_VS_3D:
+        d = load(rel)
+        for key, model in (("quarter_cylinder", "3D quarter"), ("axisymmetric", "axi")):
+            r = d[key]
+            axi = key == "axisymmetric"
+            step = r["step_time_median_s"]
+            out.append(
+                [
+                    f"r0/{d['divisions']}",
+                    model,
+                    count(r["n_particles"]),
+                    r["steps"],
+                    wall(r["wall_time_t3_s"]),
+                    wall(r["wall_time_s"]),
+                    sig(step, 3 if step >= 1 else 2),
+                    num(r["ipm_iterations_mean"], 1),
+                    f"{r['peak_memory_mb']:.0f}",
+                    num(r["normalised_runout_t3"]),
+                    num(r["normalised_runout"]),
+                    num(r["final_height"]),
+                    f"{d['speedup_to_t3']:.0f}×" if axi else "",
+                    pct(d["runout_t3_relative_difference"]) if axi else "",
+                ]
+            )
+    return md(
+        [
+            "spacing",
+            "model",
+            "particles",
+            "steps",
+            "wall to t̄ = 3 (s)",
+            "whole run (s)",
+            "s/step (median)",
+            "IPM it. (mean)",
+            "peak MB",
+            "(r − r0)/r0 at t̄ = 3",
+            "at rest",
+            "h∞/r0",
+            "speed-up to t̄ = 3",
+            "run-out difference at t̄ = 3 (axi vs 3D)",
+        ],
+        out,
+    )
+
+
 # ---------------------------------------------------------------------------
 # Verification and validation summary: every check against an independent
 # reference, in one table (docs/verification.md opens with it).
@@ -1221,6 +1306,44 @@ def vv_summary() -> str:
     )
 
 
+def _machine(meta: dict) -> str:
+    """``Intel(R) Xeon(R) Processor, 2 cores, 23.5 GB, clarabel 0.11.1, MKL ...``."""
+    parts = [str(meta.get("cpu") or "unknown CPU")]
+    if meta.get("cores"):
+        parts.append(f"{meta['cores']} cores")
+    if meta.get("memory_gb"):
+        parts.append(f"{meta['memory_gb']:g} GB")
+    if meta.get("clarabel"):
+        parts.append(f"clarabel {meta['clarabel']}")
+    if meta.get("mkl"):
+        parts.append(f"MKL {meta['mkl']}")
+    return ", ".join(parts)
+
+
+def measured_on(sources: tuple[str, ...]) -> str:
+    """`` Measured on DATE (MACHINE).`` from the sources' ``machine`` records.
+
+    Benchmark reports record the date and the machine of their measurement;
+    the table's note carries them, so the prose around it does not.  Sources
+    without such a record add nothing.
+    """
+    dates: dict[str, list[str]] = {}
+    for src in sources:
+        try:
+            data = load(src)
+        except (OSError, ValueError):
+            continue
+        meta = data.get("machine") if isinstance(data, dict) else None
+        if isinstance(meta, dict) and meta.get("date"):
+            dates.setdefault(_machine(meta), []).append(str(meta["date"])[:10])
+    out = []
+    for machine, when in dates.items():
+        lo, hi = min(when), max(when)
+        span = lo if lo == hi else f"{lo} to {hi}"
+        out.append(f"{span} ({machine})")
+    return f" Measured on {'; '.join(out)}." if out else ""
+
+
 # ---------------------------------------------------------------------------
 # Directives.
 
@@ -1240,8 +1363,9 @@ class ResultsTable(SphinxDirective):
         for src in sources:
             self.env.note_dependency(str(ROOT / src))
         note = ", ".join(f"`{src}`" for src in sources)
+        measured = measured_on(sources)
         return self.parse_text_to_nodes(
-            f"{builder()}\n\n<small>Table from {note}.</small>"
+            f"{builder()}\n\n<small>Table from {note}.{measured}</small>"
         )
 
 
