@@ -64,16 +64,11 @@ from .run.rest import AtRest
 from .run.simulation import Simulation
 from .scenes import SCENES, get_scene, run_scene
 from .step.conic import ConeSolution, solve_step
-from .step.limit import (
-    LimitResult,
-    SafetyResult,
-    limit_analysis,
-    reduced_strength,
-    strength_reduction,
-)
+from .step.limit import LimitResult, limit_analysis
 from .step.model import Model
 from .step.program import ConeInput
 from .step.records import Step, StepRecord, skfem_fields
+from .step.safety import SafetyResult, reduced_strength, strength_reduction
 from .step.solver import SolverOptions
 from .step.stages import advance
 from .sweeps import sweep

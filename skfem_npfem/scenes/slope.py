@@ -40,25 +40,21 @@ from skfem import MeshTri
 
 from ..boundary import Contacts
 from ..constants import GRAVITY
-from ..materials import LinearElastic, Material, MohrCoulomb, Tresca
+from ..materials import LinearElastic, Material
 from ..mesh.regions import (
     CrossSection,
-    Region,
-    check_regions,
     fill_regions,
-    read_cross_section,
 )
 from ..mesh.smoothing import nodal_integration
 from ..mesh.sources import AlphaShapeMesher, FixedMesh
 from ..particles import Particles
 from ..run.simulation import AtRest, Simulation
 from ..step.conic import solve_step
-from ..step.limit import reduced_strength, strength_reduction
 from ..step.model import Model
 from ..step.program import ConeInput
+from ..step.safety import reduced_strength, strength_reduction
 from .base import Param, Scene, SceneRun
 from .common import (
-    check_size,
     elastic_params,
     fidelity_from,
     fidelity_params,
@@ -68,6 +64,21 @@ from .common import (
 )
 from .limit_mode import LIMIT_METRICS, analysis_param, limit_metrics
 from .scenery import Scenery, number
+from .slope_runout import (  # noqa: F401
+    deposit_factor_of_safety,
+    deposit_slopes,
+    runout_metrics,
+    save_mechanism,
+)
+from .slope_section import (  # noqa: F401
+    _area,
+    _dedupe,
+    _surface_height,
+    parametric_section,
+    section_materials,
+    section_of,
+    supports,
+)
 
 MATERIALS = ("mohr-coulomb", "tresca")
 _POSITIVE = {"lo": 0, "lo_open": True}
@@ -207,94 +218,6 @@ METRICS = {
 }
 
 
-# -- geometry -------------------------------------------------------------------
-def parametric_section(values: dict[str, Any]) -> CrossSection:
-    """The slope of the parameters as a one-region cross-section."""
-    H, D = values["height"], values["foundation_depth"]
-    crest = values["crest_length"]
-    toe = values["toe_length"]
-    crest = 1.5 * H if crest is None else crest
-    toe = 2.5 * H if toe is None else toe
-    run = 0.0 if values["angle"] >= 90 else H / math.tan(math.radians(values["angle"]))
-    x_crest, x_toe = crest, crest + run
-    W = x_toe + toe
-    pts = [(0, 0), (W, 0)]
-    if D > 0:
-        pts.append((W, D))
-    pts += [(x_toe, D), (x_crest, D + H), (0, D + H)]
-    poly = np.array(pts, dtype=float)
-    props = {
-        "c": values["c"],
-        "phi": 0.0 if values["material"] == "tresca" else values["phi"],
-        "rho": values["rho"],
-    }
-    return CrossSection([Region("soil", _dedupe(poly))], {"soil": props})
-
-
-def _dedupe(poly: np.ndarray) -> np.ndarray:
-    """Drop repeated consecutive vertices (a zero-length crest or toe)."""
-    keep = np.linalg.norm(poly - np.roll(poly, 1, axis=0), axis=1) > 1e-12
-    return poly[keep]
-
-
-def section_of(values: dict[str, Any]) -> tuple[CrossSection, float]:
-    """The cross-section (file or parametric) and the spacing."""
-    if values["geometry"]:
-        sec = read_cross_section(values["geometry"])
-        heights = [float(np.ptp(r.polygon[:, 1])) for r in sec.regions]
-        default_h = max(heights) / 20
-    else:
-        sec = parametric_section(values)
-        default_h = values["height"] / 10
-    h = values["spacing"] if values["spacing"] is not None else default_h
-    values["spacing"] = h
-    area = sum(abs(_area(r.polygon)) for r in sec.regions)
-    check_size(area / h**2, 2, values, advice="use a larger spacing")
-    check_regions(sec.regions, h)
-    return sec, h
-
-
-def _area(poly: np.ndarray) -> float:
-    x, y = poly[:, 0], poly[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
-
-
-def section_materials(
-    sec: CrossSection, values: dict[str, Any], flow: bool = False
-) -> list[Material]:
-    """One material per name of the section (scene values as defaults)."""
-    mats = []
-    for props in sec.materials.values():
-        c = props.get("c", values["c"])
-        phi = props.get("phi", values["phi"])
-        rho = props.get("rho", values["rho"])
-        E, nu = props.get("E", values["E"]), props.get("nu", values["nu"])
-        psi = min(props.get("psi", values["psi"]), phi) if flow else phi
-        if values["material"] == "tresca" and not values["geometry"]:
-            mats.append(Tresca(E, nu, rho, c=c))
-        else:
-            mats.append(
-                MohrCoulomb(E, nu, rho, c=c, phi=phi, psi=psi, tension_cutoff=flow)
-            )
-    return mats
-
-
-def supports(x: np.ndarray, sec: CrossSection) -> np.ndarray:
-    """Fixed dofs: the base (lowest y) and the sides (smallest/largest x)."""
-    lo, hi = x.min(axis=0), x.max(axis=0)
-    tol = 1e-9 * max(float(np.ptp(x)), 1.0)
-    fixed = np.zeros_like(x, dtype=bool)
-    base = np.abs(x[:, 1] - lo[1]) < tol
-    fixed[base, 1] = True
-    if sec.supports["base"] == "fixed":
-        fixed[base, 0] = True
-    if sec.supports["sides"] == "rollers":
-        fixed[(np.abs(x[:, 0] - lo[0]) < tol) | (np.abs(x[:, 0] - hi[0]) < tol), 0] = (
-            True
-        )
-    return fixed
-
-
 # -- stages ---------------------------------------------------------------------
 def initial_stress(
     values: dict[str, Any],
@@ -336,25 +259,6 @@ def initial_stress(
     resid = ni.G @ sigma[:, [0, 1, 3]].reshape(-1) - force.reshape(-1)
     norm = float(np.linalg.norm(force.reshape(-1)[free]))
     return sigma, float(np.linalg.norm(resid[free]) / norm)
-
-
-def _surface_height(x: np.ndarray, at: np.ndarray, width: float = 0.0) -> np.ndarray:
-    """Highest particle y near each of ``at`` (NaN where there is none).
-
-    The particles are binned in columns ``width`` wide (default: half the
-    median gap between distinct x); a query takes the highest particle of its
-    column and the two neighbouring ones (within ``width`` to ``2 width``).
-    """
-    if width <= 0:
-        gaps = np.diff(np.unique(np.round(x[:, 0], 9)))
-        width = 0.5 * float(np.median(gaps)) if gaps.size else 1.0
-    x0 = min(float(x[:, 0].min()), float(np.min(at))) - 2 * width
-    b = np.floor((x[:, 0] - x0) / width).astype(int)
-    qb = np.floor((np.asarray(at) - x0) / width).astype(int)
-    top = np.full(max(int(b.max()), int(qb.max())) + 2, -np.inf)
-    np.maximum.at(top, b, x[:, 1])
-    out = np.maximum(np.maximum(top[qb - 1], top[qb]), top[qb + 1])
-    return np.where(np.isfinite(out), out, np.nan)
 
 
 def factor_of_safety(values, mesh, mats, material, fixed):
@@ -483,26 +387,6 @@ def build(
     return SceneRun(sim, {"t_end": values["t_end"], "stop": stop}, metrics)
 
 
-def save_mechanism(folder: Path, pts, tri, res, volumes) -> None:
-    """``mechanism.npz`` and, with matplotlib, ``mechanism.png`` in ``folder``."""
-    lim = res.limit
-    np.savez(
-        folder / "mechanism.npz",
-        x=pts,
-        triangles=tri,
-        velocity=lim.velocity,
-        dissipation=lim.dissipation,
-        plastic=lim.plastic,
-    )
-    try:
-        from ..viz.figures import mechanism_figure
-    except ImportError:  # pragma: no cover - the viz extra is not installed
-        return
-    title = f"collapse mechanism at F = {res.factor_of_safety:.3f}"
-    fig = mechanism_figure(pts, tri, lim.velocity, lim.dissipation, volumes, title)
-    fig.savefig(folder / "mechanism.png")
-
-
 def reduced_strength_flow(material: Material, factor: float) -> Material:
     """``c/F``, ``tan(phi)/F`` keeping the material's (non-associated) ``psi``."""
     out = reduced_strength(material, factor)
@@ -532,96 +416,6 @@ def _toe_and_crest(sec: CrossSection, values: dict[str, Any]):
     y_toe = float(right[:, 1].max()) if right.size else top
     low = right[np.isclose(right[:, 1], right[:, 1].max())]
     return float(low[:, 0].min()), y_toe, x_crest, float(top)
-
-
-def runout_metrics(sim, state, values, h, x_toe, y_toe, x_crest, y_crest) -> dict:
-    """The run-out stage's metrics from the particles at the end of the run."""
-    p = sim.particles
-    x0 = p.x - p.u
-    moved = np.linalg.norm(p.u, axis=1) > 0.5 * h
-    above = x0[:, 1] > y_toe + 0.25 * h
-    final = p.x
-    runout = float(final[above, 0].max() - x_toe) if above.any() else 0.0
-    crest_now = _surface_height(final, np.array([x_crest]), h)[0]
-    travel = 0.0
-    vol = 0.0
-    if moved.any():
-        w = p.mass[moved]
-        travel = float(np.linalg.norm((w[:, None] * p.u[moved]).sum(0) / w.sum()))
-        rho = np.array([m.rho for m in sim.model.materials])[p.material[moved]]
-        vol = float(np.sum(w / rho))
-    xs = np.arange(final[:, 0].min(), final[:, 0].max() + 1e-9, h)
-    ys = _surface_height(final, xs, 0.75 * h)
-    slope = deposit_slopes(xs, ys, final[moved, 0], h)
-    summ = sim.summary()
-    stop = state.get("stop")
-    deposit_fos = deposit_factor_of_safety(sim, values)
-    return {
-        "reduction": state.get("reduction"),
-        "runout": max(runout, 0.0),
-        "crest_settlement": float(y_crest - crest_now),
-        "mass_centre_travel": travel,
-        "moved_volume": vol,
-        "deposit_profile": [[float(a), float(b)] for a, b in zip(xs, ys, strict=True)],
-        "deposit_max_slope": float(np.max(slope, initial=0.0)),
-        "mass_change": summ["mass_change"],
-        "volume_change": summ["volume_change"],
-        "at_rest": bool(stop is not None and stop(sim)),
-        "deposit_factor_of_safety": deposit_fos,
-    }
-
-
-def deposit_slopes(
-    xs: np.ndarray, ys: np.ndarray, moved_x: np.ndarray, h: float, window: int = 5
-) -> np.ndarray:
-    """Surface slopes (deg) of least-squares lines over ``window`` columns.
-
-    Only windows over moved material count (the deposit, not the ground it
-    came to rest on), and not the windows over the front: the front of a
-    deposit ends in a step a few particles high at any spacing, a particle
-    size rather than a slope.  A line through ``window`` columns averages out
-    the one-particle steps of the highest-particle profile.
-    """
-    ok = np.isfinite(ys)
-    xs, ys = xs[ok], ys[ok]
-    if xs.size < window or moved_x.size == 0:
-        return np.zeros(0)
-    idx = np.arange(xs.size - window + 1)[:, None] + np.arange(window)
-    X, Y = xs[idx], ys[idx]
-    Xc = X - X.mean(axis=1, keepdims=True)
-    b = np.sum(Xc * (Y - Y.mean(axis=1, keepdims=True)), axis=1) / np.sum(Xc**2, axis=1)
-    lo, hi = X[:, 0] - 0.5 * h, X[:, -1] + 0.5 * h
-    mx = np.sort(moved_x)
-    has = (np.searchsorted(mx, hi) - np.searchsorted(mx, lo)) > 0
-    has &= hi < mx[-1]  # not over the front (a few particles thick)
-    return np.degrees(np.arctan(np.abs(b[has])))
-
-
-def deposit_factor_of_safety(sim: Simulation, values: dict[str, Any]) -> float:
-    """Factor of safety of the final deposit with the run-out's strengths.
-
-    A second limit analysis, on the alpha-shape mesh of the particles at the
-    end of the run (supports as at the start); at least 1 when the deposit is
-    statically admissible.
-    """
-    p = sim.particles
-    active, t = sim.mesh_source(p.x)
-    mesh = MeshTri(np.ascontiguousarray(p.x[active].T), np.ascontiguousarray(t))
-    ni = nodal_integration(mesh, (0, 1, 3))
-    material = np.asarray(p.material)[active]
-    rho = np.array([m.rho for m in sim.model.materials])[material]
-    load = np.zeros((active.size, 2))
-    load[:, 1] = -rho * GRAVITY * ni.volumes
-    fixed = np.asarray(p.fixed, bool)[active]
-    res = strength_reduction(
-        ni,
-        sim.model.materials,
-        material,
-        load,
-        fixed=fixed,
-        options=solver_from(values),
-    )
-    return float(res.factor_of_safety)
 
 
 def slope_scenery(p: dict, folder: Path | None = None) -> Scenery:

@@ -20,8 +20,6 @@ References (weightless soil): Prandtl ``q/c = 2 + pi``; Mohr-Coulomb
 
 from __future__ import annotations
 
-import json
-import math
 import warnings
 from pathlib import Path
 from typing import Any
@@ -29,9 +27,7 @@ from typing import Any
 import numpy as np
 from skfem import MeshTri
 
-from ..constants import GRAVITY
-from ..errors import CheckpointError, ParameterError
-from ..io import latest_checkpoint, load_checkpoint
+from ..errors import ParameterError
 from ..laws import prandtl_nc
 from ..materials import DruckerPrager, Material, MohrCoulomb, Tresca
 from ..mesh.smoothing import nodal_integration
@@ -42,7 +38,6 @@ from ..step.limit import limit_analysis
 from ..step.model import Model
 from .base import Param, Renamed, Scene, SceneRun
 from .common import (
-    check_size,
     elastic_params,
     fidelity_from,
     fidelity_params,
@@ -50,6 +45,19 @@ from .common import (
     solver_from,
     solver_params,
 )
+from .footing_mesh import (  # noqa: F401
+    DEFAULT_DOMAIN,
+    DEFAULT_SPACING,
+    LIMIT_DOMAIN,
+    LIMIT_SPACING,
+    graded_coordinates,
+    graded_count,
+    resolve_defaults,
+    soil_mesh,
+    soil_particles,
+    unit_weight,
+)
+from .footing_scenery import footing_scenery, saved_load_curve  # noqa: F401
 from .limit_mode import (
     LIMIT_METRICS,
     analysis_param,
@@ -60,15 +68,9 @@ from .limit_mode import (
 from .limits import SPACING as SPACING_RANGE
 from .methods import METHOD_METRICS, method_params, with_method
 from .plateau import PlateauRule
-from .scenery import Scenery, box, number
 
 MATERIALS = ("tresca", "mohr-coulomb", "drucker-prager")
 
-#: Default element size under the footing and block size / b (incremental).
-DEFAULT_SPACING, DEFAULT_DOMAIN = 0.125, 5.0
-#: The same with ``analysis=limit``: one program is cheap, so the default is
-#: finer and the block wider (the Prandtl mechanism reaches 16 b at phi = 40).
-LIMIT_SPACING, LIMIT_DOMAIN = 0.04, 10.0
 
 #: Default minimum settlement in units of ``(c + gamma b) b / E``.
 SETTLEMENT_SCALE = 100.0
@@ -264,43 +266,6 @@ METRICS = {
 }
 
 
-def graded_coordinates(b: float, h: float, length: float, ratio: float) -> np.ndarray:
-    """Coordinates 0..length: uniform ``h`` up to ``1.5 b``, then growing by ratio."""
-    n_fine = max(2, round(1.5 * b / h))
-    xs = list(np.linspace(0.0, n_fine * h, n_fine + 1))
-    step = h
-    while xs[-1] < length - 1e-12:
-        step *= ratio
-        xs.append(min(xs[-1] + step, length))
-    if len(xs) > 3 and xs[-1] - xs[-2] < 0.3 * (xs[-2] - xs[-3]):
-        xs.pop(-2)
-    return np.array(xs)
-
-
-def graded_count(b: float, h: float, length: float, ratio: float) -> float:
-    """Number of :func:`graded_coordinates` (estimated without building them)."""
-    n_fine = max(2, round(1.5 * b / h))
-    rest = max(length - n_fine * h, 0.0)
-    if ratio == 1.0:
-        n_graded = rest / h
-    else:
-        n_graded = math.log1p(rest * (ratio - 1) / (h * ratio)) / math.log(ratio)
-    return n_fine + 1 + math.ceil(n_graded)
-
-
-def soil_mesh(values: dict[str, Any]) -> MeshTri:
-    """The graded ``domain*b`` square block, surface at ``y = domain*b``."""
-    b, h = values["half_width"], values["spacing"]
-    if h > b / 2:
-        raise ParameterError("spacing", h, f"at most half_width/2 = {b / 2:g} m")
-    L = values["domain"] * b
-    n = graded_count(b, h, L, values["grading"])
-    check_size(n * n, 2, values, advice="use a larger spacing, grading or domain")
-    xs = graded_coordinates(b, h, L, values["grading"])
-    ys = L - graded_coordinates(b, h, L, values["grading"])[::-1]
-    return MeshTri.init_tensor(xs, ys)
-
-
 def soil_material(values: dict[str, Any]) -> tuple[Material, float]:
     """The soil material and its friction angle (0 for Tresca)."""
     name = values["material"]
@@ -324,43 +289,6 @@ def soil_material(values: dict[str, Any]) -> tuple[Material, float]:
     if c == 0 and rho == 0:
         raise ParameterError("rho", rho, "must be > 0 when c = 0 (no strength)")
     return mat, phi
-
-
-def soil_particles(
-    values: dict[str, Any], mesh: MeshTri, phi: float
-) -> tuple[Particles, np.ndarray]:
-    """Particles at the mesh nodes with the geostatic stress; the footing mask.
-
-    The footing particles move down at unit pseudo-speed (1 m per unit of
-    pseudo-time), so a step's ``dt`` is its settlement increment.
-    """
-    b, rho = values["half_width"], values["rho"]
-    L, gamma = values["domain"] * b, unit_weight(values)
-    ni = nodal_integration(mesh)
-    x = mesh.p.T.copy()
-    fixed = np.zeros_like(x, dtype=bool)
-    fixed[np.isclose(x[:, 1], 0.0)] = True
-    fixed[np.isclose(x[:, 0], 0.0) | np.isclose(x[:, 0], L), 0] = True
-    foot = np.isclose(x[:, 1], L) & (x[:, 0] <= b * (1 + 1e-9))
-    fixed[foot, 1] = True
-    if values["footing"] == "rough":
-        fixed[foot, 0] = True
-    K0 = values["K0"] if values["K0"] is not None else 1.0 - math.sin(math.radians(phi))
-    stress = np.zeros((x.shape[0], 4))
-    sv = -gamma * (L - x[:, 1])
-    stress[:, 1] = sv
-    stress[:, 0] = stress[:, 2] = K0 * sv
-    vp = np.zeros_like(x)
-    vp[foot, 1] = -1.0
-    particles = Particles.create(
-        x, np.maximum(rho, 1e-12) * ni.volumes, stress=stress, fixed=fixed
-    )
-    return particles.replace(v_prescribed=vp), foot
-
-
-def unit_weight(values: dict[str, Any]) -> float:
-    """Unit weight ``gamma = rho g`` of the soil, N/m^3 (0: weightless)."""
-    return values["rho"] * values["gravity"]
 
 
 def _rho_from_gamma(gamma: float, given: dict[str, Any]) -> dict[str, float]:
@@ -484,16 +412,6 @@ def locking_note(values: dict[str, Any], phi: float) -> str:
     return f"fem-remap with P1 elements under {flow}"
 
 
-def resolve_defaults(values: dict[str, Any]) -> dict[str, Any]:
-    """Fill ``spacing`` and ``domain`` left at None (they depend on ``analysis``)."""
-    limit = values.get("analysis") == "limit"
-    if values.get("spacing") is None:
-        values["spacing"] = LIMIT_SPACING if limit else DEFAULT_SPACING
-    if values.get("domain") is None:
-        values["domain"] = LIMIT_DOMAIN if limit else DEFAULT_DOMAIN
-    return values
-
-
 def footing_limit(
     values: dict[str, Any],
     mesh: MeshTri,
@@ -551,62 +469,6 @@ def load_curve(sim: Simulation) -> list[list[float]]:
 
 
 _GRAVITY = next(p for p in PARAMS if p.name == "gravity")
-
-
-def footing_scenery(p: dict, folder: Path | None = None) -> Scenery:
-    """The footing's scenery: base, rollers, symmetry axis, footing, load curve.
-
-    The load curve comes from ``folder``'s ``summary.json``, else from the
-    latest checkpoint there; steps are labelled by their settlement.
-    """
-    s = Scenery(scene="strip-footing")
-    p = resolve_defaults(dict(p))
-    b, domain = number(p, "half_width"), number(p, "domain")
-    if b is None or domain is None:
-        return s
-    L = domain * b
-    s.half_width = b
-    s.floor, s.floor_label = 0.0, "fixed base"
-    s.walls.append((L, -1, "rollers"))
-    s.symmetry = 0.0
-    s.outline = box(0.0, L, 0.0, L)
-    s.footing = (0.0, b, L)
-    s.label = s.settlement_label
-    c, phi = number(p, "c", 0.0), number(p, "phi", 0.0)
-    # unit weight rho g (a result of an older version: its parameter gamma)
-    gamma = number(p, "gamma", 0.0) or number(p, "rho", 0.0) * (
-        number(p, "gravity", GRAVITY) or GRAVITY
-    )
-    if p.get("material") == "tresca":
-        phi = 0.0
-    if gamma == 0 and c and c > 0:
-        s.q_reference = prandtl_nc(phi or 0.0) * c
-    if folder is not None:
-        s.load_curve = saved_load_curve(Path(folder))
-    return s
-
-
-def saved_load_curve(folder: Path) -> np.ndarray | None:
-    """``[settlement, pressure]`` rows of a result folder (summary, else checkpoint)."""
-    try:
-        data = json.loads((folder / "summary.json").read_text())
-        return np.array(data["metrics"]["load_curve"], dtype=float).reshape(-1, 2)
-    except (OSError, ValueError, KeyError, TypeError):
-        pass
-    path = latest_checkpoint(folder)
-    if path is None:
-        return None
-    try:
-        _, meta = load_checkpoint(path)
-        records = list(meta.get("records", []))
-    except CheckpointError:
-        return None
-    rows = []
-    for r in records:
-        extra = r.get("extra", {}) if isinstance(r, dict) else {}
-        if "settlement" in extra and "pressure" in extra:
-            rows.append([extra["settlement"], extra["pressure"]])
-    return np.array(rows, dtype=float).reshape(-1, 2) if rows else None
 
 
 SCENE = Scene(

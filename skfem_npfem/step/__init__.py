@@ -19,10 +19,11 @@ The data flow of :func:`advance` (in :mod:`.stages`) goes through these modules:
 """
 
 from .conic import ConeSolution, solve_step
-from .limit import LimitResult, limit_analysis, strength_reduction
+from .limit import LimitResult, limit_analysis
 from .model import Model
 from .program import ConeInput
 from .records import Step, StepRecord
+from .safety import strength_reduction
 from .solver import SolverOptions
 from .stages import advance
 

@@ -1,0 +1,125 @@
+"""The strip footing's soil block: a graded mesh and its particles.
+
+The block is ``domain * b`` wide and deep, with elements of ``spacing`` under
+the footing growing by ``grading`` away from it; the particles carry the
+geostatic stress with the at-rest coefficient K0, and those under the footing
+move down at unit pseudo-speed.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from skfem import MeshTri
+
+from ..errors import ParameterError
+from ..mesh.smoothing import nodal_integration
+from ..particles import Particles
+from .common import (
+    check_size,
+)
+
+#: Default element size under the footing and block size / b (incremental).
+DEFAULT_SPACING, DEFAULT_DOMAIN = 0.125, 5.0
+#: The same with ``analysis=limit``: one program is cheap, so the default is
+#: finer and the block wider (the Prandtl mechanism reaches 16 b at phi = 40).
+LIMIT_SPACING, LIMIT_DOMAIN = 0.04, 10.0
+
+__all__ = [
+    "DEFAULT_DOMAIN",
+    "DEFAULT_SPACING",
+    "LIMIT_DOMAIN",
+    "LIMIT_SPACING",
+    "graded_coordinates",
+    "graded_count",
+    "resolve_defaults",
+    "soil_mesh",
+    "soil_particles",
+    "unit_weight",
+]
+
+
+def graded_coordinates(b: float, h: float, length: float, ratio: float) -> np.ndarray:
+    """Coordinates 0..length: uniform ``h`` up to ``1.5 b``, then growing by ratio."""
+    n_fine = max(2, round(1.5 * b / h))
+    xs = list(np.linspace(0.0, n_fine * h, n_fine + 1))
+    step = h
+    while xs[-1] < length - 1e-12:
+        step *= ratio
+        xs.append(min(xs[-1] + step, length))
+    if len(xs) > 3 and xs[-1] - xs[-2] < 0.3 * (xs[-2] - xs[-3]):
+        xs.pop(-2)
+    return np.array(xs)
+
+
+def graded_count(b: float, h: float, length: float, ratio: float) -> float:
+    """Number of :func:`graded_coordinates` (estimated without building them)."""
+    n_fine = max(2, round(1.5 * b / h))
+    rest = max(length - n_fine * h, 0.0)
+    if ratio == 1.0:
+        n_graded = rest / h
+    else:
+        n_graded = math.log1p(rest * (ratio - 1) / (h * ratio)) / math.log(ratio)
+    return n_fine + 1 + math.ceil(n_graded)
+
+
+def soil_mesh(values: dict[str, Any]) -> MeshTri:
+    """The graded ``domain*b`` square block, surface at ``y = domain*b``."""
+    b, h = values["half_width"], values["spacing"]
+    if h > b / 2:
+        raise ParameterError("spacing", h, f"at most half_width/2 = {b / 2:g} m")
+    L = values["domain"] * b
+    n = graded_count(b, h, L, values["grading"])
+    check_size(n * n, 2, values, advice="use a larger spacing, grading or domain")
+    xs = graded_coordinates(b, h, L, values["grading"])
+    ys = L - graded_coordinates(b, h, L, values["grading"])[::-1]
+    return MeshTri.init_tensor(xs, ys)
+
+
+def soil_particles(
+    values: dict[str, Any], mesh: MeshTri, phi: float
+) -> tuple[Particles, np.ndarray]:
+    """Particles at the mesh nodes with the geostatic stress; the footing mask.
+
+    The footing particles move down at unit pseudo-speed (1 m per unit of
+    pseudo-time), so a step's ``dt`` is its settlement increment.
+    """
+    b, rho = values["half_width"], values["rho"]
+    L, gamma = values["domain"] * b, unit_weight(values)
+    ni = nodal_integration(mesh)
+    x = mesh.p.T.copy()
+    fixed = np.zeros_like(x, dtype=bool)
+    fixed[np.isclose(x[:, 1], 0.0)] = True
+    fixed[np.isclose(x[:, 0], 0.0) | np.isclose(x[:, 0], L), 0] = True
+    foot = np.isclose(x[:, 1], L) & (x[:, 0] <= b * (1 + 1e-9))
+    fixed[foot, 1] = True
+    if values["footing"] == "rough":
+        fixed[foot, 0] = True
+    K0 = values["K0"] if values["K0"] is not None else 1.0 - math.sin(math.radians(phi))
+    stress = np.zeros((x.shape[0], 4))
+    sv = -gamma * (L - x[:, 1])
+    stress[:, 1] = sv
+    stress[:, 0] = stress[:, 2] = K0 * sv
+    vp = np.zeros_like(x)
+    vp[foot, 1] = -1.0
+    particles = Particles.create(
+        x, np.maximum(rho, 1e-12) * ni.volumes, stress=stress, fixed=fixed
+    )
+    return particles.replace(v_prescribed=vp), foot
+
+
+def unit_weight(values: dict[str, Any]) -> float:
+    """Unit weight ``gamma = rho g`` of the soil, N/m^3 (0: weightless)."""
+    return values["rho"] * values["gravity"]
+
+
+def resolve_defaults(values: dict[str, Any]) -> dict[str, Any]:
+    """Fill ``spacing`` and ``domain`` left at None (they depend on ``analysis``)."""
+    limit = values.get("analysis") == "limit"
+    if values.get("spacing") is None:
+        values["spacing"] = LIMIT_SPACING if limit else DEFAULT_SPACING
+    if values.get("domain") is None:
+        values["domain"] = LIMIT_DOMAIN if limit else DEFAULT_DOMAIN
+    return values

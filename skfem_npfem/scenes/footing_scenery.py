@@ -1,0 +1,83 @@
+"""What a picture of a footing result shows.
+
+The fixed base, the rollers, the symmetry axis, the footing and the load curve.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..constants import GRAVITY
+from ..errors import CheckpointError
+from ..io import latest_checkpoint, load_checkpoint
+from ..laws import prandtl_nc
+from .footing_mesh import (  # noqa: F401
+    graded_coordinates,
+    graded_count,
+    resolve_defaults,
+    soil_mesh,
+    soil_particles,
+    unit_weight,
+)
+from .scenery import Scenery, box, number
+
+__all__ = ["footing_scenery", "saved_load_curve"]
+
+
+def footing_scenery(p: dict, folder: Path | None = None) -> Scenery:
+    """The footing's scenery: base, rollers, symmetry axis, footing, load curve.
+
+    The load curve comes from ``folder``'s ``summary.json``, else from the
+    latest checkpoint there; steps are labelled by their settlement.
+    """
+    s = Scenery(scene="strip-footing")
+    p = resolve_defaults(dict(p))
+    b, domain = number(p, "half_width"), number(p, "domain")
+    if b is None or domain is None:
+        return s
+    L = domain * b
+    s.half_width = b
+    s.floor, s.floor_label = 0.0, "fixed base"
+    s.walls.append((L, -1, "rollers"))
+    s.symmetry = 0.0
+    s.outline = box(0.0, L, 0.0, L)
+    s.footing = (0.0, b, L)
+    s.label = s.settlement_label
+    c, phi = number(p, "c", 0.0), number(p, "phi", 0.0)
+    # unit weight rho g (a result of an older version: its parameter gamma)
+    gamma = number(p, "gamma", 0.0) or number(p, "rho", 0.0) * (
+        number(p, "gravity", GRAVITY) or GRAVITY
+    )
+    if p.get("material") == "tresca":
+        phi = 0.0
+    if gamma == 0 and c and c > 0:
+        s.q_reference = prandtl_nc(phi or 0.0) * c
+    if folder is not None:
+        s.load_curve = saved_load_curve(Path(folder))
+    return s
+
+
+def saved_load_curve(folder: Path) -> np.ndarray | None:
+    """``[settlement, pressure]`` rows of a result folder (summary, else checkpoint)."""
+    try:
+        data = json.loads((folder / "summary.json").read_text())
+        return np.array(data["metrics"]["load_curve"], dtype=float).reshape(-1, 2)
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
+    path = latest_checkpoint(folder)
+    if path is None:
+        return None
+    try:
+        _, meta = load_checkpoint(path)
+        records = list(meta.get("records", []))
+    except CheckpointError:
+        return None
+    rows = []
+    for r in records:
+        extra = r.get("extra", {}) if isinstance(r, dict) else {}
+        if "settlement" in extra and "pressure" in extra:
+            rows.append([extra["settlement"], extra["pressure"]])
+    return np.array(rows, dtype=float).reshape(-1, 2) if rows else None

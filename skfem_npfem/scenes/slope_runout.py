@@ -1,0 +1,148 @@
+"""What the slope's run-out is measured by, and the mechanism picture.
+
+The run-out of the toe, the crest settlement, the travel of the mass centre and
+the volume that moved; the deposit's slopes against the friction angle and its
+own factor of safety (a second limit analysis of the deposit).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from skfem import MeshTri
+
+from ..constants import GRAVITY
+from ..mesh.smoothing import nodal_integration
+from ..run.simulation import Simulation
+from ..step.safety import strength_reduction
+from .common import (
+    solver_from,
+)
+from .slope_section import (  # noqa: F401
+    _area,
+    _dedupe,
+    _surface_height,
+    parametric_section,
+    section_materials,
+    section_of,
+    supports,
+)
+
+__all__ = [
+    "deposit_factor_of_safety",
+    "deposit_slopes",
+    "runout_metrics",
+    "save_mechanism",
+]
+
+
+def save_mechanism(folder: Path, pts, tri, res, volumes) -> None:
+    """``mechanism.npz`` and, with matplotlib, ``mechanism.png`` in ``folder``."""
+    lim = res.limit
+    np.savez(
+        folder / "mechanism.npz",
+        x=pts,
+        triangles=tri,
+        velocity=lim.velocity,
+        dissipation=lim.dissipation,
+        plastic=lim.plastic,
+    )
+    try:
+        from ..viz.figures import mechanism_figure
+    except ImportError:  # pragma: no cover - the viz extra is not installed
+        return
+    title = f"collapse mechanism at F = {res.factor_of_safety:.3f}"
+    fig = mechanism_figure(pts, tri, lim.velocity, lim.dissipation, volumes, title)
+    fig.savefig(folder / "mechanism.png")
+
+
+def runout_metrics(sim, state, values, h, x_toe, y_toe, x_crest, y_crest) -> dict:
+    """The run-out stage's metrics from the particles at the end of the run."""
+    p = sim.particles
+    x0 = p.x - p.u
+    moved = np.linalg.norm(p.u, axis=1) > 0.5 * h
+    above = x0[:, 1] > y_toe + 0.25 * h
+    final = p.x
+    runout = float(final[above, 0].max() - x_toe) if above.any() else 0.0
+    crest_now = _surface_height(final, np.array([x_crest]), h)[0]
+    travel = 0.0
+    vol = 0.0
+    if moved.any():
+        w = p.mass[moved]
+        travel = float(np.linalg.norm((w[:, None] * p.u[moved]).sum(0) / w.sum()))
+        rho = np.array([m.rho for m in sim.model.materials])[p.material[moved]]
+        vol = float(np.sum(w / rho))
+    xs = np.arange(final[:, 0].min(), final[:, 0].max() + 1e-9, h)
+    ys = _surface_height(final, xs, 0.75 * h)
+    slope = deposit_slopes(xs, ys, final[moved, 0], h)
+    summ = sim.summary()
+    stop = state.get("stop")
+    deposit_fos = deposit_factor_of_safety(sim, values)
+    return {
+        "reduction": state.get("reduction"),
+        "runout": max(runout, 0.0),
+        "crest_settlement": float(y_crest - crest_now),
+        "mass_centre_travel": travel,
+        "moved_volume": vol,
+        "deposit_profile": [[float(a), float(b)] for a, b in zip(xs, ys, strict=True)],
+        "deposit_max_slope": float(np.max(slope, initial=0.0)),
+        "mass_change": summ["mass_change"],
+        "volume_change": summ["volume_change"],
+        "at_rest": bool(stop is not None and stop(sim)),
+        "deposit_factor_of_safety": deposit_fos,
+    }
+
+
+def deposit_slopes(
+    xs: np.ndarray, ys: np.ndarray, moved_x: np.ndarray, h: float, window: int = 5
+) -> np.ndarray:
+    """Surface slopes (deg) of least-squares lines over ``window`` columns.
+
+    Only windows over moved material count (the deposit, not the ground it
+    came to rest on), and not the windows over the front: the front of a
+    deposit ends in a step a few particles high at any spacing, a particle
+    size rather than a slope.  A line through ``window`` columns averages out
+    the one-particle steps of the highest-particle profile.
+    """
+    ok = np.isfinite(ys)
+    xs, ys = xs[ok], ys[ok]
+    if xs.size < window or moved_x.size == 0:
+        return np.zeros(0)
+    idx = np.arange(xs.size - window + 1)[:, None] + np.arange(window)
+    X, Y = xs[idx], ys[idx]
+    Xc = X - X.mean(axis=1, keepdims=True)
+    b = np.sum(Xc * (Y - Y.mean(axis=1, keepdims=True)), axis=1) / np.sum(Xc**2, axis=1)
+    lo, hi = X[:, 0] - 0.5 * h, X[:, -1] + 0.5 * h
+    mx = np.sort(moved_x)
+    has = (np.searchsorted(mx, hi) - np.searchsorted(mx, lo)) > 0
+    has &= hi < mx[-1]  # not over the front (a few particles thick)
+    return np.degrees(np.arctan(np.abs(b[has])))
+
+
+def deposit_factor_of_safety(sim: Simulation, values: dict[str, Any]) -> float:
+    """Factor of safety of the final deposit with the run-out's strengths.
+
+    A second limit analysis, on the alpha-shape mesh of the particles at the
+    end of the run (supports as at the start); at least 1 when the deposit is
+    statically admissible.
+    """
+    p = sim.particles
+    active, t = sim.mesh_source(p.x)
+    mesh = MeshTri(np.ascontiguousarray(p.x[active].T), np.ascontiguousarray(t))
+    ni = nodal_integration(mesh, (0, 1, 3))
+    material = np.asarray(p.material)[active]
+    rho = np.array([m.rho for m in sim.model.materials])[material]
+    load = np.zeros((active.size, 2))
+    load[:, 1] = -rho * GRAVITY * ni.volumes
+    fixed = np.asarray(p.fixed, bool)[active]
+    res = strength_reduction(
+        ni,
+        sim.model.materials,
+        material,
+        load,
+        fixed=fixed,
+        options=solver_from(values),
+    )
+    return float(res.factor_of_safety)

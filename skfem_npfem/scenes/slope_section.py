@@ -1,0 +1,131 @@
+"""The slope's cross-section.
+
+The parametric shape or a user's file, its materials, supports and surface.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ..materials import Material, MohrCoulomb, Tresca
+from ..mesh.regions import (
+    CrossSection,
+    Region,
+    check_regions,
+    read_cross_section,
+)
+from .common import (
+    check_size,
+)
+
+__all__ = ["parametric_section", "section_materials", "section_of", "supports"]
+
+
+# -- geometry -------------------------------------------------------------------
+def parametric_section(values: dict[str, Any]) -> CrossSection:
+    """The slope of the parameters as a one-region cross-section."""
+    H, D = values["height"], values["foundation_depth"]
+    crest = values["crest_length"]
+    toe = values["toe_length"]
+    crest = 1.5 * H if crest is None else crest
+    toe = 2.5 * H if toe is None else toe
+    run = 0.0 if values["angle"] >= 90 else H / math.tan(math.radians(values["angle"]))
+    x_crest, x_toe = crest, crest + run
+    W = x_toe + toe
+    pts = [(0, 0), (W, 0)]
+    if D > 0:
+        pts.append((W, D))
+    pts += [(x_toe, D), (x_crest, D + H), (0, D + H)]
+    poly = np.array(pts, dtype=float)
+    props = {
+        "c": values["c"],
+        "phi": 0.0 if values["material"] == "tresca" else values["phi"],
+        "rho": values["rho"],
+    }
+    return CrossSection([Region("soil", _dedupe(poly))], {"soil": props})
+
+
+def _dedupe(poly: np.ndarray) -> np.ndarray:
+    """Drop repeated consecutive vertices (a zero-length crest or toe)."""
+    keep = np.linalg.norm(poly - np.roll(poly, 1, axis=0), axis=1) > 1e-12
+    return poly[keep]
+
+
+def section_of(values: dict[str, Any]) -> tuple[CrossSection, float]:
+    """The cross-section (file or parametric) and the spacing."""
+    if values["geometry"]:
+        sec = read_cross_section(values["geometry"])
+        heights = [float(np.ptp(r.polygon[:, 1])) for r in sec.regions]
+        default_h = max(heights) / 20
+    else:
+        sec = parametric_section(values)
+        default_h = values["height"] / 10
+    h = values["spacing"] if values["spacing"] is not None else default_h
+    values["spacing"] = h
+    area = sum(abs(_area(r.polygon)) for r in sec.regions)
+    check_size(area / h**2, 2, values, advice="use a larger spacing")
+    check_regions(sec.regions, h)
+    return sec, h
+
+
+def _area(poly: np.ndarray) -> float:
+    x, y = poly[:, 0], poly[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def section_materials(
+    sec: CrossSection, values: dict[str, Any], flow: bool = False
+) -> list[Material]:
+    """One material per name of the section (scene values as defaults)."""
+    mats = []
+    for props in sec.materials.values():
+        c = props.get("c", values["c"])
+        phi = props.get("phi", values["phi"])
+        rho = props.get("rho", values["rho"])
+        E, nu = props.get("E", values["E"]), props.get("nu", values["nu"])
+        psi = min(props.get("psi", values["psi"]), phi) if flow else phi
+        if values["material"] == "tresca" and not values["geometry"]:
+            mats.append(Tresca(E, nu, rho, c=c))
+        else:
+            mats.append(
+                MohrCoulomb(E, nu, rho, c=c, phi=phi, psi=psi, tension_cutoff=flow)
+            )
+    return mats
+
+
+def supports(x: np.ndarray, sec: CrossSection) -> np.ndarray:
+    """Fixed dofs: the base (lowest y) and the sides (smallest/largest x)."""
+    lo, hi = x.min(axis=0), x.max(axis=0)
+    tol = 1e-9 * max(float(np.ptp(x)), 1.0)
+    fixed = np.zeros_like(x, dtype=bool)
+    base = np.abs(x[:, 1] - lo[1]) < tol
+    fixed[base, 1] = True
+    if sec.supports["base"] == "fixed":
+        fixed[base, 0] = True
+    if sec.supports["sides"] == "rollers":
+        fixed[(np.abs(x[:, 0] - lo[0]) < tol) | (np.abs(x[:, 0] - hi[0]) < tol), 0] = (
+            True
+        )
+    return fixed
+
+
+def _surface_height(x: np.ndarray, at: np.ndarray, width: float = 0.0) -> np.ndarray:
+    """Highest particle y near each of ``at`` (NaN where there is none).
+
+    The particles are binned in columns ``width`` wide (default: half the
+    median gap between distinct x); a query takes the highest particle of its
+    column and the two neighbouring ones (within ``width`` to ``2 width``).
+    """
+    if width <= 0:
+        gaps = np.diff(np.unique(np.round(x[:, 0], 9)))
+        width = 0.5 * float(np.median(gaps)) if gaps.size else 1.0
+    x0 = min(float(x[:, 0].min()), float(np.min(at))) - 2 * width
+    b = np.floor((x[:, 0] - x0) / width).astype(int)
+    qb = np.floor((np.asarray(at) - x0) / width).astype(int)
+    top = np.full(max(int(b.max()), int(qb.max())) + 2, -np.inf)
+    np.maximum.at(top, b, x[:, 1])
+    out = np.maximum(np.maximum(top[qb - 1], top[qb]), top[qb + 1])
+    return np.where(np.isfinite(out), out, np.nan)
