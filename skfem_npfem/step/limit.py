@@ -21,7 +21,8 @@ the cell volumes, ``B u = A_K^T z_K / V``, and the dissipated power sums to
 ``lambda + f0 . u`` (strong duality).  docs/theory.md ("Limit analysis")
 derives it.
 
-:func:`limit_analysis` solves one program; :func:`~.safety.strength_reduction` finds the
+:func:`limit_analysis` solves one program (built, scaled and solved by
+:mod:`.limit_program`); :func:`~.safety.strength_reduction` finds the
 factor of safety ``F`` of Mohr-Coulomb materials (``c/F``, ``tan(phi)/F``) such
 that the gravity multiplier is 1, with a safeguarded secant iteration on
 ``log lambda(log F)`` (one cone program per iterate).
@@ -34,16 +35,20 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-import clarabel
 import numpy as np
-import scipy.sparse as sp
 
-from ..boundary import Contacts
-from ..errors import ParameterError, SolverError
+from ..errors import ParameterError
 from ..materials import Material
-from .families import cutoff, yield_cones
-from .program import ConeInput, Program
-from .solver import ACCEPTED, SolverOptions, hint, solve_clarabel
+from .limit_program import (
+    LimitProgram,
+    assemble,
+    dof_map,
+    scaling,
+    solve,
+    static_program,
+)
+from .program import Program
+from .solver import SolverOptions
 
 __all__ = ["LimitResult", "associated", "limit_analysis"]
 
@@ -109,26 +114,119 @@ def associated(material: Material) -> Material:
     return out
 
 
-def _dof_map(
-    n_dofs: int, fixed: np.ndarray, tied: list[np.ndarray]
-) -> tuple[sp.csc_matrix, int]:
-    """``T`` (n_dofs x n_red): free dofs to velocity unknowns, tied dofs merged."""
-    red = np.full(n_dofs, -1, dtype=np.int64)
-    free = ~fixed
-    owner = np.arange(n_dofs)
-    for group in tied:
-        g = np.asarray(group, dtype=np.int64).reshape(-1)
-        g = g[free[g]]
-        if g.size:
-            owner[g] = g[0]
-    roots = np.flatnonzero(free & (owner == np.arange(n_dofs)))
-    red[roots] = np.arange(roots.size)
-    dofs = np.flatnonzero(free)
-    red[dofs] = red[owner[dofs]]
-    T = sp.csc_matrix(
-        (np.ones(dofs.size), (dofs, red[dofs])), shape=(n_dofs, roots.size)
-    )
-    return T, int(roots.size)
+def _strain_operator(operator: Any, materials: list[Material]) -> Any:
+    """The nodal-integration operator of ``operator`` (a mesh is turned into one).
+
+    Parameters
+    ----------
+    operator : NodalIntegration or skfem.Mesh
+        An operator (returned as it is) or a mesh.
+    materials : list of Material
+        Materials of the body: a 2-D material that needs ``sigma_zz`` adds it
+        to the stress components.
+
+    Returns
+    -------
+    NodalIntegration
+    """
+    if hasattr(operator, "G"):
+        return operator
+    from ..mesh.smoothing import nodal_integration
+
+    d = operator.p.shape[0]
+    comp = tuple(range(6)) if d == 3 else (0, 1, 3)
+    if d == 2 and any(m.needs_zz(2) for m in materials):
+        comp = (0, 1, 2, 3)
+    return nodal_integration(operator, comp)
+
+
+def _checked_loads(
+    load: np.ndarray,
+    dead_load: np.ndarray | None,
+    fixed: np.ndarray | None,
+    N: int,
+    d: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Reference load, dead load and supports as ``(N, d)`` arrays, checked.
+
+    Parameters
+    ----------
+    load, dead_load, fixed : array_like or None
+        As in :func:`limit_analysis` (``None``: no dead load, no supports).
+    N, d : int
+        Nodes and dimension of the operator.
+
+    Returns
+    -------
+    load, f0 : ndarray (N, d) float
+    fixed : ndarray (N, d) bool
+
+    Raises
+    ------
+    ParameterError
+        For a wrong shape or a non-finite load.
+    """
+    load = np.asarray(load, float)
+    if load.shape != (N, d) or not np.all(np.isfinite(load)):
+        raise ParameterError("load", f"array of shape {load.shape}", f"({N}, {d})")
+    f0 = np.zeros((N, d)) if dead_load is None else np.asarray(dead_load, float)
+    if f0.shape != (N, d) or not np.all(np.isfinite(f0)):
+        raise ParameterError("dead_load", f"array of shape {f0.shape}", f"({N}, {d})")
+    fixed = np.zeros((N, d), bool) if fixed is None else np.asarray(fixed, bool)
+    if fixed.shape != (N, d):
+        raise ParameterError("fixed", f"array of shape {fixed.shape}", f"({N}, {d})")
+    return load, f0, fixed
+
+
+def _collapse_state(
+    operator: Any,
+    prog: Program,
+    lp: LimitProgram,
+    x: np.ndarray,
+    z: np.ndarray,
+    plastic_fraction: float,
+) -> dict[str, Any]:
+    """Multiplier, mechanism, stresses, strain rates and plastic zone of a solution.
+
+    Parameters
+    ----------
+    operator : NodalIntegration
+        Strain operator.
+    prog : Program
+        The step's program (its stress components).
+    lp : LimitProgram
+        The assembled program (dof map, sizes).
+    x, z : ndarray
+        Unscaled primal and dual solution (:func:`~.limit_program.solve`).
+    plastic_fraction : float
+        Threshold of the plastic zone on the dissipation density.
+
+    Returns
+    -------
+    dict
+        The :class:`LimitResult` fields ``multiplier``, ``velocity``,
+        ``sigma``, ``strain_rate``, ``dissipation`` and ``plastic``.
+    """
+    d, N, n_p = operator.dim, operator.n_nodes, operator.n_points
+    full = 4 if d == 2 else 6
+    u = -(lp.T @ z[: lp.n_red])
+    sig_sel = x[: lp.nsig].reshape(n_p, prog.ns)
+    sigma = np.zeros((n_p, full))
+    comp = list(prog.comp)
+    sigma[:, comp] = sig_sel
+    rate = np.zeros((n_p, full))
+    rate[:, comp] = operator.strain(u.reshape(N, d))
+    diss = operator.volumes * np.einsum("ps,ps->p", sig_sel, rate[:, comp])
+    density = diss / operator.volumes
+    plastic = density > plastic_fraction * max(float(density.max(initial=0.0)), 0.0)
+    return {
+        "multiplier": float(x[-1]),
+        "velocity": u.reshape(N, d),
+        "sigma": sigma,
+        "strain_rate": rate,
+        "dissipation": diss,
+        "plastic": plastic,
+    }
 
 
 def limit_analysis(
@@ -196,124 +294,29 @@ def limit_analysis(
         raise ParameterError(
             "materials", materials, "plastic materials only (a yield cone each)"
         )
-    if not hasattr(operator, "G"):
-        from ..mesh.smoothing import nodal_integration
-
-        d = operator.p.shape[0]
-        comp = tuple(range(6)) if d == 3 else (0, 1, 3)
-        if d == 2 and any(m.needs_zz(2) for m in materials):
-            comp = (0, 1, 2, 3)
-        operator = nodal_integration(operator, comp)
-    d, N, n_p = operator.dim, operator.n_nodes, operator.n_points
-    load = np.asarray(load, float)
-    if load.shape != (N, d) or not np.all(np.isfinite(load)):
-        raise ParameterError("load", f"array of shape {load.shape}", f"({N}, {d})")
-    f0 = np.zeros((N, d)) if dead_load is None else np.asarray(dead_load, float)
-    if f0.shape != (N, d) or not np.all(np.isfinite(f0)):
-        raise ParameterError("dead_load", f"array of shape {f0.shape}", f"({N}, {d})")
-    fixed = np.zeros((N, d), bool) if fixed is None else np.asarray(fixed, bool)
-    if fixed.shape != (N, d):
-        raise ParameterError("fixed", f"array of shape {fixed.shape}", f"({N}, {d})")
-    full = 4 if d == 2 else 6
-    data = ConeInput(
-        operator=operator,
-        materials=materials,
-        material=np.asarray(material),
-        sigma_n=np.zeros((n_p, full)),
-        force=f0,
-        fixed=fixed,
-        du_prescribed=np.zeros((N, d)),
-        contacts=Contacts(np.zeros(0, int), np.zeros((0, d)), np.zeros(0), np.zeros(0)),
-    )
-    from .conic import check_step_data
-
-    check_step_data(data)
-    prog = Program(data)
-    T, n_red = _dof_map(d * N, fixed.reshape(-1), list(tied or []))
+    operator = _strain_operator(operator, materials)
+    d, N = operator.dim, operator.n_nodes
+    load, f0, fixed = _checked_loads(load, dead_load, fixed, N, d)
+    prog = static_program(operator, materials, material, f0, fixed)
+    T, n_red = dof_map(d * N, fixed.reshape(-1), list(tied or []))
     f1 = load.reshape(-1)
     f1_red = T.T @ f1
     if not np.any(f1_red):
         raise ParameterError(
             "load", "no work", "a load acting on at least one free degree of freedom"
         )
-    # Variables x = [sigma (n_p * n_s) | lambda].
-    ns = prog.ns
-    nsig = n_p * ns
-    A_eq = sp.hstack(
-        [(T.T @ operator.G).tocsc(), sp.csc_matrix(-f1_red[:, None])], format="csc"
-    )
-    b_eq = T.T @ f0.reshape(-1)
-    blocks = [blk for blk in (cutoff(prog), yield_cones(prog)) if blk.rows]
-    cone_rows = [
-        sp.hstack([blk.A[:, :nsig], sp.csc_matrix((blk.rows, 1))]) for blk in blocks
-    ]
-    A = sp.vstack([A_eq, *cone_rows], format="csc")
-    b = np.concatenate([b_eq] + [blk.b for blk in blocks])
-    cones: list = [clarabel.ZeroConeT(n_red)]
-    for blk in blocks:
-        cones += blk.cones
-    if max_multiplier is not None:
-        cap = sp.csc_matrix(([1.0], ([0], [nsig])), shape=(1, nsig + 1))
-        A = sp.vstack([A, cap], format="csc")
-        b = np.concatenate([b, [float(max_multiplier)]])
-        cones.append(clarabel.NonnegativeConeT(1))
-    # Scaling: stresses by s* (the largest strength, or a load over the
-    # section), force rows by F* = s* h^(d-1), lambda by the multiplier at
-    # which the reference load over the section reaches s*.
-    h = float(np.sum(operator.volumes) / max(N, 1)) ** (1.0 / d)
-    s_star = max([float(np.max(c.k, initial=0.0)) for _, c in prog.yield_cones])
-    section = float(np.sum(operator.volumes)) ** ((d - 1) / d)
-    s_star = max(
-        s_star, float(np.abs(f0).sum()) / section, float(np.abs(f1).sum()) / section
-    )
-    if not s_star > 0:
-        s_star = 1.0
-    F_star = s_star * h ** (d - 1)
-    lam_star = s_star * section / float(np.abs(f1).sum())
-    col = np.concatenate([np.full(nsig, s_star), [lam_star]])
-    row = np.concatenate(
-        [np.full(n_red, 1 / F_star)]
-        + [np.full(blk.rows, 1 / s_star) for blk in blocks]
-        + [np.full(int(max_multiplier is not None), 1 / lam_star)]
-    )
-    A_hat = (sp.diags(row) @ A @ sp.diags(col)).tocsc()
-    q_hat = np.zeros(nsig + 1)
-    q_hat[-1] = -1.0  # minimise -lambda / lambda*
-    P_hat = sp.csc_matrix((nsig + 1, nsig + 1))
-    res = solve_clarabel(P_hat, q_hat, A_hat, row * b, cones, options, d)
-    if res.status not in ACCEPTED:
-        if res.status in ("DualInfeasible", "AlmostDualInfeasible"):
-            why = "the multiplier is unbounded: no collapse mechanism (check supports)"
-        else:
-            why = hint(res.status, False)
-        raise SolverError(res.status, None, res.iterations, why)
-    x = col * res.x
-    z = lam_star * row * res.z
-    lam = float(x[-1])
-    u = -(T @ z[:n_red])
-    sig_sel = x[:nsig].reshape(n_p, ns)
-    sigma = np.zeros((n_p, full))
-    comp = list(prog.comp)
-    sigma[:, comp] = sig_sel
-    rate = np.zeros((n_p, full))
-    rate[:, comp] = operator.strain(u.reshape(N, d))
-    diss = operator.volumes * np.einsum("ps,ps->p", sig_sel, rate[:, comp])
-    density = diss / operator.volumes
-    plastic = density > plastic_fraction * max(float(density.max(initial=0.0)), 0.0)
+    lp = assemble(operator, prog, T, n_red, f1_red, f0, max_multiplier)
+    col, row, lam_star = scaling(operator, prog, lp, f0, f1)
+    res, x, z = solve(lp, col, row, lam_star, options, d)
     return LimitResult(
-        multiplier=lam,
-        velocity=u.reshape(N, d),
-        sigma=sigma,
-        strain_rate=rate,
-        dissipation=diss,
-        plastic=plastic,
+        **_collapse_state(operator, prog, lp, x, z, plastic_fraction),
         status=res.status,
         iterations=res.iterations,
         wall_time=time.perf_counter() - t0,
         sizes={
-            "variables": nsig + 1,
-            "rows": int(b.size),
-            "nnz_A": int(A.nnz),
+            "variables": lp.nsig + 1,
+            "rows": int(lp.b.size),
+            "nnz_A": int(lp.A.nnz),
             "linear_solver": res.linear_solver,
         },
     )
