@@ -36,33 +36,16 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from skfem import MeshTri
 
-from ..boundary import Contacts
 from ..constants import GRAVITY
-from ..materials import LinearElastic, Material
-from ..mesh.regions import (
-    CrossSection,
-    fill_regions,
-)
+from ..mesh.regions import CrossSection
 from ..mesh.smoothing import nodal_integration
 from ..mesh.sources import AlphaShapeMesher, FixedMesh
 from ..particles import Particles
 from ..run.simulation import AtRest, Simulation
-from ..step.conic import solve_step
-from ..step.model import Model
-from ..step.program import ConeInput
-from ..step.safety import reduced_strength, strength_reduction
 from .base import Param, Scene, SceneRun
-from .common import (
-    elastic_params,
-    fidelity_from,
-    fidelity_params,
-    make_writer,
-    solver_from,
-    solver_params,
-)
-from .limit_mode import LIMIT_METRICS, analysis_param, limit_metrics
+from .common import elastic_params, fidelity_params, make_writer, solver_params
+from .limit_mode import LIMIT_METRICS, analysis_param
 from .scenery import Scenery, number
 from .slope_runout import (  # noqa: F401
     deposit_factor_of_safety,
@@ -78,6 +61,14 @@ from .slope_section import (  # noqa: F401
     section_materials,
     section_of,
     supports,
+)
+from .slope_stages import (  # noqa: F401
+    factor_of_safety,
+    flow_model,
+    fos_metrics,
+    initial_stress,
+    reduced_strength_flow,
+    slope_body,
 )
 
 MATERIALS = ("mohr-coulomb", "tresca")
@@ -218,72 +209,81 @@ METRICS = {
 }
 
 
-# -- stages ---------------------------------------------------------------------
-def initial_stress(
-    values: dict[str, Any],
-    mesh: MeshTri,
-    mats: list[Material],
-    material: np.ndarray,
-    fixed: np.ndarray,
-) -> tuple[np.ndarray, float]:
-    """Stage 1: the initial stresses (full Voigt) and their equilibrium residual."""
-    ni = nodal_integration(mesh, (0, 1, 3))
-    x = mesh.p.T
-    rho = np.array([m.rho for m in mats])[material]
-    force = np.zeros_like(x)
-    force[:, 1] = -rho * GRAVITY * ni.volumes
-    if values["initial_stress"] == "gravity":
-        elastic = [LinearElastic(m.E, m.nu, m.rho) for m in mats]
-        data = ConeInput(
-            operator=ni,
-            materials=elastic,
-            material=material,
-            sigma_n=np.zeros((x.shape[0], 4)),
-            force=force,
-            fixed=fixed,
-            du_prescribed=np.zeros_like(x),
-            contacts=Contacts(
-                np.zeros(0, int), np.zeros((0, 2)), np.zeros(0), np.zeros(0)
-            ),
-        )
-        sigma = solve_step(data, solver_from(values)).sigma
-    else:
-        surface = _surface_height(x, x[:, 0])
-        phi = np.array([getattr(m, "phi", 0.0) for m in mats])[material]
-        K0 = values["K0"]
-        k0 = 1 - np.sin(np.radians(phi)) if K0 is None else np.full(len(x), K0)
-        sigma = np.zeros((x.shape[0], 4))
-        sigma[:, 1] = -rho * GRAVITY * (surface - x[:, 1])
-        sigma[:, 0] = sigma[:, 2] = k0 * sigma[:, 1]
-    free = ~fixed.reshape(-1)
-    resid = ni.G @ sigma[:, [0, 1, 3]].reshape(-1) - force.reshape(-1)
-    norm = float(np.linalg.norm(force.reshape(-1)[free]))
-    return sigma, float(np.linalg.norm(resid[free]) / norm)
-
-
-def factor_of_safety(values, mesh, mats, material, fixed):
-    """Stage 2: strength reduction on the initial mesh (its limit analysis)."""
-    ni = nodal_integration(mesh, (0, 1, 3))
-    rho = np.array([m.rho for m in mats])[material]
-    load = np.zeros((mesh.p.shape[1], 2))
-    load[:, 1] = -rho * GRAVITY * ni.volumes
-    return strength_reduction(
-        ni, mats, material, load, fixed=fixed, options=solver_from(values)
-    ), ni
-
-
 # -- build ----------------------------------------------------------------------
+def base_metrics(
+    fos: dict[str, Any],
+    resid: float | None,
+    n_particles: int,
+    state: dict[str, Any],
+    sim: Simulation,
+) -> dict[str, Any]:
+    """The slope's metrics before the run-out's: those left null without it.
+
+    Parameters
+    ----------
+    fos : dict
+        The factor of safety's metrics (:func:`fos_metrics`).
+    resid : float or None
+        Equilibrium residual of the initial stresses (None: limit only).
+    n_particles : int
+        Number of particles.
+    state : dict
+        The run's shared state (stage times).
+    sim : Simulation
+        The run (its step timings).
+
+    Returns
+    -------
+    dict
+    """
+    return {
+        **fos,
+        "initial_equilibrium_residual": resid,
+        "reduction": None,
+        "runout": None,
+        "crest_settlement": None,
+        "mass_centre_travel": None,
+        "moved_volume": None,
+        "deposit_profile": None,
+        "deposit_max_slope": None,
+        "mass_change": None,
+        "volume_change": None,
+        "at_rest": None,
+        "deposit_factor_of_safety": None,
+        "n_particles": n_particles,
+        "stage_wall_time": {
+            "initial_stress": state.get("t_initial", 0.0),
+            "factor_of_safety": state.get("t_fos", 0.0),
+            "runout": float(sum(sum(r.timings.values()) for r in sim.records)),
+        },
+    }
+
+
 def build(
     values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
 ) -> SceneRun:
-    """Build the slope's staged run (or its limit analysis only)."""
-    sec, h = section_of(values)
-    pts, tri, region = fill_regions(sec.regions, h)
-    names = list(sec.materials)
-    material = np.array([names.index(sec.regions[r].material) for r in region])
-    mesh = MeshTri(np.ascontiguousarray(pts.T), np.ascontiguousarray(tri))
-    fixed = supports(pts, sec)
-    mats = section_materials(sec, values)
+    """Build the slope's staged run (or its limit analysis only).
+
+    Parameters
+    ----------
+    values : dict
+        The scene's parameter values (``dt`` and ``t_end`` filled in when
+        unset).
+    out : Path, optional
+        Output folder.
+    progress : callable, optional
+        Progress reporter of the run.
+    resume : bool
+        Resume from the folder's checkpoint.
+
+    Returns
+    -------
+    SceneRun
+        No steps without the run-out (its metrics run stage 2 when asked);
+        with it, steps until at rest or ``t_end``.
+    """
+    body = slope_body(values)
+    pts, material, fixed = body.pts, body.material, body.fixed
     H = float(np.ptp(pts[:, 1]))
     if values["dt"] is None:
         values["dt"] = 0.02 * math.sqrt(H / GRAVITY)
@@ -295,50 +295,18 @@ def build(
         sigma, resid = np.zeros((len(pts), 4)), None
     else:
         t0 = time.perf_counter()
-        sigma, resid = initial_stress(values, mesh, mats, material, fixed)
+        sigma, resid = initial_stress(values, body.mesh, body.mats, material, fixed)
         state["t_initial"] = time.perf_counter() - t0
-    ni = nodal_integration(mesh, (0, 1, 3))
-    masses = np.array([m.rho for m in mats])[material] * ni.volumes
-
-    def fos() -> dict[str, Any]:
-        if "fos" not in state:
-            t0 = time.perf_counter()
-            res, ni_ = factor_of_safety(values, mesh, mats, material, fixed)
-            state["t_fos"] = time.perf_counter() - t0
-            state["fos"] = res
-            state["fos_metrics"] = {
-                "factor_of_safety": res.factor_of_safety,
-                "fos_iterates": [list(map(float, it)) for it in res.iterates],
-                **limit_metrics(res.limit, ni_.volumes, res.programs, state["t_fos"]),
-                # The gravity multiplier of the slope as it is (F = 1).
-                "collapse_multiplier": res.multiplier_unreduced,
-            }
-            if out is not None:
-                save_mechanism(Path(out), pts, tri, res, ni_.volumes)
-        return state["fos_metrics"]
-
+    ni = nodal_integration(body.mesh, (0, 1, 3))
+    masses = np.array([m.rho for m in body.mats])[material] * ni.volumes
     run_out = values["runout"] and not limit_only
-    flow_mats = section_materials(sec, values, flow=True)
     particles = Particles.create(
         pts, masses, stress=sigma, fixed=fixed, material=material
     )
-    if run_out:
-        # Stage 3 needs the factor of safety first: reduce, then flow to rest.
-        fos()
-        F = fos()["factor_of_safety"]
-        # A slope that fails as it is (F < 1) runs out with its own strength.
-        red = values["reduction"] or (values["margin"] * F if F >= 1 else 1.0)
-        state["reduction"] = red
-        flow_mats = [reduced_strength_flow(m, red) for m in flow_mats]
-    model = Model(
-        dim=2,
-        materials=flow_mats,
-        gravity=GRAVITY,
-        mode="dynamic",
-        solver=solver_from(values),
-        **fidelity_from(values, 0.0),
+    model = flow_model(values, body, state, out, run_out)
+    source = (
+        AlphaShapeMesher(body.h, values["alpha"]) if run_out else FixedMesh(body.mesh.t)
     )
-    source = AlphaShapeMesher(h, values["alpha"]) if run_out else FixedMesh(mesh.t)
     sim = Simulation(
         particles,
         model,
@@ -350,34 +318,13 @@ def build(
         progress=progress,
         meta={"scene": "slope", "parameters": values},
     )
-    x_toe, y_toe, x_crest, y_crest = _toe_and_crest(sec, values)
+    toe_crest = _toe_and_crest(body.sec, values)
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
-        m = {
-            **fos(),
-            "initial_equilibrium_residual": resid,
-            "reduction": None,
-            "runout": None,
-            "crest_settlement": None,
-            "mass_centre_travel": None,
-            "moved_volume": None,
-            "deposit_profile": None,
-            "deposit_max_slope": None,
-            "mass_change": None,
-            "volume_change": None,
-            "at_rest": None,
-            "deposit_factor_of_safety": None,
-            "n_particles": len(pts),
-            "stage_wall_time": {
-                "initial_stress": state.get("t_initial", 0.0),
-                "factor_of_safety": state.get("t_fos", 0.0),
-                "runout": float(sum(sum(r.timings.values()) for r in sim_.records)),
-            },
-        }
+        fos = fos_metrics(values, body, state, out)
+        m = base_metrics(fos, resid, len(pts), state, sim_)
         if run_out:
-            m.update(
-                runout_metrics(sim_, state, values, h, x_toe, y_toe, x_crest, y_crest)
-            )
+            m.update(runout_metrics(sim_, state, values, body.h, *toe_crest))
         return m
 
     if not run_out:
@@ -385,14 +332,6 @@ def build(
     stop = AtRest(values["rest_fraction"], 2 * math.sqrt(H / GRAVITY))
     state["stop"] = stop
     return SceneRun(sim, {"t_end": values["t_end"], "stop": stop}, metrics)
-
-
-def reduced_strength_flow(material: Material, factor: float) -> Material:
-    """``c/F``, ``tan(phi)/F`` keeping the material's (non-associated) ``psi``."""
-    out = reduced_strength(material, factor)
-    out.psi = min(material.psi, out.phi)
-    out.tension_cutoff = getattr(material, "tension_cutoff", False)
-    return out
 
 
 def _toe_and_crest(sec: CrossSection, values: dict[str, Any]):

@@ -1,0 +1,294 @@
+"""The slope scene's stages: particles, initial stresses, factor of safety, run-out.
+
+:mod:`.slope` builds the run from them.
+
+Stage 1 (:func:`initial_stress`) switches gravity on in one elastic static
+step or sets ``K0`` stresses; stage 2 (:func:`factor_of_safety`,
+:func:`fos_metrics`) is strength reduction by limit analysis on the initial
+mesh; stage 3's model (:func:`flow_model`) flows with the strengths reduced
+by the run-out's factor (:func:`reduced_strength_flow`).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from skfem import MeshTri
+
+from ..boundary import Contacts
+from ..constants import GRAVITY
+from ..materials import LinearElastic, Material
+from ..mesh.regions import CrossSection, fill_regions
+from ..mesh.smoothing import nodal_integration
+from ..step.conic import solve_step
+from ..step.model import Model
+from ..step.program import ConeInput
+from ..step.safety import SafetyResult, reduced_strength, strength_reduction
+from .common import fidelity_from, solver_from
+from .limit_mode import limit_metrics
+from .slope_runout import save_mechanism
+from .slope_section import _surface_height, section_materials, section_of, supports
+
+__all__ = [
+    "SlopeBody",
+    "factor_of_safety",
+    "flow_model",
+    "fos_metrics",
+    "initial_stress",
+    "reduced_strength_flow",
+    "slope_body",
+]
+
+
+def initial_stress(
+    values: dict[str, Any],
+    mesh: MeshTri,
+    mats: list[Material],
+    material: np.ndarray,
+    fixed: np.ndarray,
+) -> tuple[np.ndarray, float]:
+    """Stage 1: the initial stresses (full Voigt) and their equilibrium residual.
+
+    Parameters
+    ----------
+    values : dict
+        The scene's parameter values (``initial_stress``: gravity or k0, ``K0``).
+    mesh : MeshTri
+        The particles' mesh.
+    mats : list of Material
+        The section's materials (their ``E``, ``nu``, ``rho``, ``phi``).
+    material : ndarray (n,) int
+        Material index per particle.
+    fixed : ndarray (n, 2) bool
+        Supports.
+
+    Returns
+    -------
+    sigma : ndarray (n, 4)
+        Initial stresses, Pa.
+    residual : float
+        ``|G s - f| / |f|`` on the free dofs.
+    """
+    ni = nodal_integration(mesh, (0, 1, 3))
+    x = mesh.p.T
+    rho = np.array([m.rho for m in mats])[material]
+    force = np.zeros_like(x)
+    force[:, 1] = -rho * GRAVITY * ni.volumes
+    if values["initial_stress"] == "gravity":
+        elastic = [LinearElastic(m.E, m.nu, m.rho) for m in mats]
+        data = ConeInput(
+            operator=ni,
+            materials=elastic,
+            material=material,
+            sigma_n=np.zeros((x.shape[0], 4)),
+            force=force,
+            fixed=fixed,
+            du_prescribed=np.zeros_like(x),
+            contacts=Contacts(
+                np.zeros(0, int), np.zeros((0, 2)), np.zeros(0), np.zeros(0)
+            ),
+        )
+        sigma = solve_step(data, solver_from(values)).sigma
+    else:
+        surface = _surface_height(x, x[:, 0])
+        phi = np.array([getattr(m, "phi", 0.0) for m in mats])[material]
+        K0 = values["K0"]
+        k0 = 1 - np.sin(np.radians(phi)) if K0 is None else np.full(len(x), K0)
+        sigma = np.zeros((x.shape[0], 4))
+        sigma[:, 1] = -rho * GRAVITY * (surface - x[:, 1])
+        sigma[:, 0] = sigma[:, 2] = k0 * sigma[:, 1]
+    free = ~fixed.reshape(-1)
+    resid = ni.G @ sigma[:, [0, 1, 3]].reshape(-1) - force.reshape(-1)
+    norm = float(np.linalg.norm(force.reshape(-1)[free]))
+    return sigma, float(np.linalg.norm(resid[free]) / norm)
+
+
+def factor_of_safety(
+    values: dict[str, Any],
+    mesh: MeshTri,
+    mats: list[Material],
+    material: np.ndarray,
+    fixed: np.ndarray,
+) -> tuple[SafetyResult, Any]:
+    """Stage 2: strength reduction on the initial mesh (its limit analysis).
+
+    Parameters
+    ----------
+    values, mesh, mats, material, fixed
+        As in :func:`initial_stress`.
+
+    Returns
+    -------
+    result : SafetyResult
+        Factor of safety, iterates and the last limit analysis.
+    ni : NodalIntegration
+        The mesh's strain operator (its cell volumes).
+    """
+    ni = nodal_integration(mesh, (0, 1, 3))
+    rho = np.array([m.rho for m in mats])[material]
+    load = np.zeros((mesh.p.shape[1], 2))
+    load[:, 1] = -rho * GRAVITY * ni.volumes
+    return strength_reduction(
+        ni, mats, material, load, fixed=fixed, options=solver_from(values)
+    ), ni
+
+
+@dataclass
+class SlopeBody:
+    """The slope's section filled with particles, and their mesh.
+
+    Attributes
+    ----------
+    sec : CrossSection
+        Regions and materials of the section.
+    h : float
+        Particle spacing, m.
+    pts : ndarray (n, 2)
+        Particle positions, m.
+    tri : ndarray (n_t, 3)
+        Triangles of the particles' mesh.
+    material : ndarray (n,) int
+        Material index per particle (into ``mats``).
+    mesh : MeshTri
+        The particles' mesh.
+    fixed : ndarray (n, 2) bool
+        Supports: the fixed base and the side rollers.
+    mats : list of Material
+        The section's materials (limit analysis and initial stresses).
+    """
+
+    sec: CrossSection
+    h: float
+    pts: np.ndarray
+    tri: np.ndarray
+    material: np.ndarray
+    mesh: MeshTri
+    fixed: np.ndarray
+    mats: list[Material]
+
+
+def slope_body(values: dict[str, Any]) -> SlopeBody:
+    """The section of ``values`` (parametric or a file) filled at the spacing.
+
+    Parameters
+    ----------
+    values : dict
+        The scene's parameter values.
+
+    Returns
+    -------
+    SlopeBody
+    """
+    sec, h = section_of(values)
+    pts, tri, region = fill_regions(sec.regions, h)
+    names = list(sec.materials)
+    material = np.array([names.index(sec.regions[r].material) for r in region])
+    mesh = MeshTri(np.ascontiguousarray(pts.T), np.ascontiguousarray(tri))
+    fixed = supports(pts, sec)
+    mats = section_materials(sec, values)
+    return SlopeBody(sec, h, pts, tri, material, mesh, fixed, mats)
+
+
+def fos_metrics(
+    values: dict[str, Any], body: SlopeBody, state: dict[str, Any], out: Path | None
+) -> dict[str, Any]:
+    """Stage 2 once: the factor of safety's metrics, kept in ``state``.
+
+    The first call runs the strength reduction (and, with an output folder,
+    saves the mechanism); later calls return the same metrics.
+
+    Parameters
+    ----------
+    values : dict
+        The scene's parameter values.
+    body : SlopeBody
+        The slope's particles and mesh.
+    state : dict
+        The run's shared state: gets ``fos``, ``fos_metrics`` and ``t_fos``.
+    out : Path or None
+        Output folder of ``mechanism.npz`` and ``mechanism.png``.
+
+    Returns
+    -------
+    dict
+        ``factor_of_safety``, ``fos_iterates``, the limit metrics and
+        ``collapse_multiplier``.
+    """
+    if "fos" not in state:
+        t0 = time.perf_counter()
+        res, ni_ = factor_of_safety(
+            values, body.mesh, body.mats, body.material, body.fixed
+        )
+        state["t_fos"] = time.perf_counter() - t0
+        state["fos"] = res
+        state["fos_metrics"] = {
+            "factor_of_safety": res.factor_of_safety,
+            "fos_iterates": [list(map(float, it)) for it in res.iterates],
+            **limit_metrics(res.limit, ni_.volumes, res.programs, state["t_fos"]),
+            # The gravity multiplier of the slope as it is (F = 1).
+            "collapse_multiplier": res.multiplier_unreduced,
+        }
+        if out is not None:
+            save_mechanism(Path(out), body.pts, body.tri, res, ni_.volumes)
+    return state["fos_metrics"]
+
+
+def flow_model(
+    values: dict[str, Any],
+    body: SlopeBody,
+    state: dict[str, Any],
+    out: Path | None,
+    run_out: bool,
+) -> Model:
+    """The dynamic model of stage 3, with the run-out's reduced strengths.
+
+    With ``run_out`` the factor of safety comes first (:func:`fos_metrics`):
+    the strengths are divided by ``reduction`` (default ``margin`` times the
+    factor of safety, or 1 when it is below 1: such a slope fails as it is),
+    which goes into ``state["reduction"]``.
+
+    Parameters
+    ----------
+    values : dict
+        The scene's parameter values.
+    body : SlopeBody
+        The slope's section and particles.
+    state : dict
+        The run's shared state.
+    out : Path or None
+        Output folder (for the mechanism).
+    run_out : bool
+        Whether stage 3 runs.
+
+    Returns
+    -------
+    Model
+    """
+    flow_mats = section_materials(body.sec, values, flow=True)
+    if run_out:
+        # Stage 3 needs the factor of safety first: reduce, then flow to rest.
+        F = fos_metrics(values, body, state, out)["factor_of_safety"]
+        # A slope that fails as it is (F < 1) runs out with its own strength.
+        red = values["reduction"] or (values["margin"] * F if F >= 1 else 1.0)
+        state["reduction"] = red
+        flow_mats = [reduced_strength_flow(m, red) for m in flow_mats]
+    return Model(
+        dim=2,
+        materials=flow_mats,
+        gravity=GRAVITY,
+        mode="dynamic",
+        solver=solver_from(values),
+        **fidelity_from(values, 0.0),
+    )
+
+
+def reduced_strength_flow(material: Material, factor: float) -> Material:
+    """``c/F``, ``tan(phi)/F`` keeping the material's (non-associated) ``psi``."""
+    out = reduced_strength(material, factor)
+    out.psi = min(material.psi, out.phi)
+    out.tension_cutoff = getattr(material, "tension_cutoff", False)
+    return out
