@@ -281,6 +281,71 @@ def fill_regions(
     return pts[used], new[tri].T, region
 
 
+def _materials(mats: object) -> dict[str, dict[str, float]]:
+    """The ``materials`` object of a cross-section file, checked."""
+    if not isinstance(mats, dict) or not mats:
+        raise ParameterError("materials", mats, "an object: name -> properties")
+    materials: dict[str, dict[str, float]] = {}
+    for name, props in mats.items():
+        if not isinstance(props, dict):
+            raise ParameterError(f"materials.{name}", props, "an object of properties")
+        bad = sorted(set(props) - set(MATERIAL_KEYS))
+        if bad:
+            raise ParameterError(
+                f"materials.{name}",
+                bad[0],
+                "properties among " + ", ".join(MATERIAL_KEYS),
+            )
+        for key, val in props.items():
+            if (
+                isinstance(val, bool)
+                or not isinstance(val, int | float)
+                or not math.isfinite(val)
+            ):
+                raise ParameterError(f"materials.{name}.{key}", val, "a finite number")
+        materials[name] = {k: float(v) for k, v in props.items()}
+    return materials
+
+
+def _region(k: int, r: object, materials: dict[str, dict[str, float]]) -> Region:
+    """Region ``k`` of a cross-section file, checked (the polygon left open)."""
+    if not isinstance(r, dict) or "polygon" not in r or "material" not in r:
+        raise ParameterError(
+            f"regions[{k}]", r, "an object with 'material' and 'polygon'"
+        )
+    if r["material"] not in materials:
+        raise ParameterError(
+            f"regions[{k}].material",
+            r["material"],
+            "one of the materials of the file: " + ", ".join(materials),
+        )
+    try:
+        poly = np.asarray(r["polygon"], dtype=float)
+    except (TypeError, ValueError):
+        poly = np.zeros((0,))
+    if poly.ndim != 2 or poly.shape[1] != 2 or not np.all(np.isfinite(poly)):
+        raise ParameterError(
+            f"regions[{k}].polygon", r["polygon"], "a list of [x, y] vertices"
+        )
+    if len(poly) < 4 or not np.allclose(poly[0], poly[-1]):
+        raise ParameterError(
+            f"regions[{k}].polygon",
+            f"{len(poly)} vertices, from {poly[0].tolist() if len(poly) else None} "
+            f"to {poly[-1].tolist() if len(poly) else None}",
+            "a closed polygon: at least 3 vertices and the last one repeating "
+            "the first (this one is open)",
+        )
+    hr = r.get("spacing")
+    if hr is not None and not (
+        isinstance(hr, int | float)
+        and not isinstance(hr, bool)
+        and math.isfinite(hr)
+        and hr > 0
+    ):
+        raise ParameterError(f"regions[{k}].spacing", hr, "a length > 0 (m)")
+    return Region(r["material"], poly[:-1], hr)
+
+
 def read_cross_section(path: str | Path) -> CrossSection:
     """Read and check the JSON geometry file (format in the module notes).
 
@@ -307,65 +372,8 @@ def read_cross_section(path: str | Path) -> CrossSection:
         raise ParameterError(
             "geometry", str(path), "a JSON object with 'materials' and 'regions'"
         )
-    mats = data["materials"]
-    if not isinstance(mats, dict) or not mats:
-        raise ParameterError("materials", mats, "an object: name -> properties")
-    materials: dict[str, dict[str, float]] = {}
-    for name, props in mats.items():
-        if not isinstance(props, dict):
-            raise ParameterError(f"materials.{name}", props, "an object of properties")
-        bad = sorted(set(props) - set(MATERIAL_KEYS))
-        if bad:
-            raise ParameterError(
-                f"materials.{name}",
-                bad[0],
-                "properties among " + ", ".join(MATERIAL_KEYS),
-            )
-        for key, val in props.items():
-            if (
-                isinstance(val, bool)
-                or not isinstance(val, int | float)
-                or not math.isfinite(val)
-            ):
-                raise ParameterError(f"materials.{name}.{key}", val, "a finite number")
-        materials[name] = {k: float(v) for k, v in props.items()}
-    regions = []
-    for k, r in enumerate(data["regions"]):
-        if not isinstance(r, dict) or "polygon" not in r or "material" not in r:
-            raise ParameterError(
-                f"regions[{k}]", r, "an object with 'material' and 'polygon'"
-            )
-        if r["material"] not in materials:
-            raise ParameterError(
-                f"regions[{k}].material",
-                r["material"],
-                "one of the materials of the file: " + ", ".join(materials),
-            )
-        try:
-            poly = np.asarray(r["polygon"], dtype=float)
-        except (TypeError, ValueError):
-            poly = np.zeros((0,))
-        if poly.ndim != 2 or poly.shape[1] != 2 or not np.all(np.isfinite(poly)):
-            raise ParameterError(
-                f"regions[{k}].polygon", r["polygon"], "a list of [x, y] vertices"
-            )
-        if len(poly) < 4 or not np.allclose(poly[0], poly[-1]):
-            raise ParameterError(
-                f"regions[{k}].polygon",
-                f"{len(poly)} vertices, from {poly[0].tolist() if len(poly) else None} "
-                f"to {poly[-1].tolist() if len(poly) else None}",
-                "a closed polygon: at least 3 vertices and the last one repeating "
-                "the first (this one is open)",
-            )
-        hr = r.get("spacing")
-        if hr is not None and not (
-            isinstance(hr, int | float)
-            and not isinstance(hr, bool)
-            and math.isfinite(hr)
-            and hr > 0
-        ):
-            raise ParameterError(f"regions[{k}].spacing", hr, "a length > 0 (m)")
-        regions.append(Region(r["material"], poly[:-1], hr))
+    materials = _materials(data["materials"])
+    regions = [_region(k, r, materials) for k, r in enumerate(data["regions"])]
     supports = {"base": "fixed", "sides": "rollers"}
     for key, val in dict(data.get("supports", {})).items():
         allowed = {"base": BASES, "sides": SIDES}.get(key)
