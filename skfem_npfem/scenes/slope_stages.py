@@ -198,8 +198,9 @@ def fos_metrics(
 ) -> dict[str, Any]:
     """Stage 2 once: the factor of safety's metrics, kept in ``state``.
 
-    The first call runs the strength reduction (and, with an output folder,
-    saves the mechanism); later calls return the same metrics.
+    The first call runs the strength reduction; later calls return the same
+    metrics.  With an output folder the mechanism is saved there (once): the
+    scene passes it only when the run owns the folder, after every check.
 
     Parameters
     ----------
@@ -232,8 +233,14 @@ def fos_metrics(
             # The gravity multiplier of the slope as it is (F = 1).
             "collapse_multiplier": res.multiplier_unreduced,
         }
-        if out is not None:
-            save_mechanism(Path(out), body.pts, body.tri, res, ni_.volumes)
+        state["fos_volumes"] = ni_.volumes
+    if out is not None and not state.get("mechanism_saved"):
+        # Written once the run owns its folder (never while the scene is built).
+        Path(out).mkdir(parents=True, exist_ok=True)
+        save_mechanism(
+            Path(out), body.pts, body.tri, state["fos"], state["fos_volumes"]
+        )
+        state["mechanism_saved"] = True
     return state["fos_metrics"]
 
 
@@ -271,7 +278,7 @@ def flow_model(
     flow_mats = section_materials(body.sec, values, flow=True)
     if run_out:
         # Stage 3 needs the factor of safety first: reduce, then flow to rest.
-        F = fos_metrics(values, body, state, out)["factor_of_safety"]
+        F = fos_metrics(values, body, state, None)["factor_of_safety"]
         # A slope that fails as it is (F < 1) runs out with its own strength.
         red = values["reduction"] or (values["margin"] * F if F >= 1 else 1.0)
         state["reduction"] = red
