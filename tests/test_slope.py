@@ -238,3 +238,19 @@ def test_finer_where_asked_and_t_junctions():
         assert area.min() > 0.02 * 0.1**2  # no slivers at the T-junction
     in_b = lambda r: int(np.sum(r[2] == 1))  # noqa: E731
     assert in_b(fine) > 4 * in_b(coarse)  # (0.25 / 0.1)^2 = 6.25 per area
+
+
+def test_mechanism_is_saved_with_the_run_and_drawn_by_plot(tmp_path):
+    """The scene writes the mechanism's data when it owns its folder; the
+    drawing is the viz layer's (``skfem-npfem plot``), not the scene's."""
+    pytest.importorskip("matplotlib")
+    from skfem_npfem.viz.plot import plot_mechanism
+
+    out = tmp_path / "slope"
+    s = npfem.run_scene("slope", {**GRIFFITHS_LANE, "spacing": 2.0}, out=out)
+    data = np.load(out / "mechanism.npz")
+    # The saved mechanism is the one of the reported factor of safety.
+    assert float(data["factor_of_safety"]) == s["metrics"]["factor_of_safety"]
+    assert data["velocity"].shape == data["x"].shape
+    png = plot_mechanism(out / "mechanism.npz", tmp_path / "plots")
+    assert png.name == "mechanism.png" and png.stat().st_size > 10_000

@@ -17,9 +17,9 @@ Stages, in one run:
    ``s_h = K0 s_v`` (not in equilibrium under a slope: the residual says how
    far);
 2. **factor of safety** by strength reduction (``c/F``, ``tan(phi)/F``) with
-   the collapse mechanism (with an output folder: ``mechanism.npz`` and
-   ``mechanism.png``), from limit analysis on the particles' mesh
-   (:func:`~skfem_npfem.step.limit.strength_reduction`;
+   the collapse mechanism (with an output folder: ``mechanism.npz``, drawn by
+   ``skfem-npfem plot`` as ``plots/mechanism.png``), from limit analysis on
+   the particles' mesh (:func:`~skfem_npfem.step.safety.strength_reduction`;
    ``analysis=limit`` runs this stage only);
 3. **failure and run-out**, with ``runout=true``: the strengths divided by
    ``reduction`` (default: ``margin`` times the factor of safety, or 1 when

@@ -39,7 +39,11 @@ __all__ = [
 
 
 def save_mechanism(folder: Path, pts, tri, res, volumes) -> None:
-    """``mechanism.npz`` and, with matplotlib, ``mechanism.png`` in ``folder``."""
+    """``mechanism.npz`` in ``folder``: the mechanism's data.
+
+    ``skfem-npfem plot`` draws it as ``plots/mechanism.png``
+    (:func:`skfem_npfem.viz.plot.plot_mechanism`).
+    """
     lim = res.limit
     np.savez(
         folder / "mechanism.npz",
@@ -48,14 +52,9 @@ def save_mechanism(folder: Path, pts, tri, res, volumes) -> None:
         velocity=lim.velocity,
         dissipation=lim.dissipation,
         plastic=lim.plastic,
+        volumes=volumes,
+        factor_of_safety=res.factor_of_safety,
     )
-    try:
-        from ..viz.figures import mechanism_figure
-    except ImportError:  # pragma: no cover - the viz extra is not installed
-        return
-    title = f"collapse mechanism at F = {res.factor_of_safety:.3f}"
-    fig = mechanism_figure(pts, tri, lim.velocity, lim.dissipation, volumes, title)
-    fig.savefig(folder / "mechanism.png")
 
 
 def runout_metrics(sim, state, values, h, x_toe, y_toe, x_crest, y_crest) -> dict:

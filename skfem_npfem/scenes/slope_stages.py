@@ -211,7 +211,7 @@ def fos_metrics(
     state : dict
         The run's shared state: gets ``fos``, ``fos_metrics`` and ``t_fos``.
     out : Path or None
-        Output folder of ``mechanism.npz`` and ``mechanism.png``.
+        Output folder of ``mechanism.npz``.
 
     Returns
     -------

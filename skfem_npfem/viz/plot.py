@@ -41,7 +41,7 @@ from .colours import (  # noqa: F401
     _robust_range,
     _style,
 )
-from .figures import Frames2D, crop, load_settlement_figure
+from .figures import Frames2D, crop, load_settlement_figure, mechanism_figure
 from .render import (
     Renderer,
     Step,
@@ -373,7 +373,14 @@ def plot_results(
     >>> paths = plot_results("out", times=[0, 1, 2, 4])  # doctest: +SKIP
     """
     req = _check_args(animation, max_frames, window_size, clim, times)
-    pvd = _find_pvd(Path(result_dir))
+    mechanism = Path(result_dir) / "mechanism.npz"
+    try:
+        pvd = _find_pvd(Path(result_dir))
+    except CheckpointError:
+        if not mechanism.is_file():  # a limit analysis alone: its mechanism
+            raise
+        out = Path(result_dir) / "plots" if out_dir is None else Path(out_dir)
+        return [plot_mechanism(mechanism, out)]
     folder = pvd.parent
     entries = read_pvd(pvd)
     if not entries:
@@ -442,7 +449,45 @@ def plot_results(
         fig.canvas.draw()
         _save_rgb(np.asarray(fig.canvas.buffer_rgba())[..., :3], path)
         written.append(path)
+    if (folder / "mechanism.npz").is_file():
+        written.append(plot_mechanism(folder / "mechanism.npz", out))
     return written
+
+
+def plot_mechanism(path: str | os.PathLike, out_dir: str | os.PathLike) -> Path:
+    """Draw the ``mechanism.npz`` of a limit analysis as ``mechanism.png``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file a scene wrote (the slope's factor of safety stage).
+    out_dir : str or os.PathLike
+        Folder of the picture (created if needed).
+
+    Returns
+    -------
+    Path
+        The picture: dissipation density and velocity arrows of the mechanism.
+    """
+    data = np.load(path)
+    out = Path(out_dir)
+    check_writable_dir("out_dir", out)
+    title = "collapse mechanism"
+    if "factor_of_safety" in data:
+        title += f" at F = {float(data['factor_of_safety']):.3f}"
+    volumes = data["volumes"] if "volumes" in data else None
+    fig = mechanism_figure(
+        data["x"],
+        data["triangles"],
+        data["velocity"],
+        data["dissipation"],
+        volumes,
+        title,
+    )
+    fig.canvas.draw()
+    target = out / "mechanism.png"
+    _save_rgb(np.asarray(fig.canvas.buffer_rgba())[..., :3], target)
+    return target
 
 
 def _load_picked(entries, field, req, unit, animation, max_frames):
