@@ -28,6 +28,7 @@ from pathlib import Path
 from _common import VALIDATION
 
 import skfem_npfem as npfem
+from skfem_npfem.baseline.reporting import save_png
 
 #: Bishop & Morgenstern's chart value for the slope (Griffiths & Lane 1999).
 REFERENCE = 1.38
@@ -129,7 +130,7 @@ def main() -> None:
     ax.set_ylabel("factor of safety")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(args.out / "slope_fos.png", dpi=110)
+    save_png(fig, args.out / "slope_fos.png", dpi=110)  # palette PNG: small
     print("\n".join(lines))
 
 
