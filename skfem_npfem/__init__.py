@@ -32,6 +32,7 @@ from ._deprecated import RENAMED as _RENAMED
 from ._deprecated import renamed as _renamed
 
 # isort: split
+from .bodies import RigidBody
 from .boundary import Contacts, RigidWall, floor, wall_x
 from .errors import (
     CheckpointError,
@@ -96,7 +97,7 @@ __all__ += [
     "compliance_matrix",
 ]
 #: Boundaries.
-__all__ += ["Contacts", "RigidWall", "floor", "wall_x"]
+__all__ += ["Contacts", "RigidBody", "RigidWall", "floor", "wall_x"]
 #: One step.
 __all__ += [
     "ConeInput",

@@ -148,8 +148,15 @@ class Contacts:
         prescribed dofs (the program only sees the free dofs; non-penetration is
         ``gap + normal . du_free >= 0``).
     mu_lambda : ndarray (nc,)
-        Friction bound ``mu * lambda_bar_n`` (N) from the previous step; values
-        <= 0 mean frictionless (no tangential variable).
+        Friction bound ``mu * lambda_bar_n`` (N) from the previous step, or an
+        adhesion bound that does not depend on the normal force (a
+        :class:`RigidBody` with ``adhesion``); values <= 0 mean frictionless
+        (no tangential variable).
+    slip_offset : ndarray (nc, d-1) or None
+        Tangential motion of the contact surface that the node's slip is
+        measured against: ``t_k . (du_prescribed - du_surface)`` for a moving
+        :class:`RigidBody` (the tangential counterpart of what ``gap`` holds
+        along the normal).  None (fixed walls): zero.
 
     Raises
     ------
@@ -170,6 +177,7 @@ class Contacts:
     normal: np.ndarray
     gap: np.ndarray
     mu_lambda: np.ndarray
+    slip_offset: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.node = np.asarray(self.node, dtype=np.int64).reshape(-1)
@@ -192,6 +200,9 @@ class Contacts:
             raise ParameterError(
                 "contacts", "non-finite values", "finite gap, mu_lambda"
             )
+        if self.slip_offset is not None:
+            d = self.normal.shape[1]
+            self.slip_offset = np.asarray(self.slip_offset, float).reshape(nc, d - 1)
 
     @classmethod
     def empty(cls, dim: int) -> Contacts:
@@ -202,6 +213,28 @@ class Contacts:
     def size(self) -> int:
         """Number of candidates."""
         return int(self.node.shape[0])
+
+    @classmethod
+    def concat(cls, parts: Sequence[Contacts]) -> Contacts:
+        """The candidates of several sources, in order (``slip_offset`` zero-filled)."""
+        d = parts[0].normal.shape[1]
+        offset = None
+        if any(c.slip_offset is not None for c in parts):
+            offset = np.concatenate(
+                [
+                    np.zeros((c.size, d - 1))
+                    if c.slip_offset is None
+                    else c.slip_offset
+                    for c in parts
+                ]
+            )
+        return cls(
+            node=np.concatenate([c.node for c in parts]),
+            normal=np.concatenate([c.normal for c in parts]),
+            gap=np.concatenate([c.gap for c in parts]),
+            mu_lambda=np.concatenate([c.mu_lambda for c in parts]),
+            slip_offset=offset,
+        )
 
 
 def wall_contacts(

@@ -6,6 +6,7 @@ Objective terms (``formulation.md`` §3, in the stress increments ``ds``):
 * :func:`inertia` ``1/2 sum_j dt^2/m~_j r_j^2`` (dynamic steps);
 * :func:`prescribed_work` ``-ds^T G_P^T ubar`` (prescribed displacements);
 * :func:`contact_gap` ``sum_c g_c lambda_c``;
+* :func:`contact_slip` ``sum_c o_c lambda_t,c`` (slip against a moving body);
 * :func:`~skfem_npfem.step.stabilisation.residual_penalty` the element-residual
   stabilisation of the stresses (when ``stabilisation > 0``);
 * :func:`~skfem_npfem.step.volume.eigenstrain_work` ``sum_p V_p e_p . ds_p``, a
@@ -41,6 +42,7 @@ __all__ = [
     "ROW_FAMILIES",
     "contact",
     "contact_gap",
+    "contact_slip",
     "cutoff",
     "elastic_energy",
     "equilibrium",
@@ -94,6 +96,22 @@ def contact_gap(prog: Program) -> Term:
     """``g^T lambda_n``: the gaps enter the objective linearly."""
     q = np.zeros(prog.nx)
     q[prog.slice("lambda_n")] = prog.data.contacts.gap
+    return Term(q=q)
+
+
+def contact_slip(prog: Program) -> Term:
+    """``o^T lambda_t``: slip measured against a moving surface (rigid bodies).
+
+    The tangential counterpart of :func:`contact_gap`: with the offsets ``o =
+    t . (du_prescribed - du_surface)`` (:attr:`Contacts.slip_offset`) the
+    friction bound acts on the relative slip ``t . du + o``.  No term for fixed
+    walls (``slip_offset`` None).
+    """
+    off = prog.data.contacts.slip_offset
+    if off is None or not prog.fric.size:
+        return Term()
+    q = np.zeros(prog.nx)
+    q[prog.slice("lambda_t")] = off[prog.fric].reshape(-1)
     return Term(q=q)
 
 
@@ -251,6 +269,7 @@ OBJECTIVE_TERMS = (
     inertia,
     prescribed_work,
     contact_gap,
+    contact_slip,
     residual_penalty,
     eigenstrain_work,
 )
