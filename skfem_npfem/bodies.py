@@ -48,6 +48,7 @@ __all__ = [
     "RigidBody",
     "body_contacts",
     "body_loads",
+    "boundary_facets",
     "boundary_tributary",
     "check_clear",
     "project_out_of_bodies",
@@ -231,8 +232,13 @@ class RigidBody:
         edge_n = np.stack([ab[:, 1], -ab[:, 0]], axis=1) / np.linalg.norm(
             ab, axis=1, keepdims=True
         )
-        normal = edge_n[k].copy()
-        far = dist > _ON_OUTLINE * self.size
+        # On the outline: the mean normal of the edges there (a corner's
+        # bisector, the limit of the closest-point direction around it).
+        tol = _ON_OUTLINE * self.size
+        on = d2 <= tol * tol
+        normal = on.astype(float) @ edge_n
+        normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+        far = dist > tol
         sign = np.where(inside, -1.0, 1.0)
         normal[far] = sign[far, None] * (x[far] - closest[far]) / dist[far, None]
         return sign * dist, normal, closest
@@ -262,8 +268,24 @@ def _near(body: RigidBody, x: np.ndarray, t: float, reach: float | np.ndarray):
     return np.flatnonzero(np.all((x > lo - r) & (x < hi + r), axis=1))
 
 
+def boundary_facets(t: np.ndarray) -> np.ndarray:
+    """Boundary edges (2, nb) of a triangle mesh ``t`` (3, ne): edges of one triangle.
+
+    Examples
+    --------
+    >>> boundary_facets(np.array([[0, 1, 2], [1, 3, 2]]).T).T.tolist()
+    [[0, 1], [0, 2], [1, 3], [2, 3]]
+    """
+    edges = np.sort(np.concatenate([t[[0, 1]], t[[1, 2]], t[[2, 0]]], axis=1), axis=0)
+    uniq, counts = np.unique(edges, axis=1, return_counts=True)
+    return uniq[:, counts == 1]
+
+
 def boundary_tributary(
-    x: np.ndarray, t: np.ndarray, axisymmetric: bool = False
+    x: np.ndarray,
+    facets: np.ndarray,
+    tangent: np.ndarray | None = None,
+    axisymmetric: bool = False,
 ) -> np.ndarray:
     """Contact area of each node of a 2D mesh: half its boundary edges.
 
@@ -271,8 +293,12 @@ def boundary_tributary(
     ----------
     x : ndarray (N, 2)
         Node positions.
-    t : ndarray (3, ne)
-        Triangles.
+    facets : ndarray (2, nb)
+        Boundary edges (:func:`boundary_facets`).
+    tangent : ndarray (N, 2), optional
+        Unit tangent of the surface a node touches: an edge then counts with
+        its length along that tangent (a side edge meeting a flat contact
+        face adds nothing).  None: full lengths.
     axisymmetric : bool
         Multiply by ``2 pi r`` (ring area of the ``(r, z)`` half-section).
 
@@ -284,17 +310,25 @@ def boundary_tributary(
     Examples
     --------
     >>> x = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
-    >>> boundary_tributary(x, np.array([[0], [1], [2]])).round(3).tolist()
+    >>> f = boundary_facets(np.array([[0], [1], [2]]))
+    >>> boundary_tributary(x, f).round(3).tolist()
     [1.0, 1.207, 1.207]
+    >>> flat = np.tile([1.0, 0.0], (3, 1))
+    >>> boundary_tributary(x, f, flat).round(3).tolist()
+    [0.5, 1.0, 0.5]
     """
-    edges = np.sort(np.concatenate([t[[0, 1]], t[[1, 2]], t[[2, 0]]], axis=1), axis=0)
-    uniq, counts = np.unique(edges, axis=1, return_counts=True)
-    bnd = uniq[:, counts == 1]
-    length = np.linalg.norm(x[bnd[0]] - x[bnd[1]], axis=1)
+    a, b = facets
+    e = x[b] - x[a]
+    if tangent is None:
+        la = lb = np.linalg.norm(e, axis=1)
+    else:
+        la = np.abs(np.sum(e * tangent[a], axis=1))
+        lb = np.abs(np.sum(e * tangent[b], axis=1))
     if axisymmetric:
-        length = length * 2.0 * math.pi * 0.5 * (x[bnd[0], 0] + x[bnd[1], 0])
-    out = np.bincount(bnd[0], weights=0.5 * length, minlength=x.shape[0])
-    out += np.bincount(bnd[1], weights=0.5 * length, minlength=x.shape[0])
+        ring = 2.0 * math.pi * 0.5 * (x[a, 0] + x[b, 0])
+        la, lb = la * ring, lb * ring
+    out = np.bincount(a, weights=0.5 * la, minlength=x.shape[0])
+    out += np.bincount(b, weights=0.5 * lb, minlength=x.shape[0])
     return out
 
 
@@ -305,12 +339,13 @@ def body_contacts(
     fixed: np.ndarray,
     v_prescribed: np.ndarray,
     lagged: np.ndarray,
-    area: np.ndarray,
+    facets: np.ndarray,
     dt: float,
     h: float,
     gravity: float,
     time: float,
     noise_ref: np.ndarray | None = None,
+    axisymmetric: bool = False,
 ) -> tuple[Contacts, np.ndarray]:
     """Contact candidates of nodes against the bodies over one step.
 
@@ -330,10 +365,13 @@ def body_contacts(
         Prescribed dofs and their velocities.
     lagged : ndarray (n, n_bodies)
         Normal force of each body on the node in the previous step, N.
-    area : ndarray (n,)
-        Contact area of each node (:func:`boundary_tributary`), for adhesion.
+    facets : ndarray (2, nb)
+        Boundary edges of the step's mesh (:func:`boundary_facets`): the
+        contact areas of adhesion (:func:`boundary_tributary` along the body).
     dt, h, gravity, time : float
         Step (s), spacing (m), gravity (m/s^2), time at the start (s).
+    axisymmetric : bool
+        Contact areas of rings.
     noise_ref : ndarray (m, n_bodies), optional
         Forces that set the noise level of ``lagged`` (default ``lagged``).
 
@@ -363,7 +401,10 @@ def body_contacts(
         lam = lagged[cand, b_id]
         touching = lam > 1e-8 * np.max(np.abs(noise_ref[:, b_id]), initial=0.0)
         if body.adhesion > 0:
-            bound = np.where(touching, body.adhesion * area[cand], 0.0)
+            along = np.zeros_like(x)
+            along[cand] = tang
+            area = boundary_tributary(x, facets, along, axisymmetric)[cand]
+            bound = np.where(touching, body.adhesion * area, 0.0)
         else:
             bound = np.where(touching, body.mu * lam, 0.0)
         parts.append(
@@ -404,6 +445,20 @@ def spanning_elements(
         probes = np.concatenate([p.mean(axis=0)[None], 0.5 * (p + np.roll(p, -1, 0))])
         inside = body.contains(probes.reshape(-1, 2), time).reshape(4, -1)
         hit = np.any(inside, axis=0)
+        # A body (or a corner of it) inside an element with no edge crossing.
+        d0 = p[1] - p[0]
+        d1 = p[2] - p[0]
+        det = d0[:, 0] * d1[:, 1] - d0[:, 1] * d1[:, 0]  # (k,)
+        r = a[None, :, :] - p[0][:, None, :]  # (k, m, 2)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            l1 = (r[..., 0] * d1[:, None, 1] - r[..., 1] * d1[:, None, 0]) / det[
+                :, None
+            ]
+            l2 = (d0[:, None, 0] * r[..., 1] - d0[:, None, 1] * r[..., 0]) / det[
+                :, None
+            ]
+        tiny = 1e-9
+        hit |= np.any((l1 > tiny) & (l2 > tiny) & (l1 + l2 < 1 - tiny), axis=1)
         # Proper crossings of element edges (p, q) with outline edges (a, b).
         q = np.roll(p, -1, axis=0)
         b = np.roll(a, -1, axis=0)

@@ -36,7 +36,7 @@ from .._deprecated import renamed
 from ..bodies import (
     body_contacts,
     body_loads,
-    boundary_tributary,
+    boundary_facets,
     project_out_of_bodies,
     spanning_elements,
 )
@@ -468,7 +468,7 @@ def _with_body_contacts(
     nw = len(model.walls)
     lagged = p.wall_force[:, nw : nw + len(model.bodies)]
     x = p.x[active]
-    area = boundary_tributary(x, local_t, model.axisymmetric)
+    facets = boundary_facets(local_t)
     bc, body_ids = body_contacts(
         model.bodies,
         x,
@@ -476,12 +476,13 @@ def _with_body_contacts(
         p.fixed[active],
         p.v_prescribed[active],
         lagged[active],
-        area,
+        facets,
         dt,
         h,
         model.gravity,
         time,
         noise_ref=lagged,
+        axisymmetric=model.axisymmetric,
     )
     return Contacts.concat([contacts, bc]), np.concatenate([wall_ids, nw + body_ids])
 
