@@ -25,7 +25,14 @@ from skfem import MeshTri
 
 import skfem_npfem as npfem
 from skfem_npfem import ParameterError, RigidBody
-from skfem_npfem.bodies import boundary_facets, boundary_tributary, spanning_elements
+from skfem_npfem.bodies import (
+    body_contacts,
+    boundary_facets,
+    boundary_tributary,
+    corner_contacts,
+    oriented_boundary,
+    spanning_elements,
+)
 
 G = 9.81
 RHO = 2000.0
@@ -213,3 +220,78 @@ def test_unilateral_soil_stays_when_body_leaves():
     assert np.abs(sim.particles.u).max() < 1e-12
     assert sim.records[-1].extra["body_force_y"] == pytest.approx(0.0, abs=1e-9)
     assert sim.records[-1].extra["body_y"] == pytest.approx(0.03)
+
+
+# --- corners -----------------------------------------------------------------
+def test_a_node_on_a_corner_takes_the_face_that_moves_onto_it():
+    """The bisector would let it slide off the footing's edge diagonally."""
+    x = np.array([[1.0, 0.0], [0.5, -0.01]])
+    facets = np.array([[0], [1]])
+    lagged = np.zeros((2, 1))
+    args = (x, np.zeros_like(x), np.zeros_like(x, bool), np.zeros_like(x), lagged)
+    rest = (facets, 0.1, 0.05, 0.0, 0.0)
+    down = RigidBody(SQUARE, velocity=[0.0, -1.0])
+    c, _ = body_contacts([down], *args, *rest)
+    assert c.normal[0].tolist() == pytest.approx([0.0, -1.0])  # the base
+    assert c.gap[0] == pytest.approx(-0.1)  # closes by V dt
+    sideways = RigidBody(SQUARE, velocity=[1.0, 0.0])
+    c, _ = body_contacts([sideways], *args, *rest)
+    assert c.normal[0].tolist() == pytest.approx([1.0, 0.0])  # the side
+    c, _ = body_contacts([RigidBody(SQUARE)], *args, *rest)
+    assert c.normal[0].tolist() == pytest.approx([0.5**0.5, -(0.5**0.5)])
+
+
+def test_corner_rows_of_a_wedge_tip_between_two_nodes():
+    # One triangle below the edge (1, 1) -> (0, 1); a wedge tip 5 cm above
+    # the edge at x = 0.3 moves down 1 cm in the step.
+    x = np.array([[0.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    t = np.array([[0], [1], [2]])
+    edges = oriented_boundary(x, t)
+    assert edges.T.tolist() == [[0, 1], [1, 2], [2, 0]]  # mesh on the left
+    wedge = RigidBody([[0.3, 1.05], [0.5, 1.5], [0.1, 1.5]], velocity=[0.0, -1.0])
+    none = np.zeros_like(x)
+    c = corner_contacts(
+        wedge, x, edges, none.astype(bool), none, np.full(3, 0.1), 0.01, 0.0
+    )
+    assert c.size == 1
+    assert (c.node[0], c.partner[0]) == (1, 2)
+    assert c.share[0] == pytest.approx(0.7)  # x_s = 0.3 x_1 + 0.7 x_2
+    assert c.normal[0].tolist() == pytest.approx([0.0, -1.0])  # into the soil
+    assert c.gap[0] == pytest.approx(0.05 - 0.01)
+    assert c.points(x)[0].tolist() == pytest.approx([0.3, 1.0])
+    # A flat face over the edge presses through its nodes, not its corners.
+    flat = RigidBody([[0.2, 1.05], [0.4, 1.05], [0.4, 1.5], [0.2, 1.5]])
+    c = corner_contacts(
+        flat, x, edges, none.astype(bool), none, np.full(3, 0.1), 0.01, 0.0
+    )
+    assert c.size == 0
+
+
+def test_wedge_tip_between_nodes_pushes_the_soil_edge():
+    """Only a corner row can carry this load: both nodes are outside the wedge.
+
+    The edge under the tip ends at the tip (the row is active, its gap
+    closed) and the wedge takes the force the soil pushes back with; no
+    particle gets inside it.
+    """
+    mesh = MeshTri.init_tensor(np.linspace(0, 1, 5), np.linspace(0, 1, 5))
+    soil = npfem.LinearElastic(1e6, 0.3, 1.0)
+    fixed = np.zeros((mesh.p.shape[1], 2), bool)
+    fixed[np.isclose(mesh.p[1], 0.0)] = True
+    p = npfem.Particles.from_mesh(mesh, soil, fixed=fixed)
+    tip = RigidBody(  # tip at x = 0.375, between the nodes at 0.25 and 0.5
+        [[0.375, 1.0], [0.575, 1.4], [0.175, 1.4]], velocity=[0.0, -0.1], name="wedge"
+    )
+    model = npfem.Model(
+        dim=2, materials=[soil], bodies=[tip], mode="static", gravity=0.0
+    )
+    sim = npfem.Simulation(p, model, mesh, 0.1, progress=False)
+    sim.run(steps=1)
+    q = sim.particles.x
+    top = np.isclose(mesh.p[1], 1.0)
+    left = np.flatnonzero(np.isclose(mesh.p[0], 0.25) & top)[0]
+    right = np.flatnonzero(np.isclose(mesh.p[0], 0.5) & top)[0]
+    y_edge = 0.5 * (q[left, 1] + q[right, 1])
+    assert y_edge == pytest.approx(1.0 - 0.01, abs=1e-8)
+    assert sim.records[-1].extra["wedge_force_y"] > 0.0
+    assert sim.records[-1].extra["wedge_penetration"] == 0.0

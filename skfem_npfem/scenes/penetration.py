@@ -138,7 +138,10 @@ PARAMS = [
 ]
 
 METRICS = {
-    "bearing_factor": "q/s_u at w/B = 0.1 (interpolated; null if not reached)",
+    "bearing_factor": "q/s_u at w/B = 0.1: the curve's mean over one spacing of "
+    "penetration centred there (w/B = 0.1 +- spacing/(2B); it averages the "
+    "saw-tooth of soil nodes passing the footing's edge); null if not reached",
+    "bearing_factor_range": "[min, max] of q/s_u over that window",
     "bearing_factor_reference": "Prandtl's 2 + pi",
     "relative_error": "bearing_factor / (2 + pi) - 1",
     "final_bearing_factor": "q/s_u at the final penetration",
@@ -156,7 +159,7 @@ def graded_axis(fine: float, h: float, length: float, ratio: float) -> np.ndarra
     Examples
     --------
     >>> graded_axis(1.0, 0.5, 3.0, 2.0).tolist()
-    [0.0, 0.5, 1.0, 3.0]
+    [0.0, 0.5, 1.0, 2.0, 3.0]
     """
     n_fine = max(1, math.ceil(min(fine, length) / h - 1e-9))
     xs = list(np.linspace(0.0, min(n_fine * h, length), n_fine + 1))
@@ -314,12 +317,13 @@ def build(
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
         curve = penetration_curve(sim_.records, B, su)
-        factor = _at(curve, 0.1)
+        factor, spread = _window(curve, 0.1, 0.5 * values["spacing"] / B)
         ref = prandtl_nc(0.0)
         pen = [r.extra.get("footing_penetration", 0.0) for r in sim_.records]
         heave = float(sim_.particles.u[surface, 1].max()) / B
         return {
             "bearing_factor": factor,
+            "bearing_factor_range": spread,
             "bearing_factor_reference": ref,
             "relative_error": None if factor is None else factor / ref - 1.0,
             "final_bearing_factor": curve[-1][1] if curve else None,
@@ -341,12 +345,32 @@ def penetration_curve(records, B: float, su: float) -> list[list[float]]:
     ]
 
 
-def _at(curve: list[list[float]], w: float) -> float | None:
-    """The curve's value at ``w`` (linear interpolation; None past its end)."""
+def _window(
+    curve: list[list[float]], w: float, half: float
+) -> tuple[float | None, list[float] | None]:
+    """Mean of the curve over ``[w - half, w + half]`` and its range there.
+
+    The window is cut at the curve's end; None when the curve stops short of
+    ``w``.  The mean is that of the linear interpolant (the trapezoidal
+    integral over the window's length).
+
+    Examples
+    --------
+    >>> _window([[0.1, 1.0], [0.2, 3.0], [0.3, 1.0]], 0.2, 0.1)
+    (2.0, [1.0, 3.0])
+    """
     if not curve or curve[-1][0] < w * (1 - 1e-9):
-        return None
+        return None, None
     c = np.array([[0.0, 0.0], *curve])
-    return float(np.interp(w, c[:, 0], c[:, 1]))
+    lo, hi = max(w - half, 0.0), min(w + half, c[-1, 0])
+    if hi <= lo:
+        value = float(np.interp(w, c[:, 0], c[:, 1]))
+        return value, [value, value]
+    inner = c[(c[:, 0] > lo) & (c[:, 0] < hi)]
+    ws = np.concatenate([[lo], inner[:, 0], [hi]])
+    qs = np.interp(ws, c[:, 0], c[:, 1])
+    mean = float(np.sum(0.5 * (qs[1:] + qs[:-1]) * np.diff(ws)) / (hi - lo))
+    return mean, [float(qs.min()), float(qs.max())]
 
 
 def penetration_scenery(p: dict, folder: Path | None = None) -> Scenery:

@@ -120,10 +120,14 @@ def contact_maps(prog: Program) -> tuple[sp.csc_matrix, sp.csc_matrix]:
     """Place contact forces on dofs: ``N`` (dN x n_c) and ``T`` (dN x n_t)."""
     d, c = prog.dim, prog.data.contacts
     ndof, nc, nt = d * prog.n_nodes, prog.size("lambda_n"), prog.size("lambda_t")
-    rows = (d * c.node[:, None] + np.arange(d)).ravel()
-    Nmat = sp.csc_matrix(
-        (c.normal.ravel(), (rows, np.repeat(np.arange(nc), d))), shape=(ndof, nc)
-    )
+    # A candidate is a node, or a point of a boundary edge (a rigid body's
+    # corner): its force goes to the edge's two nodes by their weights.
+    nodes, w, used = c.weights()
+    rows = d * nodes[:, :, None] + np.arange(d)  # (nc, 2, d)
+    vals = w[:, :, None] * c.normal[:, None, :]
+    cols = np.broadcast_to(np.arange(nc)[:, None, None], rows.shape)
+    keep = np.broadcast_to(used[:, :, None], rows.shape)
+    Nmat = sp.csc_matrix((vals[keep], (rows[keep], cols[keep])), shape=(ndof, nc))
     if not nt:
         return Nmat, sp.csc_matrix((ndof, 0))
     tang = tangents(c.normal[prog.fric])  # (nf, d-1, d)

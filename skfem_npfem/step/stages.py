@@ -36,7 +36,7 @@ from .._deprecated import renamed
 from ..bodies import (
     body_contacts,
     body_loads,
-    boundary_facets,
+    oriented_boundary,
     project_out_of_bodies,
     spanning_elements,
 )
@@ -468,7 +468,7 @@ def _with_body_contacts(
     nw = len(model.walls)
     lagged = p.wall_force[:, nw : nw + len(model.bodies)]
     x = p.x[active]
-    facets = boundary_facets(local_t)
+    facets = oriented_boundary(x, local_t)
     bc, body_ids = body_contacts(
         model.bodies,
         x,
@@ -483,6 +483,7 @@ def _with_body_contacts(
         time,
         noise_ref=lagged,
         axisymmetric=model.axisymmetric,
+        corners=True,
     )
     return Contacts.concat([contacts, bc]), np.concatenate([wall_ids, nw + body_ids])
 
@@ -526,7 +527,12 @@ def update_particles(
     eps_p[active] += equivalent_strain(sol.deps_p)
     wall_force = np.zeros_like(p.wall_force)
     if ops.contacts.size:
-        wall_force[active[ops.contacts.node], ops.wall_ids] = sol.lambda_n
+        nodes, w, _ = ops.contacts.weights()
+        np.add.at(
+            wall_force,
+            (active[nodes], ops.wall_ids[:, None]),
+            w * sol.lambda_n[:, None],
+        )
     motion = move_particles(p, model, dt, active, sol.du, ops.data.dynamic)
     return p.replace(**motion, stress=stress, eps_p=eps_p, wall_force=wall_force)
 
@@ -716,7 +722,7 @@ def _record_bodies(
     nw = len(model.walls)
     sel = ops.wall_ids >= nw
     c = ops.contacts
-    sub = Contacts(c.node[sel], c.normal[sel], c.gap[sel], c.mu_lambda[sel])
+    sub = c.subset(sel)
     loads = body_loads(
         model.bodies,
         sub,
