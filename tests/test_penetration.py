@@ -1,13 +1,14 @@
 """Scene ``footing-penetration``: a rigid strip footing pushed into Tresca clay.
 
 Reference: Prandtl's ``q/s_u = 2 + pi`` (weightless Tresca soil, smooth or
-rough).  At the default rigidity (E_u/s_u = 100) the small-strain curve of
-the same soil block is still at 4.82 at w/B = 0.1 (the ``strip-footing``
-scene with B = 1, domain 10, spacing 0.05) and reaches 2 + pi at w/B = 0.16.
-The footing's node-based contact also loses the strip between the last
-particle under the footing and its edge when the soil flows round the
-corner, so the measured bearing factor sits below Prandtl by about a spacing
-over B; the tolerances below are the measured errors rounded up.
+rough).  The checks use a stiff soil, E_u/s_u = 1000: at the default 100 the
+soil still settles elastically at w/B = 0.1 (the small-strain curve of the
+same block, scene ``strip-footing``, is at 4.82 there and reaches 2 + pi at
+w/B = 0.16), so no discretisation would give Prandtl at w/B = 0.1.  Soil
+nodes passing the footing's edge make the curve a saw-tooth of about a
+spacing over B; ``bearing_factor`` is its mean over one spacing of
+penetration around w/B = 0.1.  Measured (E_u/s_u = 1000, w = 0.15 B):
+-15.4 % at h = B/10, -1.0 % at B/20, +0.13 % at B/40.
 """
 
 from __future__ import annotations
@@ -20,13 +21,14 @@ SCENE = "footing-penetration"
 
 
 def test_footing_penetration_coarse_reaches_prandtl_and_keeps_out():
-    res = run_scene(SCENE, {"spacing": 0.1, "penetration": 0.15})
+    res = run_scene(SCENE, {"spacing": 0.1, "penetration": 0.15, "E": 1e6})
     m = res["metrics"]
     assert set(res["solver"]["statuses"]) <= {"Solved", "AlmostSolved"}
-    # measured -19.8 % at h = B/10 (edge strip and elastic settlement)
-    assert m["relative_error"] == pytest.approx(0.0, abs=0.25)
-    assert m["max_body_penetration"] <= 0.5 * 0.1  # measured 0
-    assert m["final_bearing_factor"] > m["bearing_factor"]
+    # measured -15.4 % at h = B/10 (five spacings under the half footing)
+    assert m["relative_error"] == pytest.approx(0.0, abs=0.2)
+    lo, hi = m["bearing_factor_range"]
+    assert lo <= m["bearing_factor"] <= hi
+    assert m["max_body_penetration"] <= 0.5 * 0.1  # measured 1e-15
     assert m["max_heave"] > 0.0
 
 
@@ -63,8 +65,11 @@ def test_footing_penetration_near_incompressible_runs():
 
 @pytest.mark.slow
 def test_footing_penetration_fine_prandtl():
-    res = run_scene(SCENE, {"spacing": 0.025, "penetration": 0.15, "dt": 0.00625})
+    res = run_scene(
+        SCENE, {"spacing": 0.025, "penetration": 0.15, "dt": 0.00625, "E": 1e6}
+    )
     m = res["metrics"]
-    # measured -8.3 % at h = B/40 (about two minutes on one core)
-    assert m["relative_error"] == pytest.approx(0.0, abs=0.10)
+    # measured +0.13 % at h = B/40 (saw-tooth 4.93-5.20 over the window;
+    # about two and a half minutes on one core)
+    assert m["relative_error"] == pytest.approx(0.0, abs=0.03)
     assert m["max_body_penetration"] <= 0.5 * 0.025
