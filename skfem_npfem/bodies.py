@@ -60,6 +60,9 @@ __all__ = [
 #: Relative tolerance (of a body's size) below which a point counts as on the outline.
 _ON_OUTLINE = 1e-9
 
+#: Relative distance (of a body's size) within which a node counts as on a corner.
+_ON_CORNER = 1e-6
+
 #: Degrees by which a boundary edge's normal must lie inside a corner's
 #: normal cone for a corner row (:func:`corner_contacts`).
 _CORNER_MARGIN = 30.0
@@ -359,7 +362,7 @@ def boundary_tributary(
 
 
 def _corner_normals(
-    body: RigidBody, x: np.ndarray, v: np.ndarray, normal: np.ndarray, time: float
+    body: RigidBody, x: np.ndarray, normal: np.ndarray, time: float
 ) -> np.ndarray:
     """Normals of nodes on a corner: the face that moves onto them.
 
@@ -367,15 +370,17 @@ def _corner_normals(
     let the node under a footing's edge slide off diagonally with a fraction
     of its load (measured: the first step of the footing-penetration scene
     at h = B/10 lost 15 % of the load, and the soil under the edge sagged
-    away from the corner for the steps after).  Such a node takes the normal
-    of the adjacent face that approaches it fastest (largest ``(V - v) .
-    n``: the base of a footing pushed down); with no approach (a body at
-    rest, or both faces alike) it keeps the bisector.  A node beyond the
-    corner keeps the corner-to-node direction: it is in contact with the
-    face only while it is under it.
+    away from it for the steps after).  Such a node takes the normal of the
+    adjacent face that moves fastest along its own normal (largest ``V .
+    n``: the base of a footing pushed down); when both faces move alike (a
+    body at rest, a symmetric tip pushed along its axis) it keeps the
+    bisector.  A node beyond the corner keeps the corner-to-node direction:
+    it is in contact with a face only while it is in front of it.
     """
     V = body.vertices_at(time)
-    tol = _ON_OUTLINE * body.size
+    # A node pushed onto a corner in the previous step sits there to the
+    # solver's tolerance, not to round-off.
+    tol = _ON_CORNER * body.size
     d2 = np.sum((x[:, None, :] - V[None]) ** 2, axis=2)
     k = np.argmin(d2, axis=1)
     on = np.flatnonzero(d2[np.arange(x.shape[0]), k] <= tol * tol)
@@ -386,10 +391,11 @@ def _corner_normals(
     edge_n /= np.linalg.norm(edge_n, axis=1, keepdims=True)
     k = k[on]
     faces = np.stack([edge_n[k - 1], edge_n[k]], axis=1)  # (m, 2, 2)
-    approach = np.einsum("mfd,md->mf", faces, body.velocity - v[on])
+    approach = faces @ body.velocity  # (m, 2)
     best = np.argmax(approach, axis=1)
+    speed = float(np.linalg.norm(body.velocity))
     use = (approach.max(axis=1) > 0.0) & (
-        np.abs(approach[:, 0] - approach[:, 1]) > 1e-12 * np.abs(approach).max(axis=1)
+        np.abs(approach[:, 0] - approach[:, 1]) > 1e-9 * speed
     )
     normal = normal.copy()
     normal[on[use]] = faces[use, best[use]]
@@ -463,7 +469,7 @@ def body_contacts(
         dist, normal, _ = body.signed_distance(x[near], time)
         keep = dist < reach[near]
         cand, dist, normal = near[keep], dist[keep], normal[keep]
-        normal = _corner_normals(body, x[cand], v[cand], normal, time)
+        normal = _corner_normals(body, x[cand], normal, time)
         free = ~np.all(fixed[cand] | (np.abs(normal) == 0.0), axis=1)
         cand, dist, normal = cand[free], dist[free], normal[free]
         rel = du_pres[cand] - dU
