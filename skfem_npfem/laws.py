@@ -5,7 +5,9 @@
 * :func:`lube2004_runout` -- run-out of axisymmetric column collapses, Lube et
   al. (2004);
 * :func:`prandtl_nc` -- the exact bearing factor ``N_c`` of a smooth strip
-  footing on a weightless Mohr-Coulomb soil (Prandtl 1920, Reissner 1924).
+  footing on a weightless Mohr-Coulomb soil (Prandtl 1920, Reissner 1924);
+* :func:`teh_houlsby_nc` -- the cone factor of a smooth cone in undrained
+  clay against the rigidity index (Teh & Houlsby 1991).
 
 References are listed in ``docs/references.md``.
 """
@@ -14,7 +16,9 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["lube2004_runout", "lube2005_runout", "prandtl_nc"]
+from .errors import ParameterError
+
+__all__ = ["lube2004_runout", "lube2005_runout", "prandtl_nc", "teh_houlsby_nc"]
 
 
 def lube2005_runout(aspect: float) -> float:
@@ -66,3 +70,27 @@ def prandtl_nc(phi_deg: float) -> float:
     f = math.radians(phi_deg)
     nq = math.exp(math.pi * math.tan(f)) * math.tan(math.pi / 4 + f / 2) ** 2
     return (nq - 1.0) / math.tan(f)
+
+
+def teh_houlsby_nc(rigidity_index: float) -> float:
+    """Cone factor ``N_c = (q_c - sigma_0)/s_u = 1.25 + 1.84 ln I_r`` of a smooth cone.
+
+    Teh & Houlsby (1991), the simplified fit of their strain-path and
+    finite-element results for a 60-degree smooth cone in undrained clay, in
+    the rigidity index ``I_r = G/s_u``.
+
+    Raises
+    ------
+    ParameterError
+        For a rigidity index that is not a finite number > 0.
+
+    Examples
+    --------
+    >>> round(teh_houlsby_nc(100.0), 3)
+    9.724
+    """
+    if not (math.isfinite(rigidity_index) and rigidity_index > 0):
+        raise ParameterError(
+            "rigidity_index", rigidity_index, "a finite number > 0 (G/s_u)"
+        )
+    return 1.25 + 1.84 * math.log(rigidity_index)

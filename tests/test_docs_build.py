@@ -1,7 +1,7 @@
 """The documentation site builds without a warning, and its tutorials run.
 
 One Sphinx build (``python -m sphinx -W -b html docs OUT``, the command of
-``docs/conf.py``) executes the five tutorials (MyST notebooks; an error in a cell
+``docs/conf.py``) executes the six tutorials (MyST notebooks; an error in a cell
 fails the build).  The numbers the tutorials print are then read back from the
 built pages and checked against their closed-form references, the API inventory
 is checked against ``skfem_npfem.__all__``, and the gallery against ``demos/``.
@@ -188,3 +188,11 @@ def test_tutorial_choosing_reads_the_committed_study(site):
     text = page_text(site, "tutorials/choosing.html")
     n = int(re.search(r"checked the errors of (\d+) runs against 2 \+ pi", text)[1])
     assert n > 0
+
+
+def test_tutorial_own_body_matches_uniaxial_strain(site):
+    text = page_text(site, "tutorials/own_body.html")
+    m = re.search(r"force ([\d.]+) N/m, uniaxial strain ([\d.]+) N/m", text)
+    assert float(m[1]) == pytest.approx(float(m[2]), rel=1e-6)
+    deepest = re.search(r"deepest particle inside the pipe: ([\d.e+-]+) m", text)
+    assert float(deepest[1]) <= 0.5 * 0.05

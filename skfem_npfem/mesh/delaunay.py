@@ -198,6 +198,7 @@ def alpha_shape(
     min_quality: float = 1e-3,
     jitter: float = 1e-6,
     seed: int = 0,
+    h_local: ArrayLike | None = None,
 ) -> Triangulation:
     """Triangulate particles and keep the simplices that pass the alpha test.
 
@@ -227,6 +228,11 @@ def alpha_shape(
         it, which is not recommended for lattices.
     seed : int, default 0
         Seed of the jitter, >= 0.  Equal inputs give equal triangulations.
+    h_local : array_like of float, shape (N,), optional
+        Spacing of each particle, m, for a graded particle cloud: a simplex is
+        then kept if its circumradius is below ``alpha`` times the largest
+        spacing of its vertices (``h`` still scales the tolerances and the
+        jitter: pass the finest spacing).  None: ``h`` everywhere.
 
     Returns
     -------
@@ -288,7 +294,15 @@ def alpha_shape(
 
     # The alpha complex: candidates that pass the alpha test.  Degenerate ones
     # have radius = inf and never do.  Among them, slivers are not meshed.
-    in_alpha = radius < alpha * h
+    if h_local is None:
+        in_alpha = radius < alpha * h
+    else:
+        hl = np.asarray(h_local, dtype=float).reshape(-1)
+        if hl.shape != (n,) or not np.all(np.isfinite(hl) & (hl > 0)):
+            raise ParameterError(
+                "h_local", hl.shape, f"{n} finite spacings > 0 (one per particle)"
+            )
+        in_alpha = radius < alpha * hl[candidates].max(axis=1)
     good = quality >= min_quality
     simplices_k = candidates[in_alpha]
     kept_k = good[in_alpha]

@@ -198,6 +198,12 @@ class AlphaShapeMesher:
         meshes (restarts reproduce).
     seed : int
         Seed of the jitter (default 0).
+    spacing : array_like (N,), optional
+        Initial spacing of each particle, m, for a graded lattice: the alpha
+        test then uses the largest spacing of a simplex's particles (``h`` is
+        the finest, :func:`~skfem_npfem.mesh.delaunay.alpha_shape`'s
+        ``h_local``).  Particles keep their index, so the spacing travels with
+        them.  None (default): ``h`` everywhere.
 
     Attributes
     ----------
@@ -232,6 +238,7 @@ class AlphaShapeMesher:
         min_quality: float = 1e-3,
         jitter: float = 1e-6,
         seed: int = 0,
+        spacing: np.ndarray | None = None,
     ) -> None:
         for name, val in (("h", h), ("alpha", alpha), ("wall_distance", wall_distance)):
             if not (isinstance(val, int | float) and math.isfinite(val) and val > 0):
@@ -243,10 +250,25 @@ class AlphaShapeMesher:
         self.min_quality = min_quality
         self.jitter = jitter
         self.seed = seed
+        self.spacing = None
+        if spacing is not None:
+            hl = np.asarray(spacing, dtype=float).reshape(-1)
+            if not np.all(np.isfinite(hl) & (hl > 0)):
+                raise ParameterError("spacing", "values <= 0", "spacings > 0 (m)")
+            self.spacing = hl
         self.last: Triangulation | None = None
 
     def triangulate(self, x: np.ndarray) -> Triangulation:
         """Alpha-shape triangulation of positions ``x`` (N, d)."""
+        extra = {}
+        if self.spacing is not None:
+            if self.spacing.size != x.shape[0]:
+                raise ParameterError(
+                    "spacing",
+                    f"{self.spacing.size} values",
+                    f"one per particle ({x.shape[0]})",
+                )
+            extra["h_local"] = self.spacing
         return alpha_shape(
             x,
             self.h,
@@ -254,6 +276,7 @@ class AlphaShapeMesher:
             min_quality=self.min_quality,
             jitter=self.jitter,
             seed=self.seed,
+            **extra,
         )
 
     def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from skfem import Mesh
 
+from ..bodies import check_clear
 from ..errors import ParameterError, RunInterrupted, SolverError
 from ..io import read_checkpoint, write_checkpoint
 from ..mesh.sources import MeshSource, as_mesh_source
@@ -159,6 +160,15 @@ class Simulation:
         self.last_record: StepRecord | None = None
         #: Mass and energies of the initial state (see :func:`energies`).
         self.initial = energies(particles, model.gravity)
+        if model.bodies:
+            if stepper is not None:
+                raise ParameterError(
+                    "stepper",
+                    getattr(stepper, "__name__", type(stepper).__name__),
+                    "None with rigid bodies (they are part of the N-PFEM step)",
+                )
+            for body in model.bodies:
+                check_clear([body], particles.x, 0.0, 1e-6 * body.size)
 
     # -- output ---------------------------------------------------------------
     def point_data(self, p: Particles, active: np.ndarray | None) -> dict:
@@ -416,6 +426,10 @@ class Simulation:
         # checkpoints, which keep the records, carry it).
         last = self.last_record
         state = None if last is None else last.extra.get("volume_correction_strain")
+        if self.model.bodies:
+            return advance(
+                *args, step=self.step + 1, volume_state=state, time=self.time
+            )
         return advance(*args, step=self.step + 1, volume_state=state)
 
     def summary(self) -> dict[str, Any]:

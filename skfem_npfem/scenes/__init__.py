@@ -9,13 +9,21 @@ from ..errors import ParameterError
 from .base import Param, Scene
 from .collapse_runs import COLUMN_COLLAPSE
 from .elastic_column import SCENE as ELASTIC_COLUMN
+from .penetration import SCENE as FOOTING_PENETRATION
 from .slope import SCENE as SLOPE
 from .strip_footing import SCENE as STRIP_FOOTING
 
 __all__ = ["SCENES", "Param", "Scene", "get_scene", "run_scene"]
 
 SCENES: dict[str, Scene] = {
-    s.name: s for s in (ELASTIC_COLUMN, STRIP_FOOTING, COLUMN_COLLAPSE, SLOPE)
+    s.name: s
+    for s in (
+        ELASTIC_COLUMN,
+        STRIP_FOOTING,
+        COLUMN_COLLAPSE,
+        SLOPE,
+        FOOTING_PENETRATION,
+    )
 }
 
 

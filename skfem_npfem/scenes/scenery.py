@@ -57,6 +57,9 @@ class Scenery:
         Footing: Prandtl-Reissner ``N_c c`` of a weightless soil, Pa.
     half_width : float or None
         Footing half width b, m.
+    bodies : list of (ndarray (m, 2), ndarray (2,), str)
+        Rigid bodies: the outline at time 0, the velocity (m/s) and the legend
+        text; a picture of time t draws the outline moved by ``velocity * t``.
     label : callable
         ``label(t)``: the text naming a step of time t in titles.
     """
@@ -75,6 +78,7 @@ class Scenery:
     load_curve: np.ndarray | None = None
     q_reference: float | None = None
     half_width: float | None = None
+    bodies: list[tuple[np.ndarray, np.ndarray, str]] = field(default_factory=list)
     label: Callable[[float], str] = field(default=lambda t: f"t = {t:.4g} s")
 
     def settlement_label(self, t: float) -> str:

@@ -6,6 +6,7 @@ Objective terms (docs/theory.md, "The mixed step"; in the stress increments ``ds
 * :func:`inertia` ``1/2 sum_j dt^2/m~_j r_j^2`` (dynamic steps);
 * :func:`prescribed_work` ``-ds^T G_P^T ubar`` (prescribed displacements);
 * :func:`contact_gap` ``sum_c g_c lambda_c``;
+* :func:`contact_slip` ``sum_c o_c lambda_t,c`` (slip against a moving body);
 * :func:`~skfem_npfem.step.stabilisation.residual_penalty` the element-residual
   stabilisation of the stresses (when ``stabilisation > 0``);
 * :func:`~skfem_npfem.step.volume.eigenstrain_work` ``sum_p V_p e_p . ds_p``, a
@@ -41,6 +42,7 @@ __all__ = [
     "ROW_FAMILIES",
     "contact",
     "contact_gap",
+    "contact_slip",
     "cutoff",
     "elastic_energy",
     "equilibrium",
@@ -97,15 +99,35 @@ def contact_gap(prog: Program) -> Term:
     return Term(q=q)
 
 
+def contact_slip(prog: Program) -> Term:
+    """``o^T lambda_t``: slip measured against a moving surface (rigid bodies).
+
+    The tangential counterpart of :func:`contact_gap`: with the offsets ``o =
+    t . (du_prescribed - du_surface)`` (:attr:`Contacts.slip_offset`) the
+    friction bound acts on the relative slip ``t . du + o``.  No term for fixed
+    walls (``slip_offset`` None).
+    """
+    off = prog.data.contacts.slip_offset
+    if off is None or not prog.fric.size:
+        return Term()
+    q = np.zeros(prog.nx)
+    q[prog.slice("lambda_t")] = off[prog.fric].reshape(-1)
+    return Term(q=q)
+
+
 # -- rows ---------------------------------------------------------------------
 def contact_maps(prog: Program) -> tuple[sp.csc_matrix, sp.csc_matrix]:
     """Place contact forces on dofs: ``N`` (dN x n_c) and ``T`` (dN x n_t)."""
     d, c = prog.dim, prog.data.contacts
     ndof, nc, nt = d * prog.n_nodes, prog.size("lambda_n"), prog.size("lambda_t")
-    rows = (d * c.node[:, None] + np.arange(d)).ravel()
-    Nmat = sp.csc_matrix(
-        (c.normal.ravel(), (rows, np.repeat(np.arange(nc), d))), shape=(ndof, nc)
-    )
+    # A candidate is a node, or a point of a boundary edge (a rigid body's
+    # corner): its force goes to the edge's two nodes by their weights.
+    nodes, w, used = c.weights()
+    rows = d * nodes[:, :, None] + np.arange(d)  # (nc, 2, d)
+    vals = w[:, :, None] * c.normal[:, None, :]
+    cols = np.broadcast_to(np.arange(nc)[:, None, None], rows.shape)
+    keep = np.broadcast_to(used[:, :, None], rows.shape)
+    Nmat = sp.csc_matrix((vals[keep], (rows[keep], cols[keep])), shape=(ndof, nc))
     if not nt:
         return Nmat, sp.csc_matrix((ndof, 0))
     tang = tangents(c.normal[prog.fric])  # (nf, d-1, d)
@@ -251,6 +273,7 @@ OBJECTIVE_TERMS = (
     inertia,
     prescribed_work,
     contact_gap,
+    contact_slip,
     residual_penalty,
     eigenstrain_work,
 )

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..bodies import RigidBody
 from ..boundary import RigidWall
 from ..constants import GRAVITY
 from ..errors import ParameterError
@@ -38,6 +39,11 @@ class Model:
         default; 1/2, 1/2: trapezoidal, energy conserving, elastic waves only).
     walls : list of RigidWall
         Rigid planes the particles may touch.
+    bodies : list of RigidBody
+        Rigid polygons moving with a prescribed velocity (2D only;
+        :mod:`skfem_npfem.bodies`).  Their lagged normal forces are the
+        columns ``len(walls) ..`` of :attr:`Particles.wall_force` (added by
+        :func:`~skfem_npfem.advance` when missing).
     objective_rotation : bool
         Rotate stresses with the smoothed spin (Hughes-Winget, exactly orthogonal).
     update_geometry : bool
@@ -89,6 +95,7 @@ class Model:
     theta1: float = 1.0
     theta2: float = 1.0
     walls: list[RigidWall] = field(default_factory=list)
+    bodies: list[RigidBody] = field(default_factory=list)
     objective_rotation: bool = True
     update_geometry: bool = True
     stress_scale: float | None = None
@@ -130,6 +137,7 @@ class Model:
         for w in self.walls:
             if w.normal.size != self.dim:
                 raise ParameterError("walls", w, f"walls must be {self.dim}D")
+        self._check_bodies()
         b = self.stabilisation
         if isinstance(b, bool) or not (
             isinstance(b, int | float) and math.isfinite(b) and b >= 0
@@ -153,6 +161,26 @@ class Model:
             raise ParameterError("axisymmetric", self.axisymmetric, "True or False")
         if self.axisymmetric:
             self._check_axisymmetric()
+
+    def _check_bodies(self) -> None:
+        """Bodies are RigidBody objects of a 2D model, with distinct names."""
+        if isinstance(self.bodies, RigidBody):
+            self.bodies = [self.bodies]
+        names = []
+        for i, body in enumerate(self.bodies):
+            if not isinstance(body, RigidBody):
+                raise ParameterError(
+                    f"bodies[{i}]", body, "a RigidBody(vertices, velocity, ...)"
+                )
+            names.append(body.name)
+        if self.bodies and self.dim != 2:
+            raise ParameterError(
+                "bodies",
+                f"{len(self.bodies)} bodies in a {self.dim}D model",
+                "rigid bodies in 2D models (plane strain or axisymmetric) only",
+            )
+        if len(set(names)) != len(names):
+            raise ParameterError("bodies", names, "bodies with distinct names")
 
     def _check_axisymmetric(self) -> None:
         """Axisymmetry is 2D, and every plastic cone must see sigma_tt."""

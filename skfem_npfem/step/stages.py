@@ -24,14 +24,21 @@ The step's types, from the inside out:
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from time import perf_counter
 
 import numpy as np
 from skfem import Mesh
 
 from .._deprecated import renamed
+from ..bodies import (
+    body_contacts,
+    body_loads,
+    oriented_boundary,
+    project_out_of_bodies,
+    spanning_elements,
+)
 from ..boundary import Contacts, project_to_walls, wall_contacts
 from ..errors import ParameterError
 from ..mesh.axisymmetric import axisymmetric_integration
@@ -78,6 +85,16 @@ class StepOperators:
     volume_strains : ndarray (n_materials,) or None
         Volumetric eigenstrain of the volume correction per material
         (:func:`~skfem_npfem.step.volume.volume_strains`; None when it is off).
+    time : float
+        Time at the start of the step, s (where the model's bodies are).
+    dropped : int
+        Elements of the mesh source's mesh dropped because they span a body.
+
+    Notes
+    -----
+    With rigid bodies, :attr:`wall_ids` numbers the bodies after the walls
+    (``len(model.walls) + k`` for body ``k``): the columns of
+    :attr:`Particles.wall_force`.
     """
 
     active: np.ndarray
@@ -86,6 +103,8 @@ class StepOperators:
     wall_ids: np.ndarray
     data: ConeInput
     volume_strains: np.ndarray | None = None
+    time: float = 0.0
+    dropped: int = 0
 
     @property
     def contacts(self) -> Contacts:
@@ -99,13 +118,20 @@ def build_operators(
     dt: float,
     mesh_source: MeshSource,
     volume_state: Sequence[float] | None = None,
+    time: float = 0.0,
 ) -> StepOperators:
     """Stage 1: the mesh, smoothing cells, contacts and cone-step data of a step.
 
     ``volume_state`` is the previous step's ``volume_correction_strain`` (the
-    volume correction's filter state, one number per material).
+    volume correction's filter state, one number per material); ``time`` the
+    time at the start of the step (where the model's rigid bodies are).
     """
     active, local_t = mesh_source(p.x)
+    dropped = 0
+    if model.bodies:
+        active, local_t, dropped = _without_body_elements(
+            model, p.x, active, local_t, time
+        )
     mesh = p1_mesh(p.x[active], local_t)
     op, h = strain_operator(mesh, model)
     mass = model.node_masses(p.mass[active], p.material[active], op.volumes)
@@ -118,6 +144,10 @@ def build_operators(
         volume_state,
     )
     contacts, wall_ids = wall_contacts(model.walls, p, active, dt, h, model.gravity)
+    if model.bodies:
+        contacts, wall_ids = _with_body_contacts(
+            model, p, active, local_t, dt, h, time, contacts, wall_ids
+        )
     data = ConeInput(
         operator=op,
         materials=model.materials,
@@ -143,7 +173,62 @@ def build_operators(
             (0, 1, 2) if model.dim == 3 or model.axisymmetric else (0, 1),
         ),
     )
-    return StepOperators(active, local_t, op, wall_ids, data, strains)
+    return StepOperators(
+        active, local_t, op, wall_ids, data, strains, float(time), dropped
+    )
+
+
+def _without_body_elements(
+    model: Model, x: np.ndarray, active: np.ndarray, local_t: np.ndarray, time: float
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Drop the elements that span a rigid body; renumber the remaining nodes."""
+    drop = spanning_elements(model.bodies, x[active], local_t, time)
+    if not np.any(drop):
+        return active, local_t, 0
+    local_t = local_t[:, ~drop]
+    used = np.unique(local_t)
+    if used.size == 0:
+        raise ParameterError(
+            "bodies",
+            [b.name for b in model.bodies],
+            "bodies that leave some soil: every element of the mesh spans a body",
+        )
+    return active[used], np.searchsorted(used, local_t), int(drop.sum())
+
+
+def _with_body_contacts(
+    model: Model,
+    p: Particles,
+    active: np.ndarray,
+    local_t: np.ndarray,
+    dt: float,
+    h: float,
+    time: float,
+    contacts: Contacts,
+    wall_ids: np.ndarray,
+) -> tuple[Contacts, np.ndarray]:
+    """The wall candidates followed by the rigid-body ones (ids after the walls)."""
+    nw = len(model.walls)
+    lagged = p.wall_force[:, nw : nw + len(model.bodies)]
+    x = p.x[active]
+    facets = oriented_boundary(x, local_t)
+    bc, body_ids = body_contacts(
+        model.bodies,
+        x,
+        p.v[active],
+        p.fixed[active],
+        p.v_prescribed[active],
+        lagged[active],
+        facets,
+        dt,
+        h,
+        model.gravity,
+        time,
+        noise_ref=lagged,
+        axisymmetric=model.axisymmetric,
+        corners=True,
+    )
+    return Contacts.concat([contacts, bc]), np.concatenate([wall_ids, nw + body_ids])
 
 
 def strain_operator(mesh, model: Model) -> tuple[NodalIntegration, float]:
@@ -185,7 +270,12 @@ def update_particles(
     eps_p[active] += equivalent_strain(sol.deps_p)
     wall_force = np.zeros_like(p.wall_force)
     if ops.contacts.size:
-        wall_force[active[ops.contacts.node], ops.wall_ids] = sol.lambda_n
+        nodes, w, _ = ops.contacts.weights()
+        np.add.at(
+            wall_force,
+            (active[nodes], ops.wall_ids[:, None]),
+            w * sol.lambda_n[:, None],
+        )
     motion = move_particles(p, model, dt, active, sol.du, ops.data.dynamic)
     return p.replace(**motion, stress=stress, eps_p=eps_p, wall_force=wall_force)
 
@@ -247,6 +337,7 @@ def advance(
     mesh_source: MeshSource | Mesh | np.ndarray,
     step: int | None = None,
     volume_state: Sequence[float] | None = None,
+    time: float = 0.0,
 ) -> tuple[Particles, Step]:
     """Advance the particles by one step.
 
@@ -273,6 +364,10 @@ def advance(
         None at the start of a run.  Only read when
         ``model.volume_correction > 0``; :class:`~skfem_npfem.Simulation`
         passes it.
+    time : float
+        Time at the start of the step, s: where the model's rigid bodies are
+        (:class:`~skfem_npfem.Simulation` passes it; only read when
+        ``model.bodies`` is not empty).
 
     Returns
     -------
@@ -281,7 +376,14 @@ def advance(
         the solution and the mesh; ``step.to_skfem()`` gives the mesh and the
         fields for scikit-fem).  With the volume correction on, the
         record's ``extra["volume_correction_strain"]`` holds this step's
-        volumetric eigenstrain per material.
+        volumetric eigenstrain per material.  With rigid bodies it holds, per
+        body ``<name>``: ``<name>_x``, ``<name>_y`` (displacement of the body
+        at the end of the step, m), ``<name>_force_x``, ``<name>_force_y``
+        (force of the soil on the body, N per m in plane strain, N of the
+        ring in axisymmetry, where ``force_x`` is 0), ``<name>_moment``
+        (N m per m, about its reference point; 0 in axisymmetry) and
+        ``<name>_penetration`` (the deepest a particle got inside it before
+        being put back on its outline, m); and ``dropped_elements``.
 
     Raises
     ------
@@ -315,20 +417,79 @@ def advance(
             f"{model.dim}D positions for a {model.dim}D model",
         )
     mesh_source = as_mesh_source(mesh_source)
-    t0 = time.perf_counter()
-    ops = build_operators(p, model, dt, mesh_source, volume_state)
-    t1 = time.perf_counter()
+    t_start = float(time)
+    if model.bodies:
+        p = _with_body_columns(p, model)
+    t0 = perf_counter()
+    ops = build_operators(p, model, dt, mesh_source, volume_state, t_start)
+    t1 = perf_counter()
     sol = solve_step(ops.data, model.solver, step=step)
-    t2 = time.perf_counter()
+    t2 = perf_counter()
     new = update_particles(p, model, dt, ops, sol)
-    timings = {"mesh": t1 - t0, **sol.timings, "update": time.perf_counter() - t2}
+    depth = None
+    if model.bodies and model.update_geometry:
+        x, v, depth = project_out_of_bodies(model.bodies, new.x, new.v, t_start + dt)
+        if x is not new.x:
+            new = new.replace(x=x, v=v, u=new.u + (x - new.x))
+    timings = {"mesh": t1 - t0, **sol.timings, "update": perf_counter() - t2}
     rec = StepRecord.of_step(
         step, dt, new, model.gravity, ops.active, ops.operator, sol, timings
     )
     rec.n_contacts = ops.contacts.size
     if ops.volume_strains is not None:
         rec.extra["volume_correction_strain"] = [float(x) for x in ops.volume_strains]
+    if model.bodies:
+        _record_bodies(rec, model, p, ops, sol, t_start + dt, depth)
     return new, Step(rec, sol, ops.active, ops.local_t, ops.operator, new)
+
+
+def _with_body_columns(p: Particles, model: Model) -> Particles:
+    """Particles with one lagged-force column per wall and body."""
+    need = len(model.walls) + len(model.bodies)
+    have = p.wall_force.shape[1]
+    if have >= need:
+        return p
+    pad = np.zeros((p.n, need - have))
+    return p.replace(wall_force=np.concatenate([p.wall_force, pad], axis=1))
+
+
+def _record_bodies(
+    rec: StepRecord,
+    model: Model,
+    p: Particles,
+    ops: StepOperators,
+    sol: ConeSolution,
+    t_end: float,
+    depth: np.ndarray | None,
+) -> None:
+    """Position, load and penetration of each body in the step's record."""
+    nw = len(model.walls)
+    sel = ops.wall_ids >= nw
+    c = ops.contacts
+    sub = c.subset(sel)
+    loads = body_loads(
+        model.bodies,
+        sub,
+        ops.wall_ids[sel] - nw,
+        sol.lambda_n[sel],
+        sol.lambda_t[sel],
+        p.x[ops.active],
+        t_end,
+    )
+    for k, (body, (force, moment)) in enumerate(zip(model.bodies, loads, strict=True)):
+        disp = body.displacement(t_end)
+        rec.extra[f"{body.name}_x"] = float(disp[0])
+        rec.extra[f"{body.name}_y"] = float(disp[1])
+        # A body of revolution takes no net radial force.
+        rec.extra[f"{body.name}_force_x"] = (
+            0.0 if model.axisymmetric else float(force[0])
+        )
+        rec.extra[f"{body.name}_force_y"] = float(force[1])
+        rec.extra[f"{body.name}_moment"] = 0.0 if model.axisymmetric else moment
+        rec.extra[f"{body.name}_penetration"] = (
+            0.0 if depth is None else float(depth[k])
+        )
+    rec.extra["dropped_elements"] = ops.dropped
 
 
 def __getattr__(name: str) -> object:

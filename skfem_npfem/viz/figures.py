@@ -355,7 +355,7 @@ class Frames2D:
             )
 
     def _markers(self, step: Step) -> None:
-        from matplotlib.patches import Rectangle
+        from matplotlib.patches import Polygon, Rectangle
 
         ax, sc = self.ax, self.sc
         if sc.runout_reference is not None and step.mass is not None:
@@ -384,6 +384,18 @@ class Frames2D:
             )
             ax.add_patch(bar)
             self.dynamic.append(bar)
+        for outline, velocity, label in sc.bodies:
+            poly = Polygon(
+                np.asarray(outline) + np.asarray(velocity) * step.time,
+                closed=True,
+                facecolor="#606060",
+                edgecolor="black",
+                lw=1.0,
+                zorder=7,
+                label=label,
+            )
+            ax.add_patch(poly)
+            self.dynamic.append(poly)
         if self.curve_ax is not None:
             load_settlement_figure(sc, ax=self.curve_ax, mark=step.time)
 

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..constants import GRAVITY
 from ..errors import CheckpointError, ParameterError
-from ..io import atomic_path, check_writable_dir, read_pvd, read_step
+from ..io import check_writable_dir, read_pvd, read_step
 from .colours import (  # noqa: F401
     _EPS_P_FLOOR,
     _PLASTIC_QUANTILE,
@@ -41,7 +41,8 @@ from .colours import (  # noqa: F401
     _robust_range,
     _style,
 )
-from .figures import Frames2D, crop, load_settlement_figure, mechanism_figure
+from .figures import Frames2D, crop, load_settlement_figure
+from .mechanism import plot_mechanism, save_rgb
 from .render import (
     Renderer,
     Step,
@@ -373,14 +374,11 @@ def plot_results(
     >>> paths = plot_results("out", times=[0, 1, 2, 4])  # doctest: +SKIP
     """
     req = _check_args(animation, max_frames, window_size, clim, times)
-    mechanism = Path(result_dir) / "mechanism.npz"
-    try:
-        pvd = _find_pvd(Path(result_dir))
-    except CheckpointError:
-        if not mechanism.is_file():  # a limit analysis alone: its mechanism
-            raise
-        out = Path(result_dir) / "plots" if out_dir is None else Path(out_dir)
-        return [plot_mechanism(mechanism, out)]
+    pvd = _find_pvd_or_mechanism(Path(result_dir))
+    if pvd.name == "mechanism.npz":  # a limit analysis alone: its mechanism
+        return [
+            plot_mechanism(pvd, pvd.parent / "plots" if out_dir is None else out_dir)
+        ]
     folder = pvd.parent
     entries = read_pvd(pvd)
     if not entries:
@@ -443,51 +441,31 @@ def plot_results(
                 written.append(path)
             finally:
                 renderer.close()
-    if loaded.dim == 2 and sc.load_curve is not None:
+    return written + _extra_pictures(folder, sc, out, loaded.dim)
+
+
+def _find_pvd_or_mechanism(result_dir: Path) -> Path:
+    """The folder's ``result.pvd``, else its ``mechanism.npz`` (a limit analysis)."""
+    try:
+        return _find_pvd(result_dir)
+    except CheckpointError:
+        if not (result_dir / "mechanism.npz").is_file():
+            raise
+        return result_dir / "mechanism.npz"
+
+
+def _extra_pictures(folder: Path, sc, out: Path, dim: int) -> list[Path]:
+    """The footing's load-settlement curve (2D) and a limit analysis's mechanism."""
+    written = []
+    if dim == 2 and sc.load_curve is not None:
         path = out / "load_settlement.png"
         fig = load_settlement_figure(sc)
         fig.canvas.draw()
-        _save_rgb(np.asarray(fig.canvas.buffer_rgba())[..., :3], path)
+        save_rgb(np.asarray(fig.canvas.buffer_rgba())[..., :3], path)
         written.append(path)
     if (folder / "mechanism.npz").is_file():
         written.append(plot_mechanism(folder / "mechanism.npz", out))
     return written
-
-
-def plot_mechanism(path: str | os.PathLike, out_dir: str | os.PathLike) -> Path:
-    """Draw the ``mechanism.npz`` of a limit analysis as ``mechanism.png``.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file a scene wrote (the slope's factor of safety stage).
-    out_dir : str or os.PathLike
-        Folder of the picture (created if needed).
-
-    Returns
-    -------
-    Path
-        The picture: dissipation density and velocity arrows of the mechanism.
-    """
-    data = np.load(path)
-    out = Path(out_dir)
-    check_writable_dir("out_dir", out)
-    title = "collapse mechanism"
-    if "factor_of_safety" in data:
-        title += f" at F = {float(data['factor_of_safety']):.3f}"
-    volumes = data["volumes"] if "volumes" in data else None
-    fig = mechanism_figure(
-        data["x"],
-        data["triangles"],
-        data["velocity"],
-        data["dissipation"],
-        volumes,
-        title,
-    )
-    fig.canvas.draw()
-    target = out / "mechanism.png"
-    _save_rgb(np.asarray(fig.canvas.buffer_rgba())[..., :3], target)
-    return target
 
 
 def _load_picked(entries, field, req, unit, animation, max_frames):
@@ -507,10 +485,3 @@ def _load_picked(entries, field, req, unit, animation, max_frames):
             loaded = _load(entries, field, set(snaps) | set(frames))
         loaded.bad = []
     return loaded, entries, snaps, frames
-
-
-def _save_rgb(img: np.ndarray, path: Path) -> None:
-    from PIL import Image
-
-    with atomic_path(path) as tmp:
-        Image.fromarray(img).save(tmp, format="PNG")

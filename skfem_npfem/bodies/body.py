@@ -1,0 +1,419 @@
+"""Moving rigid bodies: polygons pushed through the particles.
+
+A :class:`RigidBody` is a closed polygon (plane strain, or the ``(r, z)``
+half-section of a body of revolution in an axisymmetric model) that moves with
+a prescribed velocity: a footing, a cone with its shaft, a pipe section.  Every
+step of a model with bodies
+
+1. drops the elements of the step's mesh that span a body
+   (:func:`spanning_elements`: an element whose centroid or an edge midpoint is
+   inside, or whose edge crosses the outline);
+2. finds the contact candidates of the mesh's nodes against each body at its
+   position at the start of the step (:func:`body_contacts`): the node's
+   distance to the outline and the outward normal at the closest point; the
+   non-penetration row is ``gap + n . (du - dU) >= 0`` with ``dU`` the body's
+   displacement over the step, so the soil may leave the body (unilateral);
+3. puts particles that ended inside a body back on its outline
+   (:func:`project_out_of_bodies`) and reports how deep they were -- the
+   ``<name>_penetration`` of the step record, zero when the contact rows held;
+4. reports the force and moment the soil exerts on each body
+   (:func:`body_loads`).
+
+Interface (one of):
+
+* frictionless (the default);
+* Tresca adhesion ``|t| <= adhesion`` (Pa; ``alpha s_u`` for undrained clay):
+  the bound of a node is ``adhesion`` times its contact area (half the
+  mesh-boundary facets that meet at the node; ``2 pi r`` times that in
+  axisymmetry), applied while the node was in contact in the previous step;
+* Coulomb friction ``|t| <= mu p`` with the *lagged* normal force of the
+  previous step (as the walls: an associated bound in the cone program would
+  lift the soil off the body by ``mu |slip|``).  The lag makes friction one
+  step late where the contact force changes; docs/theory.md measures its error
+  on a block carried by a moving rough belt.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..boundary import Contacts
+from ..errors import ParameterError
+
+__all__ = [
+    "RigidBody",
+    "body_loads",
+    "check_clear",
+    "project_out_of_bodies",
+    "spanning_elements",
+]
+
+#: Relative tolerance (of a body's size) below which a point counts as on the outline.
+_ON_OUTLINE = 1e-9
+
+#: Relative distance (of a body's size) within which a node counts as on a corner.
+_ON_CORNER = 1e-6
+
+#: Degrees by which a boundary edge's normal must lie inside a corner's
+#: normal cone for a corner row (:func:`corner_contacts`).
+_CORNER_MARGIN = 30.0
+
+
+@dataclass(frozen=True)
+class RigidBody:
+    """A rigid polygon moving with a prescribed velocity (2D models).
+
+    Parameters
+    ----------
+    vertices : array_like (m, 2)
+        Corners of the closed outline at time 0, m, in either order (stored
+        counter-clockwise); m >= 3, no repeated closing vertex needed.
+    velocity : array_like (2,)
+        Constant velocity, m/s (static models: per unit of pseudo-time).
+    friction_angle : float
+        Coulomb interface friction angle, degrees, in [0, 90).
+    adhesion : float
+        Tresca interface strength ``alpha s_u``, Pa, >= 0.  At most one of
+        ``friction_angle`` and ``adhesion`` may be > 0; both 0: frictionless.
+    name : str
+        Label: the step record's keys start with it (``<name>_force_y``).
+    reference : array_like (2,), optional
+        Point about which the moment is reported, at time 0 (default: the
+        centroid of the vertices).
+
+    Raises
+    ------
+    ParameterError
+        For vertices that are not a finite (m >= 3, 2) array enclosing an area,
+        a velocity that is not a finite 2-vector, a friction angle outside
+        [0, 90), a negative or non-finite adhesion, both interface laws, or a
+        name that is not a word.
+
+    Examples
+    --------
+    >>> foot = RigidBody([[-0.5, 0.0], [0.5, 0.0], [0.5, 1.0], [-0.5, 1.0]],
+    ...                  velocity=[0.0, -0.1], name="footing")
+    >>> foot.interface, foot.vertices_at(2.0)[0].tolist()
+    ('smooth', [-0.5, -0.2])
+    >>> d, n, _ = foot.signed_distance(np.array([[0.0, -0.1], [0.0, 0.5]]), 0.0)
+    >>> d.round(3).tolist(), n[0].tolist()
+    ([0.1, -0.5], [0.0, -1.0])
+    """
+
+    vertices: np.ndarray
+    velocity: np.ndarray = (0.0, 0.0)
+    friction_angle: float = 0.0
+    adhesion: float = 0.0
+    name: str = "body"
+    reference: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        try:
+            v = np.asarray(self.vertices, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(
+                "vertices", self.vertices, "an array (m, 2) of corners"
+            ) from None
+        if v.ndim != 2 or v.shape[1] != 2 or not np.all(np.isfinite(v)):
+            raise ParameterError(
+                "vertices",
+                getattr(v, "shape", v),
+                "a finite array (m, 2) of corners (2D models only)",
+            )
+        if v.shape[0] > 3 and np.allclose(v[0], v[-1]):
+            v = v[:-1]
+        area = 0.5 * float(
+            np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
+        )
+        size = float(np.ptp(v, axis=0).max()) if v.shape[0] else 0.0
+        if v.shape[0] < 3 or not abs(area) > 1e-12 * size**2:
+            raise ParameterError(
+                "vertices",
+                f"{v.shape[0]} corners enclosing an area of {abs(area):g} m^2",
+                "at least 3 corners enclosing a non-zero area",
+            )
+        if area < 0:
+            v = v[::-1]
+        vel = _vector("velocity", self.velocity)
+        fa = self.friction_angle
+        if isinstance(fa, bool) or not (
+            isinstance(fa, int | float) and math.isfinite(fa) and 0.0 <= fa < 90.0
+        ):
+            raise ParameterError("friction_angle", fa, "degrees in [0, 90)")
+        ad = self.adhesion
+        if isinstance(ad, bool) or not (
+            isinstance(ad, int | float) and math.isfinite(ad) and ad >= 0.0
+        ):
+            raise ParameterError("adhesion", ad, "a finite stress >= 0 (Pa)")
+        if fa > 0 and ad > 0:
+            raise ParameterError(
+                "adhesion",
+                ad,
+                "0 when friction_angle > 0 (choose Coulomb friction or Tresca "
+                "adhesion)",
+            )
+        if not (isinstance(self.name, str) and self.name.isidentifier()):
+            raise ParameterError(
+                "name", self.name, "a word (letters, digits, _), e.g. 'footing'"
+            )
+        ref = (
+            v.mean(axis=0)
+            if self.reference is None
+            else _vector("reference", self.reference)
+        )
+        object.__setattr__(self, "vertices", v)
+        object.__setattr__(self, "velocity", vel)
+        object.__setattr__(self, "friction_angle", float(fa))
+        object.__setattr__(self, "adhesion", float(ad))
+        object.__setattr__(self, "reference", ref)
+
+    @property
+    def mu(self) -> float:
+        """Coulomb friction coefficient ``tan(friction_angle)``."""
+        return math.tan(math.radians(self.friction_angle))
+
+    @property
+    def interface(self) -> str:
+        """``"smooth"``, ``"adhesion"`` or ``"coulomb"``."""
+        if self.adhesion > 0:
+            return "adhesion"
+        return "coulomb" if self.friction_angle > 0 else "smooth"
+
+    @property
+    def size(self) -> float:
+        """Largest extent of the outline, m."""
+        return float(np.ptp(self.vertices, axis=0).max())
+
+    def displacement(self, t: float) -> np.ndarray:
+        """Displacement (2,) from time 0 to ``t``, m."""
+        return self.velocity * float(t)
+
+    def vertices_at(self, t: float) -> np.ndarray:
+        """The outline's corners (m, 2) at time ``t``."""
+        return self.vertices + self.displacement(t)
+
+    def reference_at(self, t: float) -> np.ndarray:
+        """The moment's reference point (2,) at time ``t``."""
+        return self.reference + self.displacement(t)
+
+    def signed_distance(
+        self, x: np.ndarray, t: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Distance of points from the outline at time ``t``, negative inside.
+
+        Returns
+        -------
+        dist : ndarray (n,)
+            Signed distance, m (positive outside).
+        normal : ndarray (n, 2)
+            Unit outward normal at the closest point (from the closest point
+            towards an outside point; the edge's normal on the outline).
+        closest : ndarray (n, 2)
+            Closest point of the outline.
+        """
+        x = np.asarray(x, float).reshape(-1, 2)
+        a = self.vertices_at(t)
+        b = np.roll(a, -1, axis=0)
+        ab = b - a
+        ap = x[:, None, :] - a[None]
+        s = np.clip(np.einsum("nmk,mk->nm", ap, ab) / np.sum(ab * ab, axis=1), 0, 1)
+        c = a[None] + s[..., None] * ab[None]
+        d2 = np.sum((x[:, None, :] - c) ** 2, axis=2)
+        k = np.argmin(d2, axis=1)
+        rows = np.arange(x.shape[0])
+        closest = c[rows, k]
+        dist = np.sqrt(d2[rows, k])
+        # Crossing number: odd -> inside.
+        ya, yb = a[:, 1][None], b[:, 1][None]
+        straddle = (ya > x[:, 1:2]) != (yb > x[:, 1:2])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xc = a[:, 0][None] + (x[:, 1:2] - ya) * (ab[:, 0] / ab[:, 1])[None]
+        inside = np.count_nonzero(straddle & (x[:, 0:1] < xc), axis=1) % 2 == 1
+        edge_n = np.stack([ab[:, 1], -ab[:, 0]], axis=1) / np.linalg.norm(
+            ab, axis=1, keepdims=True
+        )
+        # On the outline: the mean normal of the edges there (a corner's
+        # bisector, the limit of the closest-point direction around it).
+        tol = _ON_OUTLINE * self.size
+        on = d2 <= tol * tol
+        normal = on.astype(float) @ edge_n
+        normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+        far = dist > tol
+        sign = np.where(inside, -1.0, 1.0)
+        normal[far] = sign[far, None] * (x[far] - closest[far]) / dist[far, None]
+        return sign * dist, normal, closest
+
+    def contains(self, x: np.ndarray, t: float) -> np.ndarray:
+        """Points (n, 2) strictly inside the outline at time ``t`` (n,) bool."""
+        dist, _, _ = self.signed_distance(x, t)
+        return dist < -_ON_OUTLINE * self.size
+
+
+def _vector(name: str, value) -> np.ndarray:
+    """A finite 2-vector."""
+    try:
+        v = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(name, value, "a finite vector of size 2") from None
+    if v.shape != (2,) or not np.all(np.isfinite(v)):
+        raise ParameterError(name, value, "a finite vector of size 2 (m or m/s)")
+    return v
+
+
+def _near(body: RigidBody, x: np.ndarray, t: float, reach: float | np.ndarray):
+    """Indices of points within ``reach`` of the body's bounding box."""
+    v = body.vertices_at(t)
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    r = np.asarray(reach)[..., None] if np.ndim(reach) else reach
+    return np.flatnonzero(np.all((x > lo - r) & (x < hi + r), axis=1))
+
+
+def spanning_elements(
+    bodies: Sequence[RigidBody], x: np.ndarray, t: np.ndarray, time: float
+) -> np.ndarray:
+    """Triangles (3, ne) of nodes ``x`` that span a body at ``time`` (ne,) bool.
+
+    An element spans a body when its centroid or an edge midpoint is inside
+    the outline, or one of its edges crosses an edge of the outline (a
+    triangle may have all three nodes outside a thin body and still cover it).
+    """
+    ne = t.shape[1]
+    drop = np.zeros(ne, bool)
+    xe = x[t]  # (3, ne, 2)
+    lo, hi = xe.min(axis=0), xe.max(axis=0)
+    for body in bodies:
+        a = body.vertices_at(time)
+        blo, bhi = a.min(axis=0), a.max(axis=0)
+        near = np.flatnonzero(np.all((lo < bhi) & (hi > blo), axis=1))
+        if not near.size:
+            continue
+        p = xe[:, near]  # (3, k, 2)
+        probes = np.concatenate([p.mean(axis=0)[None], 0.5 * (p + np.roll(p, -1, 0))])
+        inside = body.contains(probes.reshape(-1, 2), time).reshape(4, -1)
+        hit = np.any(inside, axis=0)
+        # A body (or a corner of it) inside an element with no edge crossing.
+        d0 = p[1] - p[0]
+        d1 = p[2] - p[0]
+        det = d0[:, 0] * d1[:, 1] - d0[:, 1] * d1[:, 0]  # (k,)
+        r = a[None, :, :] - p[0][:, None, :]  # (k, m, 2)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            l1 = (r[..., 0] * d1[:, None, 1] - r[..., 1] * d1[:, None, 0]) / det[
+                :, None
+            ]
+            l2 = (d0[:, None, 0] * r[..., 1] - d0[:, None, 1] * r[..., 0]) / det[
+                :, None
+            ]
+        tiny = 1e-9
+        hit |= np.any((l1 > tiny) & (l2 > tiny) & (l1 + l2 < 1 - tiny), axis=1)
+        # Proper crossings of element edges (p, q) with outline edges (a, b).
+        q = np.roll(p, -1, axis=0)
+        b = np.roll(a, -1, axis=0)
+        eps = (1e-9 * body.size) ** 2
+
+        def orient(o, u, w):
+            return (u[..., 0] - o[..., 0]) * (w[..., 1] - o[..., 1]) - (
+                u[..., 1] - o[..., 1]
+            ) * (w[..., 0] - o[..., 0])
+
+        P, Q = p[:, :, None, :], q[:, :, None, :]  # (3, k, 1, 2)
+        A, B = a[None, None], b[None, None]  # (1, 1, m, 2)
+        o1, o2 = orient(P, Q, A), orient(P, Q, B)
+        o3, o4 = orient(A, B, P), orient(A, B, Q)
+        cross = (o1 * o2 < -eps * eps) & (o3 * o4 < -eps * eps)
+        hit |= np.any(cross, axis=(0, 2))
+        drop[near[hit]] = True
+    return drop
+
+
+def project_out_of_bodies(
+    bodies: Sequence[RigidBody], x: np.ndarray, v: np.ndarray, time: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Put points that are inside a body at ``time`` back on its outline.
+
+    The velocity loses its component into the body (relative to the body's
+    velocity).
+
+    Returns
+    -------
+    x, v : ndarray (n, 2)
+        Projected positions and velocities (copies if anything moved).
+    depth : ndarray (n_bodies,)
+        Deepest point inside each body before the projection, m (0: none).
+    """
+    depth = np.zeros(len(bodies))
+    for b_id, body in enumerate(bodies):
+        near = _near(body, x, time, 0.0)
+        if not near.size:
+            continue
+        dist, normal, closest = body.signed_distance(x[near], time)
+        inside = dist < 0.0
+        if not np.any(inside):
+            continue
+        idx = near[inside]
+        depth[b_id] = float(-dist[inside].min())
+        x, v = x.copy(), v.copy()
+        x[idx] = closest[inside]
+        n = normal[inside]
+        vn = np.sum((v[idx] - body.velocity) * n, axis=1)
+        v[idx] -= np.minimum(vn, 0.0)[:, None] * n
+    return x, v, depth
+
+
+def body_loads(
+    bodies: Sequence[RigidBody],
+    contacts: Contacts,
+    body_ids: np.ndarray,
+    lambda_n: np.ndarray,
+    lambda_t: np.ndarray,
+    x: np.ndarray,
+    time: float,
+) -> list[tuple[np.ndarray, float]]:
+    """Force (2,) and moment that the soil exerts on each body, N (per m) and N m.
+
+    The contact force on a node is ``n lambda_n + t lambda_t``; the body gets
+    the opposite.  The moment is about :meth:`RigidBody.reference_at` ``time``
+    (counter-clockwise positive), from the node positions ``x`` (nodes of
+    ``contacts``).
+    """
+    n = contacts.normal
+    tang = np.stack([-n[:, 1], n[:, 0]], axis=1)
+    lt = lambda_t[:, 0] if lambda_t.size else np.zeros(n.shape[0])
+    f = -(n * lambda_n[:, None] + tang * lt[:, None])
+    out = []
+    for b_id, body in enumerate(bodies):
+        sel = body_ids == b_id
+        force = f[sel].sum(axis=0) if np.any(sel) else np.zeros(2)
+        r = contacts.subset(sel).points(x) - body.reference_at(time)
+        moment = float(np.sum(r[:, 0] * f[sel, 1] - r[:, 1] * f[sel, 0]))
+        out.append((force, moment))
+    return out
+
+
+def check_clear(
+    bodies: Sequence[RigidBody], x: np.ndarray, time: float, tolerance: float
+) -> None:
+    """Refuse particles deeper than ``tolerance`` inside a body at ``time``.
+
+    Raises
+    ------
+    ParameterError
+        Naming the body, the number of particles inside and the deepest.
+    """
+    for body in bodies:
+        near = _near(body, x, time, 0.0)
+        if not near.size:
+            continue
+        dist = body.signed_distance(x[near], time)[0]
+        inside = dist < -tolerance
+        if np.any(inside):
+            raise ParameterError(
+                f"body {body.name!r}",
+                f"{int(inside.sum())} particle(s) inside it at t = {time:g} s "
+                f"(deepest {float(-dist.min()):.3g} m)",
+                "a body that starts clear of the soil (touching is fine): move "
+                "its vertices or remove the particles it covers",
+            )

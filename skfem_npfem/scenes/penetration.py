@@ -1,0 +1,435 @@
+"""Scene ``footing-penetration``: a rigid strip footing pushed deep into clay.
+
+Half model (symmetry at ``x = 0``), plane strain, quasi-static steps with
+remeshing: a rigid :class:`~skfem_npfem.RigidBody` of width ``B`` (the
+footing) moves down at ``speed`` into a weightless Tresca layer
+``domain_width*B`` wide and ``domain_depth*B`` deep (base fixed, far side on
+rollers) until its penetration ``w`` reaches ``penetration``.  The particles
+start on a graded lattice: ``spacing`` within ``B`` of the footing's edge and
+down to ``penetration + B``, growing by ``grading`` per row beyond.  The
+interface is smooth, fully rough (Tresca adhesion ``s_u``) or adhesive
+(``alpha s_u``); the soil separates freely from the footing.
+
+The footing pressure ``q`` is the vertical force of the soil on the footing
+over its width.  References: Prandtl's ``q/s_u = 2 + pi`` once the soil
+yields under a surface footing (smooth or rough: the same in weightless
+Tresca soil); past it the pressure rises as the footing is embedded and the
+soil heaves beside it.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from skfem import MeshTri
+
+from ..bodies import RigidBody
+from ..errors import ParameterError
+from ..laws import prandtl_nc
+from ..materials import Tresca
+from ..mesh.smoothing import nodal_integration
+from ..mesh.sources import AlphaShapeMesher
+from ..particles import Particles
+from ..run.simulation import Simulation
+from ..step.model import Model
+from .base import Param, Scene, SceneRun
+from .common import (
+    check_size,
+    fidelity_from,
+    fidelity_params,
+    make_writer,
+    solver_from,
+    solver_params,
+)
+from .scenery import Scenery, box, number
+
+__all__ = ["INTERFACES", "SCENE", "graded_axis", "interface_adhesion"]
+
+#: Footing-soil interfaces.
+INTERFACES = ("smooth", "rough", "adhesion")
+
+_POSITIVE = {"lo": 0, "lo_open": True}
+
+PARAMS = [
+    Param("width", 1.0, "m", "footing width B", float, **_POSITIVE),
+    Param(
+        "domain_width",
+        10.0,
+        "-",
+        "soil width / B (half of it modelled)",
+        float,
+        lo=3.0,
+        hi=50.0,
+    ),
+    Param("domain_depth", 5.0, "-", "soil depth / B", float, lo=1.5, hi=50.0),
+    Param("E", 1.0e5, "Pa", "undrained Young's modulus E_u", float, **_POSITIVE),
+    Param(
+        "nu",
+        0.495,
+        "-",
+        "undrained Poisson's ratio",
+        float,
+        lo=0.0,
+        hi=0.5,
+        hi_open=True,
+    ),
+    Param("su", 1.0e3, "Pa", "undrained shear strength s_u", float, **_POSITIVE),
+    Param("interface", "smooth", "-", "footing-soil interface", str, INTERFACES),
+    Param(
+        "alpha",
+        0.5,
+        "-",
+        "adhesion factor (interface=adhesion): |t| <= alpha s_u",
+        float,
+        lo=0.0,
+        hi=1.0,
+    ),
+    Param(
+        "penetration",
+        None,
+        "m",
+        "final penetration w (default: B)",
+        float,
+        **_POSITIVE,
+    ),
+    Param(
+        "speed",
+        1.0,
+        "m/s",
+        "footing speed (quasi-static: sets the time unit)",
+        float,
+        **_POSITIVE,
+    ),
+    Param(
+        "dt",
+        None,
+        "s",
+        "time step (default: the footing moves spacing/4 per step; at most "
+        "one spacing)",
+        float,
+        **_POSITIVE,
+    ),
+    Param(
+        "spacing", 0.05, "m", "particle spacing near the footing", float, **_POSITIVE
+    ),
+    Param(
+        "grading",
+        1.15,
+        "-",
+        "spacing growth per row away from the footing",
+        float,
+        lo=1.0,
+        hi=2.0,
+    ),
+    Param(
+        "alpha_shape",
+        1.3,
+        "-",
+        "alpha-shape factor of the remeshing",
+        float,
+        lo=0.8,
+        hi=3.0,
+    ),
+    *fidelity_params(0.0),
+    *solver_params(),
+]
+
+METRICS = {
+    "bearing_factor": "q/s_u at w/B = 0.1: the curve's mean over one spacing of "
+    "penetration centred there (w/B = 0.1 +- spacing/(2B); it averages the "
+    "saw-tooth of soil nodes passing the footing's edge); null if not reached",
+    "bearing_factor_range": "[min, max] of q/s_u over that window",
+    "bearing_factor_reference": "Prandtl's 2 + pi",
+    "relative_error": "bearing_factor / (2 + pi) - 1",
+    "final_bearing_factor": "q/s_u at the final penetration",
+    "max_body_penetration": "deepest a particle got inside the footing before "
+    "being put back on its outline, m (over the run)",
+    "max_heave": "largest upward displacement of the soil surface / B",
+    "curve": "list of [w/B, q/s_u] per step",
+    "n_particles": "number of particles",
+}
+
+
+def graded_axis(fine: float, h: float, length: float, ratio: float) -> np.ndarray:
+    """Coordinates ``0..length``: spacing ``h`` up to ``fine``, then growing.
+
+    Examples
+    --------
+    >>> graded_axis(1.0, 0.5, 3.0, 2.0).tolist()
+    [0.0, 0.5, 1.0, 2.0, 3.0]
+    """
+    n_fine = max(1, math.ceil(min(fine, length) / h - 1e-9))
+    xs = list(np.linspace(0.0, min(n_fine * h, length), n_fine + 1))
+    step = xs[-1] - xs[-2]
+    while xs[-1] < length - 1e-12:
+        step *= ratio
+        xs.append(min(xs[-1] + step, length))
+    if len(xs) > 3 and xs[-1] - xs[-2] < 0.3 * (xs[-2] - xs[-3]):
+        xs.pop(-2)
+    return np.array(xs)
+
+
+def _axis_count(fine: float, h: float, length: float, ratio: float) -> float:
+    """Number of :func:`graded_axis` coordinates, estimated without building them."""
+    n_fine = max(1, math.ceil(min(fine, length) / h - 1e-9))
+    rest = max(length - n_fine * h, 0.0)
+    if ratio == 1.0:
+        return n_fine + 1 + math.ceil(rest / h)
+    return (
+        n_fine
+        + 1
+        + math.ceil(math.log1p(rest * (ratio - 1) / (h * ratio)) / math.log(ratio))
+    )
+
+
+def interface_adhesion(values: dict[str, Any]) -> float:
+    """Interface strength (Pa) of the ``interface`` choice."""
+    choice = values["interface"]
+    if choice == "smooth":
+        return 0.0
+    if choice == "rough":
+        return values["su"]
+    return values["alpha"] * values["su"]
+
+
+def _penetration(values: dict[str, Any]) -> float:
+    w = values["penetration"]
+    return values["width"] if w is None else w
+
+
+def _geometry(values: dict[str, Any]) -> tuple[float, float, float, float]:
+    """``(B, half width of the soil, depth of the soil, final penetration)``."""
+    B = values["width"]
+    return (
+        B,
+        values["domain_width"] * B / 2,
+        values["domain_depth"] * B,
+        _penetration(values),
+    )
+
+
+def check(values: dict[str, Any]) -> float:
+    """Refuse bad combinations before anything is built; return ``dt``."""
+    B, half, depth, w = _geometry(values)
+    h = values["spacing"]
+    if h > B / 4:
+        raise ParameterError("spacing", h, f"at most B/4 = {B / 4:g} m")
+    if w > depth - 2 * h:
+        raise ParameterError(
+            "penetration",
+            w,
+            f"less than the soil depth minus two spacings ({depth - 2 * h:g} m): "
+            "the footing would hit the fixed base",
+        )
+    dt = values["dt"]
+    if dt is None:
+        dt = 0.25 * h / values["speed"]
+    if values["speed"] * dt > h * (1 + 1e-9):
+        raise ParameterError(
+            "speed",
+            values["speed"],
+            f"at most spacing/dt = {h / dt:g} m/s: the footing may move at most "
+            "one spacing per step (lower speed or dt)",
+        )
+    nx = _axis_count(B / 2 + B, h, half, values["grading"])
+    ny = _axis_count(w + B, h, depth, values["grading"])
+    check_size(nx * ny, 2, values, advice="use a larger spacing or grading")
+    return dt
+
+
+def soil(values: dict[str, Any]) -> tuple[Particles, np.ndarray, MeshTri]:
+    """The graded lattice as particles, and each particle's spacing."""
+    B, half, depth, w = _geometry(values)
+    h, ratio = values["spacing"], values["grading"]
+    xs = graded_axis(B / 2 + B, h, half, ratio)
+    ys = depth - graded_axis(w + B, h, depth, ratio)[::-1]
+    mesh = MeshTri.init_tensor(xs, ys)
+    x = mesh.p.T.copy()
+    fixed = np.zeros_like(x, dtype=bool)
+    fixed[np.isclose(x[:, 1], 0.0)] = True
+    fixed[np.isclose(x[:, 0], 0.0) | np.isclose(x[:, 0], half), 0] = True
+    volumes = nodal_integration(mesh).volumes
+    # Weightless soil: tiny masses (static steps do not use them).
+    p = Particles.create(x, 1e-12 * volumes, fixed=fixed, n_walls=1)
+    # Each particle's spacing: the larger of its lattice row and column gaps.
+    gx = np.diff(xs)
+    gy = np.diff(ys)
+    ix = np.clip(np.searchsorted(xs, x[:, 0] - 1e-12), 0, gx.size - 1)
+    iy = np.clip(np.searchsorted(ys, x[:, 1] - 1e-12), 0, gy.size - 1)
+    spacing = np.maximum(
+        np.maximum(gx[ix], gx[np.maximum(ix - 1, 0)]),
+        np.maximum(gy[iy], gy[np.maximum(iy - 1, 0)]),
+    )
+    return p, spacing, mesh
+
+
+def footing_body(values: dict[str, Any]) -> RigidBody:
+    """The footing at time 0: resting on the surface, moving down at ``speed``."""
+    B, _, depth, w = _geometry(values)
+    height = w + B
+    return RigidBody(
+        [
+            [-B / 2, depth],
+            [B / 2, depth],
+            [B / 2, depth + height],
+            [-B / 2, depth + height],
+        ],
+        velocity=[0.0, -values["speed"]],
+        adhesion=interface_adhesion(values),
+        name="footing",
+        reference=[0.0, depth],
+    )
+
+
+def build(
+    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
+) -> SceneRun:
+    """Build the footing-penetration simulation."""
+    dt = check(values)
+    B, _, _, w = _geometry(values)
+    su = values["su"]
+    particles, spacing, _ = soil(values)
+    body = footing_body(values)
+    model = Model(
+        dim=2,
+        materials=[Tresca(values["E"], values["nu"], 0.0, c=su)],
+        gravity=0.0,
+        mode="static",
+        bodies=[body],
+        solver=solver_from(values),
+        **fidelity_from(values, 0.0),
+    )
+    mesher = AlphaShapeMesher(values["spacing"], values["alpha_shape"], spacing=spacing)
+    sim = Simulation(
+        particles,
+        model,
+        mesher,
+        dt,
+        writer=make_writer(out, resume),
+        progress=progress,
+        meta={"scene": "footing-penetration", "parameters": values},
+    )
+    t_end = w / values["speed"]
+    surface = particles.x[:, 1] >= particles.x[:, 1].max() - 1e-9
+
+    def metrics(sim_: Simulation) -> dict[str, Any]:
+        curve = penetration_curve(sim_.records, B, su)
+        factor, spread = _window(curve, 0.1, 0.5 * values["spacing"] / B)
+        ref = prandtl_nc(0.0)
+        pen = [r.extra.get("footing_penetration", 0.0) for r in sim_.records]
+        heave = float(sim_.particles.u[surface, 1].max()) / B
+        return {
+            "bearing_factor": factor,
+            "bearing_factor_range": spread,
+            "bearing_factor_reference": ref,
+            "relative_error": None if factor is None else factor / ref - 1.0,
+            "final_bearing_factor": curve[-1][1] if curve else None,
+            "max_body_penetration": max(pen, default=0.0),
+            "max_heave": heave,
+            "curve": curve,
+            "n_particles": int(particles.n),
+        }
+
+    return SceneRun(sim, {"t_end": t_end}, metrics)
+
+
+def penetration_curve(records, B: float, su: float) -> list[list[float]]:
+    """``[w/B, q/s_u]`` of every step (half model: q = force / (B/2))."""
+    return [
+        [-r.extra["footing_y"] / B, r.extra["footing_force_y"] / (B / 2) / su]
+        for r in records
+        if "footing_force_y" in r.extra
+    ]
+
+
+def _window(
+    curve: list[list[float]], w: float, half: float
+) -> tuple[float | None, list[float] | None]:
+    """Mean of the curve over ``[w - half, w + half]`` and its range there.
+
+    The window is cut at the curve's end; None when the curve stops short of
+    ``w``.  The mean is that of the linear interpolant (the trapezoidal
+    integral over the window's length).
+
+    Examples
+    --------
+    >>> _window([[0.1, 1.0], [0.2, 3.0], [0.3, 1.0]], 0.2, 0.1)
+    (2.0, [1.0, 3.0])
+    """
+    if not curve or curve[-1][0] < w * (1 - 1e-9):
+        return None, None
+    c = np.array([[0.0, 0.0], *curve])
+    lo, hi = max(w - half, 0.0), min(w + half, c[-1, 0])
+    if hi <= lo:
+        value = float(np.interp(w, c[:, 0], c[:, 1]))
+        return value, [value, value]
+    inner = c[(c[:, 0] > lo) & (c[:, 0] < hi)]
+    ws = np.concatenate([[lo], inner[:, 0], [hi]])
+    qs = np.interp(ws, c[:, 0], c[:, 1])
+    mean = float(np.sum(0.5 * (qs[1:] + qs[:-1]) * np.diff(ws)) / (hi - lo))
+    return mean, [float(qs.min()), float(qs.max())]
+
+
+def penetration_scenery(p: dict, folder: Path | None = None) -> Scenery:
+    """Base, rollers, symmetry axis, the footing where it is, the load curve."""
+    s = Scenery(scene="footing-penetration")
+    B = number(p, "width")
+    dw, dd = number(p, "domain_width"), number(p, "domain_depth")
+    speed = number(p, "speed", 1.0)
+    if B is None or dw is None or dd is None:
+        return s
+    half, depth = dw * B / 2, dd * B
+    w = number(p, "penetration") or B
+    s.floor, s.floor_label = 0.0, "fixed base"
+    s.walls.append((half, -1, "rollers"))
+    s.symmetry = 0.0
+    s.outline = box(0.0, half, 0.0, depth)
+    s.half_width = B / 2
+    height = w + B
+    s.bodies.append(
+        (
+            np.array(
+                [
+                    [0, depth],
+                    [B / 2, depth],
+                    [B / 2, depth + height],
+                    [0, depth + height],
+                ],
+                float,
+            ),
+            np.array([0.0, -speed]),
+            "footing",
+        )
+    )
+    s.label = lambda t: f"w/B = {speed * t / B:.3g}"
+    su = number(p, "su")
+    if su:
+        s.q_reference = prandtl_nc(0.0) * su
+    if folder is not None:
+        s.load_curve = _saved_curve(Path(folder), B, su or 1.0)
+    return s
+
+
+def _saved_curve(folder: Path, B: float, su: float) -> np.ndarray | None:
+    """``[w, q]`` rows of a finished run's summary (None without one)."""
+    import json
+
+    try:
+        data = json.loads((folder / "summary.json").read_text())
+        c = np.array(data["metrics"]["curve"], dtype=float).reshape(-1, 2)
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return np.stack([c[:, 0] * B, c[:, 1] * su], axis=1)
+
+
+SCENE = Scene(
+    name="footing-penetration",
+    description=__doc__.strip().splitlines()[0].split(": ", 1)[1],
+    params=PARAMS,
+    build=build,
+    metrics_doc=METRICS,
+    scenery=penetration_scenery,
+)

@@ -1,0 +1,75 @@
+"""Scene ``footing-penetration``: a rigid strip footing pushed into Tresca clay.
+
+Reference: Prandtl's ``q/s_u = 2 + pi`` (weightless Tresca soil, smooth or
+rough).  The checks use a stiff soil, E_u/s_u = 1000: at the default 100 the
+soil still settles elastically at w/B = 0.1 (the small-strain curve of the
+same block, scene ``strip-footing``, is at 4.82 there and reaches 2 + pi at
+w/B = 0.16), so no discretisation would give Prandtl at w/B = 0.1.  Soil
+nodes passing the footing's edge make the curve a saw-tooth of about a
+spacing over B; ``bearing_factor`` is its mean over one spacing of
+penetration around w/B = 0.1.  Measured (E_u/s_u = 1000, w = 0.15 B):
+-15.4 % at h = B/10, -1.0 % at B/20, +0.13 % at B/40.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from skfem_npfem import ParameterError, run_scene
+
+SCENE = "footing-penetration"
+
+
+def test_footing_penetration_coarse_reaches_prandtl_and_keeps_out():
+    res = run_scene(SCENE, {"spacing": 0.1, "penetration": 0.15, "E": 1e6})
+    m = res["metrics"]
+    assert set(res["solver"]["statuses"]) <= {"Solved", "AlmostSolved"}
+    # measured -15.4 % at h = B/10 (five spacings under the half footing)
+    assert m["relative_error"] == pytest.approx(0.0, abs=0.2)
+    lo, hi = m["bearing_factor_range"]
+    assert lo <= m["bearing_factor"] <= hi
+    assert m["max_body_penetration"] <= 0.5 * 0.1  # measured 1e-15
+    assert m["max_heave"] > 0.0
+
+
+def test_footing_penetration_rough_interface_runs():
+    res = run_scene(SCENE, {"spacing": 0.1, "penetration": 0.1, "interface": "rough"})
+    m = res["metrics"]
+    assert set(res["solver"]["statuses"]) <= {"Solved", "AlmostSolved"}
+    assert m["bearing_factor"] == pytest.approx(2 + 3.141592653589793, rel=0.3)
+
+
+@pytest.mark.parametrize(
+    ("over", "name"),
+    [
+        ({"spacing": 0.5}, "spacing"),
+        ({"penetration": 5.0}, "penetration"),
+        ({"speed": 10.0, "dt": 0.05}, "speed"),
+        ({"width": 0.0}, "width"),
+        ({"width": -1.0}, "width"),
+        ({"nu": 0.5}, "nu"),
+        ({"interface": "glued"}, "interface"),
+    ],
+)
+def test_footing_penetration_bad_input(over, name):
+    with pytest.raises(ParameterError) as info:
+        run_scene(SCENE, over)
+    assert info.value.name == name and "\n" not in str(info.value)
+
+
+def test_footing_penetration_near_incompressible_runs():
+    res = run_scene(SCENE, {"spacing": 0.1, "penetration": 0.05, "nu": 0.4999})
+    assert set(res["solver"]["statuses"]) <= {"Solved", "AlmostSolved"}
+    assert res["metrics"]["final_bearing_factor"] > 0
+
+
+@pytest.mark.slow
+def test_footing_penetration_fine_prandtl():
+    res = run_scene(
+        SCENE, {"spacing": 0.025, "penetration": 0.15, "dt": 0.00625, "E": 1e6}
+    )
+    m = res["metrics"]
+    # measured +0.13 % at h = B/40 (saw-tooth 4.93-5.20 over the window;
+    # about two and a half minutes on one core)
+    assert m["relative_error"] == pytest.approx(0.0, abs=0.03)
+    assert m["max_body_penetration"] <= 0.5 * 0.025
