@@ -173,7 +173,8 @@ def used_parameters(
     if geometry == "plane-strain":
         return set(plane_names) | {"geometry"}
     common = {"geometry", "dp_match", "size_check", "strength_floor"}
-    common |= {"stabilisation", "nodal_mass", "volume_correction"}
+    common |= {"stabilisation", "stabilisation_mode", "nodal_mass"}
+    common |= {"volume_correction"}
     common |= {
         "spacing", "material", "rho", "E", "nu", "phi", "psi", "c",
         "floor_friction", "K0", "gravity", "dt", "t_end", "rest_fraction",

@@ -39,6 +39,8 @@ from .collapse_geometry import (
 )
 from .column_collapse import SCENE as PLANE_STRAIN
 from .column_collapse import (
+    COLLAPSE_VOLUME_CORRECTION,
+    VOLUME_CORRECTION_STRAIN,
     collapse_scenery,
     collapse_simulation,
     collapse_time,
@@ -59,17 +61,38 @@ MASS_BASIS = {
 }
 
 
+#: Defaults of N-PFEM's stress stabilisation and volume correction for the
+#: cylindrical geometries: ``(beta, stabilisation_mode, kappa)``, chosen from
+#: measurements on the seed column (docs/seed_column.md, "Smooth and
+#: volume-keeping by default").  The reference paper's bare method is
+#: ``--set stabilisation=0 --set volume_correction=0``.
+CYLINDER_FIDELITY = {
+    "axisymmetric": (100.0, "full", COLLAPSE_VOLUME_CORRECTION),
+    "quarter-cylinder": (30.0, "full", COLLAPSE_VOLUME_CORRECTION),
+}
+
+
 def column_setup(values: dict[str, Any]) -> ColumnSetup:
     """Particles, model and remesher of a resolved axisymmetric or 3D column.
 
-    The node-mass rule and the stabilisation (``nodal_mass``, ``stabilisation``)
-    are those of the plane-strain scene, with the stabilisation off by default:
-    the seed case is the reference paper's, which uses none, and in 3D the
-    stabilisation doubles the step time.  In axisymmetry its residual carries
-    the hoop terms (docs/seed_column.md measures beta = 30 there).
+    The node-mass rule, the stabilisation and the volume correction
+    (``nodal_mass``, ``stabilisation``, ``stabilisation_mode``,
+    ``volume_correction``) are those of the plane-strain scene with the
+    defaults of :data:`CYLINDER_FIDELITY` for the cylindrical geometries (the
+    volume correction where its premise holds: ``psi = 0`` and a stiff soil,
+    as in plane strain); the box keeps the stabilisation off.  In
+    axisymmetry the residual carries the hoop terms.
     """
     setup = _column_setup(values)
-    fidelity = fidelity_from(values, 0.0)
+    geo = values["geometry"]
+    if geo in CYLINDER_FIDELITY:
+        beta, mode, kappa = CYLINDER_FIDELITY[geo]
+        strain = values["rho"] * values["gravity"] * values["height"] / values["E"]
+        if values["psi"] != 0.0 or strain > VOLUME_CORRECTION_STRAIN:
+            kappa = 0.0
+        fidelity = fidelity_from(values, beta, kappa, mode)
+    else:
+        fidelity = fidelity_from(values, 0.0)
     return replace(setup, model=replace(setup.model, **fidelity))
 
 
@@ -219,6 +242,10 @@ GEOMETRY_NOTES = {
     "spacing": "cylindrical: default r0/18; box: L0/22",
     "material": "3D: drucker-prager only; cylindrical and box default drucker-prager",
     "dt": "cylindrical: default 2 ms",
+    "stabilisation": "axisymmetric: default 100; quarter-cylinder: default 30; "
+    "the paper's bare method: 0",
+    "volume_correction": "cylindrical: default 0.05 where psi = 0 and "
+    "rho g h0 / E <= 0.01",
     "max_displacement": "not in axisymmetry",
 }
 
