@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..constants import GRAVITY
-from ..laws import lube2004_runout
+from ..laws import lajeunesse2004_runout, lube2004_runout
 from ..laws import lube2005_runout as lube_runout
 from ..mesh.sources import main_body
 from ..run.simulation import AtRest, Simulation
@@ -189,6 +189,7 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
         out: dict[str, Any] = {key: run, "normalised_runout": (run - L0) / L0}
         if cyl:
             out["reference_runout_lube2004"] = lube2004_runout(H0 / L0)
+            out["reference_runout_lajeunesse2004"] = lajeunesse2004_runout(H0 / L0)
         else:
             out["runout_main_body"] = float(last.get("runout_main_body", L0))
             out["runout_tip"] = float(last.get("runout_tip", L0))
