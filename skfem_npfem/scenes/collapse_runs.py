@@ -37,7 +37,6 @@ from .collapse_geometry import (
     GeometryScene,
     metrics_doc,
 )
-from .column_collapse import SCENE as PLANE_STRAIN
 from .column_collapse import (
     COLLAPSE_VOLUME_CORRECTION,
     VOLUME_CORRECTION_STRAIN,
@@ -46,6 +45,7 @@ from .column_collapse import (
     collapse_time,
     run_control,
 )
+from .column_collapse import SCENE as PLANE_STRAIN
 from .common import fidelity_from, solver_from
 from .cylinder import ColumnSetup, cylinder_column, mass_quantile, radial_front
 from .methods import with_method
