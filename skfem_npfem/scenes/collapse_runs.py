@@ -284,6 +284,16 @@ def with_geometries(plane: Scene) -> GeometryScene:
     )
 
 
+#: What the stress fields of an axisymmetric result are (the VTU slots
+#: xx, yy, zz, xy hold rr, zz, theta-theta, rz).
+AXISYMMETRIC_FIELDS = {
+    "stress_xx": "radial stress \u03c3_rr (tension +)",
+    "stress_yy": "vertical stress \u03c3_zz (tension +)",
+    "stress_zz": "hoop stress \u03c3_\u03b8\u03b8 (tension +)",
+    "stress_xy": "shear stress \u03c3_rz",
+}
+
+
 def geometry_scenery(p: dict, folder: Path | None = None) -> Scenery:
     """The collapse's scenery for its geometry (3D geometries: plane-strain's)."""
     if p.get("geometry") != "axisymmetric":
@@ -295,7 +305,10 @@ def geometry_scenery(p: dict, folder: Path | None = None) -> Scenery:
     g = number(p, "gravity", GRAVITY) or GRAVITY
     s.floor, s.floor_label = 0.0, "rough floor"
     s.outline = box(0.0, r0, 0.0, h0)
-    s.walls.append((0.0, 1, "axis r = 0 (symmetry)"))
+    # The axis is no wall: the section turns about it (u_r = 0 there).
+    s.symmetry, s.symmetry_label = 0.0, "axis of symmetry r = 0"
+    s.axes = ("r", "z")
+    s.field_names = dict(AXISYMMETRIC_FIELDS)
     s.runout_reference = r0 * (1.0 + lube2004_runout(h0 / r0))
     s.runout_label = "Lube et al. 2004: r\u221e"
     s.tau = math.sqrt(h0 / g)

@@ -500,11 +500,12 @@ def plot_results(
         fixed = clim is not None and name in clim
         lo, hi = (float(v) for v in clim[name]) if fixed else loaded.ranges[name]
         style = _style(name, lo, hi, fixed=fixed)
-        title = f"{sc.scene + ': ' if sc.scene else ''}{FIELDS[name]}"
+        what = sc.field_names.get(name, FIELDS[name])
+        title = f"{sc.scene + ': ' if sc.scene else ''}{what}"
 
-        def make(fast: bool, name=name, style=style, title=title):
+        def make(fast: bool, name=name, style=style, title=title, what=what):
             if loaded.dim == 2:
-                label = f"{FIELDS[name]} [{style.unit}]"
+                label = f"{what} [{style.unit}]"
                 ext = _extend(style, *loaded.extremes.get(name, (0.0, 0.0)))
                 return Frames2D(loaded.kept, name, style, title, label, sc, view, ext)
             return Renderer(
