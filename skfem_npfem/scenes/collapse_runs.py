@@ -296,6 +296,18 @@ AXISYMMETRIC_FIELDS = {
 
 def geometry_scenery(p: dict, folder: Path | None = None) -> Scenery:
     """The collapse's scenery for its geometry (3D geometries: plane-strain's)."""
+    if p.get("geometry") == "quarter-cylinder":
+        s = collapse_scenery(p, folder)
+        # Look at the two symmetry planes (x = 0, y = 0), where the interior
+        # of the column is, and the free surface above them.
+        s.view, s.floor = (-1.0, -1.4, 0.9), 0.0
+        s.field_names = {"stress_zz": "vertical stress \u03c3_zz (tension +)"}
+        r0, h0 = number(p, "radius"), number(p, "height")
+        if r0 and h0:
+            g = number(p, "gravity", GRAVITY) or GRAVITY
+            s.tau = math.sqrt(h0 / g)
+            s.label = time_label(s.tau, "h0")
+        return s
     if p.get("geometry") != "axisymmetric":
         return collapse_scenery(p, folder)
     s = Scenery(scene="column-collapse")

@@ -48,6 +48,11 @@ class Scenery:
     axes : (str, str)
         Names of the horizontal and vertical coordinates (``("r", "z")`` for
         an axisymmetric section).
+    view : (float, float, float) or None
+        3D: direction from the body to the camera (None: the isometric
+        ``(1, 1, 1)``); with it the picture is a perspective view with the
+        floor and axes in metres (the quarter cylinder looks at its two
+        symmetry planes, where the interior of the column is).
     field_names : dict of str to str
         What a field is called in this scene when :data:`skfem_npfem.viz.plot.FIELDS`
         does not say it right (axisymmetry: ``stress_zz`` is the hoop stress).
@@ -80,6 +85,7 @@ class Scenery:
     symmetry_label: str = "symmetry axis"
     axes: tuple[str, str] = ("x", "y")
     field_names: dict[str, str] = field(default_factory=dict)
+    view: tuple[float, float, float] | None = None
     runout_reference: float | None = None
     runout_label: str = "reference run-out"
     symmetric: bool = True

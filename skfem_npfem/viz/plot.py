@@ -509,7 +509,17 @@ def plot_results(
                 ext = _extend(style, *loaded.extremes.get(name, (0.0, 0.0)))
                 return Frames2D(loaded.kept, name, style, title, label, sc, view, ext)
             return Renderer(
-                pv, loaded.kept, 3, name, style, title, sc.tau, window_size, fast=fast
+                pv,
+                loaded.kept,
+                3,
+                name,
+                style,
+                title,
+                sc.tau,
+                window_size,
+                fast=fast,
+                view=sc.view,
+                floor=sc.floor,
             )
 
         renderer = make(False)

@@ -190,17 +190,22 @@ def _grid(pv: Any, step: Step, dim: int, values: np.ndarray) -> Any:
 
 
 def _view(
-    dim: int, lo: np.ndarray, hi: np.ndarray
+    dim: int,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    direction: tuple[float, float, float] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, tuple[float, float]]:
     """View direction, screen-up vector and screen extent of the box lo..hi.
 
-    2D looks down -z; 3D is an isometric view with z up.
+    2D looks down -z; 3D looks from ``direction`` (default the isometric
+    ``(1, 1, 1)``) with z up.
     """
     if dim == 2:
         view_dir, up = np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0])
     else:
-        view_dir = np.ones(3) / math.sqrt(3.0)
-        up = np.array([0.0, 0.0, 1.0]) - view_dir / math.sqrt(3.0)
+        view_dir = np.asarray(direction or (1.0, 1.0, 1.0), float)
+        view_dir = view_dir / np.linalg.norm(view_dir)
+        up = np.array([0.0, 0.0, 1.0]) - view_dir[2] * view_dir
         up /= np.linalg.norm(up)
     right = np.cross(up, view_dir)
     corners = np.array(
@@ -231,14 +236,21 @@ class Renderer:
         tau: float | None,
         window_size: tuple[int, int] | None,
         fast: bool = False,
+        view: tuple[float, float, float] | None = None,
+        floor: float | None = None,
     ) -> None:
         self.pv, self.steps, self.dim, self.name = pv, steps, dim, name
         self.style, self.title, self.tau = style, title, tau
         pts = np.vstack([s.points for s in steps.values()])
         lo, hi = pts.min(axis=0), pts.max(axis=0)
-        view_dir, up, extent = _view(dim, lo, hi)
+        perspective = dim == 3 and view is not None
+        if perspective and floor is not None:
+            lo[2] = min(lo[2], floor)
+        view_dir, up, extent = _view(dim, lo, hi, view if dim == 3 else None)
         if window_size is None:
             window_size = _window_size(*extent)
+            if perspective:  # room for the axes' labels
+                window_size = (max(window_size[0], 960), max(window_size[1], 880))
         self.size = (int(window_size[0]), int(window_size[1]))
         w, h = self.size
         band = h - _TOP - _BOTTOM
@@ -259,16 +271,57 @@ class Renderer:
         self.depth = 2 * spacing + 1e-3 * float(np.max(size)) if dim == 2 else 0.0
         # camera: parallel projection, the domain (union of all steps) centred
         # in the band between the colour bar and the two text lines
-        self.pl.enable_parallel_projection()
         diag = float(np.linalg.norm(size)) + 1e-12
         focal = (lo + hi) / 2 - (_BOTTOM + band / 2 - h / 2) / scale * up
-        dist = 2.0 * diag + 1.0
         cam = self.pl.camera
+        if perspective:
+            # the same framing at the focal plane as the parallel view, seen
+            # from a distance of ~3 body sizes (view angle 2 atan(1/6))
+            half = h / (2 * scale)
+            dist = max(4.0 * diag, half / math.tan(math.radians(15.0)))
+            cam.view_angle = 2.0 * math.degrees(math.atan(1.3 * half / dist))
+            self._scenery_3d(lo, hi, floor, spacing)
+        else:
+            self.pl.enable_parallel_projection()
+            dist = 2.0 * diag + 1.0
+            cam.parallel_scale = h / (2 * scale)
         cam.focal_point = tuple(focal)
         cam.position = tuple(focal + dist * view_dir)
         cam.up = tuple(up)
-        cam.parallel_scale = h / (2 * scale)
         cam.clipping_range = (max(dist - 2 * diag, 1e-6), dist + 2 * diag)
+
+    def _scenery_3d(
+        self, lo: np.ndarray, hi: np.ndarray, floor: float | None, spacing: float
+    ) -> None:
+        """The floor (a grey plane under the body) and axes in metres."""
+        pl, pv = self.pl, self.pv
+        if floor is not None:
+            pad = 2.0 * spacing
+            mid = (lo + hi) / 2
+            plane = pv.Plane(
+                center=(mid[0], mid[1], floor - 1e-4 * spacing),
+                direction=(0.0, 0.0, 1.0),
+                i_size=hi[0] - lo[0] + 2 * pad,
+                j_size=hi[1] - lo[1] + 2 * pad,
+            )
+            pl.add_mesh(plane, color="#c8c8c8", lighting=False, render=False)
+        pl.show_bounds(
+            bounds=(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]),
+            xtitle="x [m]",
+            ytitle="y [m]",
+            ztitle="z [m]",
+            color="black",
+            font_size=self._font_size() - 4,
+            location="outer",
+            grid=False,
+            all_edges=False,
+            ticks="outside",
+            n_xlabels=3,
+            n_ylabels=3,
+            n_zlabels=3,
+            fmt="%.2f",
+            render=False,
+        )
 
     def _font_size(self) -> int:
         return max(12, min(18, self.size[0] // 48))
