@@ -301,7 +301,7 @@ def geometry_scenery(p: dict, folder: Path | None = None) -> Scenery:
         # Look at the two symmetry planes (x = 0, y = 0), where the interior
         # of the column is, and the free surface above them.
         s.view, s.floor = (-1.0, -1.4, 0.9), 0.0
-        s.field_names = {"stress_zz": "vertical stress \u03c3_zz (tension +)"}
+        s.field_names = {"stress_zz": "vertical stress sigma_zz (tension +)"}
         r0, h0 = number(p, "radius"), number(p, "height")
         if r0 and h0:
             g = number(p, "gravity", GRAVITY) or GRAVITY
