@@ -68,7 +68,7 @@ MASS_BASIS = {
 #: ``--set stabilisation=0 --set volume_correction=0``.
 CYLINDER_FIDELITY = {
     "axisymmetric": (100.0, "full", COLLAPSE_VOLUME_CORRECTION),
-    "quarter-cylinder": (30.0, "full", COLLAPSE_VOLUME_CORRECTION),
+    "quarter-cylinder": (30.0, "mean", 0.0),
 }
 
 
@@ -245,8 +245,9 @@ GEOMETRY_NOTES = {
     "dt": "cylindrical: default 2 ms",
     "stabilisation": "axisymmetric: default 100; quarter-cylinder: default 30; "
     "the paper's bare method: 0",
-    "volume_correction": "cylindrical: default 0.05 where psi = 0 and "
-    "rho g h0 / E <= 0.01",
+    "stabilisation_mode": "quarter-cylinder: default mean",
+    "volume_correction": "axisymmetric: default 0.05 where psi = 0 and "
+    "rho g h0 / E <= 0.01; quarter-cylinder: 0",
     "max_displacement": "not in axisymmetry",
 }
 
