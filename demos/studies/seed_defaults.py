@@ -92,6 +92,7 @@ CASES: dict[str, tuple[str, dict[str, Any]]] = {
     "sens-12-phi-32": ("sens", {**AXI, **_sp(12), "phi": 32.0}),
     "sens-12-phi-34": ("sens", {**AXI, **_sp(12), "phi": 34.0}),
     "sens-18-floor-20": ("sens", {**AXI, "floor_friction": 20.0}),
+    "sens-18-floor-25": ("sens", {**AXI, "floor_friction": 25.0}),
     "sens-18-phi-28": ("sens", {**AXI, "phi": 28.0}),
     "sens-18-phi-34": ("sens", {**AXI, "phi": 34.0}),
     "q8-bare": ("q8", {**Q8, **BARE}),
@@ -395,7 +396,22 @@ def _sens_plot(records: dict[str, dict[str, Any]], path: Path) -> None:
     names = list(sens)
     fig, ax = plt.subplots(figsize=(7.0, 0.28 * len(names) + 1.5))
     y = np.arange(len(names))
-    ax.barh(y, [sens[n]["normalised_runout"] for n in names], color="C0")
+    run = np.array([sens[n]["normalised_runout"] for n in names])
+    top = 4.0  # a run-out beyond it (the smooth floor) is written, not drawn
+    ax.barh(y, np.minimum(run, top), color="C0")
+    for k, n in enumerate(names):
+        if run[k] > top or not sens[n]["at_rest"]:
+            text = f"{run[k]:.3g}" + ("" if sens[n]["at_rest"] else ", not at rest")
+            ax.text(
+                min(run[k], top) * 0.98,
+                k,
+                text,
+                ha="right",
+                va="center",
+                color="white",
+                fontsize=7,
+            )
+    ax.set_xlim(0, top)
     ax.set_yticks(y, names, fontsize=8)
     ax.axvline(lube2004_runout(2.0), color="C3", label="Lube et al. 2004")
     ax.axvline(lajeunesse2004_runout(2.0), color="C2", label="Lajeunesse et al. 2004")
