@@ -47,6 +47,7 @@ from typing import Any
 import numpy as np
 from _common import ROOT, WORK
 
+from skfem_npfem.baseline.reporting import save_png
 from skfem_npfem.laws import lajeunesse2004_runout, lube2004_runout
 
 R0 = 0.039
@@ -230,7 +231,10 @@ def report(records: dict[str, dict[str, Any]], fill: Path, out: Path) -> None:
                 / cost["beta=0"]["median_s_per_iteration"]
             )
             rec["ipm_iterations_mean"] = cost[name]["ipm_iterations_mean"]
-    slim = {k: {kk: vv for kk, vv in v.items()} for k, v in records.items()}
+    drop = ("step_s", "time_per_step")  # the per-step R stays
+    slim = {
+        k: {a: b for a, b in v.items() if a not in drop} for k, v in records.items()
+    }
     (out / "defaults.json").write_text(
         json.dumps({"cases": slim, "fill_r0_12": fills}, indent=1, default=float)
     )
@@ -379,7 +383,7 @@ def _cost_plot(q8: dict[str, dict[str, Any]], path: Path) -> None:
     ax.set_title("3D quarter cylinder: smoothness against cost")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_png(fig, path, dpi=110)
     plt.close(fig)
 
 
@@ -419,7 +423,7 @@ def _sens_plot(records: dict[str, dict[str, Any]], path: Path) -> None:
     ax.invert_yaxis()
     ax.legend(fontsize=8, loc="lower right")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_png(fig, path, dpi=110)
     plt.close(fig)
 
 
