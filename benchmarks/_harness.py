@@ -426,7 +426,7 @@ def load_pair(path_a: str, path_b: str) -> tuple[dict, dict, list[str]]:
 
 def write_report(path: Path, report: dict, markdown: str) -> None:
     """Write ``report`` to ``path`` (JSON) and ``markdown`` next to it (``.md``)."""
-    path.write_text(json.dumps(report, indent=1))
+    path.write_text(json.dumps(report, separators=(",", ":")) + "\n")  # compact
     path.with_suffix(".md").write_text(markdown)
 
 

@@ -11,9 +11,17 @@ Cases: plane strain at 48 particles across L0 (~4.7k particles) and the 3D
 quarter cylinder of the seed column at ``--divisions`` spacings across r0
 (12: ~3k particles; 18: the seed resolution, ~10k particles, slow).
 
+With ``--modes`` the quarter cylinder is stepped in five variants instead
+(beta = 0; beta = 30 with each ``stabilisation_mode``: full, vertical,
+sigma_v, mean), alternately, and each variant's median step is reported
+against the unstabilised one.
+
 Usage (repository root)::
 
     python benchmarks/stabilisation_cost.py --divisions 12 --steps 4
+    python benchmarks/stabilisation_cost.py --cases quarter_cylinder \\
+        --divisions 8 --steps 10 --modes \\
+        --out benchmarks/results/stabilisation_modes_cost_8.json
     python benchmarks/stabilisation_cost.py --cases plane_strain --steps 40 \\
         --out benchmarks/results/stabilisation_cost_2d_40.json
 
@@ -70,12 +78,50 @@ def alternate(params: dict[str, Any], steps: int) -> dict[str, Any]:
     }
 
 
+#: ``--modes`` variants: name -> (beta, stabilisation_mode).
+MODES = {
+    "beta=0": (0.0, "full"),
+    "full": (30.0, "full"),
+    "vertical": (30.0, "vertical"),
+    "sigma_v": (30.0, "sigma_v"),
+    "mean": (30.0, "mean"),
+}
+
+
+def alternate_modes(params: dict[str, Any], steps: int) -> dict[str, Any]:
+    """Median step time of each :data:`MODES` variant, stepped alternately."""
+    scene = get_scene("column-collapse")
+    sims = {}
+    for name, (beta, mode) in MODES.items():
+        over = {**params, "stabilisation": beta, "stabilisation_mode": mode}
+        sims[name] = scene.build(scene.resolve(over), out=None, progress=False)
+        sims[name] = sims[name].simulation
+    for _ in range(steps):
+        for sim in sims.values():
+            sim.run(steps=1)
+    out: dict[str, Any] = {"params": params, "steps": steps, "variants": {}}
+    out["particles"] = int(sims["beta=0"].particles.n)
+    for name, s in sims.items():
+        totals = np.array([sum(r.timings.values()) for r in s.records])
+        iters = np.array([r.iterations for r in s.records])
+        out["variants"][name] = {
+            "median_step_s": float(np.median(totals)),
+            "ipm_iterations_mean": float(iters.mean()),
+            "median_s_per_iteration": float(np.median(totals / np.maximum(iters, 1))),
+        }
+    base = out["variants"]["beta=0"]["median_step_s"]
+    for rec in out["variants"].values():
+        rec["ratio"] = rec["median_step_s"] / base
+    return out
+
+
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """Run both cases and write the JSON (returned)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--divisions", type=int, default=12, help="3D: r0 / spacing")
     ap.add_argument("--steps", type=int, default=4)
     ap.add_argument("--cases", nargs="+", choices=CASES, default=list(CASES))
+    ap.add_argument("--modes", action="store_true", help="3D: the five variants")
     ap.add_argument("--out", type=Path, default=OUT)
     args = ap.parse_args(argv)
     r0 = 0.039
@@ -87,7 +133,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         },
     }
     start = time.perf_counter()
-    result: dict[str, Any] = {c: alternate(cases[c], args.steps) for c in args.cases}
+    run = alternate_modes if args.modes else alternate
+    result: dict[str, Any] = {c: run(cases[c], args.steps) for c in args.cases}
     result["note"] = "2 cores, shared machine: ratios measured in one run"
     result["wall_s"] = time.perf_counter() - start
     write_json(args.out, result)

@@ -19,6 +19,12 @@ solving it again in a child process with MKL Pardiso's statistics
   stress block's diagonal) are not a method: only the symbolic numbers
   (factor non-zeros, GFLOP) of this row are meant to be read.
 
+With ``--modes`` the state is also stepped with the reduced stabilisation
+modes (``stabilisation_mode``: ``vertical``, ``sigma_v``, ``mean``;
+:mod:`skfem_npfem.step.stabilisation`), at ``beta=30`` and at the ``--betas``
+given, one row ``mode=<mode>,beta=<beta>`` each (the ``mean`` mode is the
+library's version of the ``one-scalar`` sparsity).
+
 The factor's non-zeros and GFLOP per factorisation come from Pardiso's
 symbolic phase and do not depend on the machine's load; the solve times do.
 
@@ -110,8 +116,17 @@ def measure(prog: dict[str, Any]) -> dict[str, Any]:
     return rec
 
 
-def run(case: str, divisions: float, skip: int) -> dict[str, Any]:
-    """Measure the three programs on one state of ``case``."""
+MODES = ("vertical", "sigma_v", "mean")
+
+
+def run(
+    case: str,
+    divisions: float,
+    skip: int,
+    modes: bool = False,
+    betas: tuple[float, ...] = (),
+) -> dict[str, Any]:
+    """Measure the programs on one state of ``case`` (see the module notes)."""
     scene = get_scene("column-collapse")
     params = {**case_params(case, divisions), "linear_solver": "mkl"}
     values = scene.resolve({**params, "stabilisation": 30.0})
@@ -122,6 +137,15 @@ def run(case: str, divisions: float, skip: int) -> dict[str, Any]:
         twin = copy.deepcopy(sim)
         twin.model = dataclasses.replace(twin.model, stabilisation=beta)
         progs[f"beta={beta:g}"] = capture_step(twin)
+    variants = [("full", b) for b in betas if b != 30.0]
+    if modes:
+        variants += [(m, b) for m in MODES for b in (30.0, *betas) if b]
+    for mode, beta in variants:
+        twin = copy.deepcopy(sim)
+        twin.model = dataclasses.replace(
+            twin.model, stabilisation=beta, stabilisation_mode=mode
+        )
+        progs[f"mode={mode},beta={beta:g}"] = capture_step(twin)
     n = int(sim.particles.n)
     d = int(sim.particles.x.shape[1])
     ns = progs["beta=0"]["ns"]
@@ -142,7 +166,7 @@ def run(case: str, divisions: float, skip: int) -> dict[str, Any]:
         keys = ("factor_nnz", "gflop_per_factorisation")
         print(name, {k: out[name][k] for k in keys})
     base = out["beta=0"]
-    for name in ("beta=30", "one-scalar"):
+    for name in [k for k in progs if k != "beta=0"]:
         out[name]["factor_nnz_ratio"] = out[name]["factor_nnz"] / base["factor_nnz"]
         out[name]["gflop_ratio"] = (
             out[name]["gflop_per_factorisation"] / base["gflop_per_factorisation"]
@@ -157,9 +181,13 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--case", choices=("plane_strain", "quarter_cylinder"))
     ap.add_argument("--divisions", type=float, default=12.0, help="3D: r0 / spacing")
     ap.add_argument("--skip", type=int, default=2, help="steps before the measured one")
+    ap.add_argument("--modes", action="store_true", help="the reduced modes too")
+    ap.add_argument(
+        "--betas", type=float, nargs="*", default=[], help="more beta values"
+    )
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
-    result = run(args.case, args.divisions, args.skip)
+    result = run(args.case, args.divisions, args.skip, args.modes, tuple(args.betas))
     tag = args.case
     if args.case == "quarter_cylinder":
         tag += f"_{args.divisions:g}"

@@ -4,6 +4,7 @@
   Lube et al. (2005);
 * :func:`lube2004_runout` -- run-out of axisymmetric column collapses, Lube et
   al. (2004);
+* :func:`lajeunesse2004_runout` -- the same, Lajeunesse et al. (2004);
 * :func:`prandtl_nc` -- the exact bearing factor ``N_c`` of a smooth strip
   footing on a weightless Mohr-Coulomb soil (Prandtl 1920, Reissner 1924);
 * :func:`teh_houlsby_nc` -- the cone factor of a smooth cone in undrained
@@ -18,7 +19,13 @@ import math
 
 from .errors import ParameterError
 
-__all__ = ["lube2004_runout", "lube2005_runout", "prandtl_nc", "teh_houlsby_nc"]
+__all__ = [
+    "lajeunesse2004_runout",
+    "lube2004_runout",
+    "lube2005_runout",
+    "prandtl_nc",
+    "teh_houlsby_nc",
+]
 
 
 def lube2005_runout(aspect: float) -> float:
@@ -53,6 +60,25 @@ def lube2004_runout(aspect: float) -> float:
     2.2627
     """
     return 1.24 * aspect if aspect <= 1.7 else 1.6 * math.sqrt(aspect)
+
+
+def lajeunesse2004_runout(aspect: float) -> float:
+    """Normalised run-out ``(r_inf - r0)/r0`` of Lajeunesse et al. (2004), axisymmetric.
+
+    ``a`` for ``a <= 0.74`` and ``2 a^(1/2)`` above, as quoted by Staron &
+    Hinch (2005, section 3) beside Lube et al.'s laws (the primary paper was
+    not available to check; 0.74 is also where the paper's deposits change from
+    truncated cones to cones, and the two branches do not meet there).  At
+    ``a = 2`` it gives 2.83, 25 % above :func:`lube2004_runout`: the two
+    experimental laws bound the band a model of the seed column is read
+    against (docs/seed_column.md).
+
+    Examples
+    --------
+    >>> round(lajeunesse2004_runout(2.0), 4), lajeunesse2004_runout(0.5)
+    (2.8284, 0.5)
+    """
+    return aspect if aspect <= 0.74 else 2.0 * math.sqrt(aspect)
 
 
 def prandtl_nc(phi_deg: float) -> float:

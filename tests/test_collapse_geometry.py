@@ -77,7 +77,9 @@ def test_geometry_runs_from_the_cli(tmp_path, geometry):
         sc = scenery(out)
         assert np.allclose(sc.outline.max(axis=0), [R0, H0])
         assert sc.runout_reference == pytest.approx(R0 * (1 + 1.6 * math.sqrt(2)))
-        assert "2004" in sc.runout_label and sc.walls[0][2].startswith("axis")
+        assert "2004" in sc.runout_label and not sc.walls  # the axis is no wall
+        assert sc.symmetry == 0.0 and sc.symmetry_label.startswith("axis")
+        assert sc.axes == ("r", "z") and "hoop" in sc.field_names["stress_zz"]
     if geometry == "box":
         # The slab: rho L0 H0 W (1e-12), W = 4 spacings.
         assert abs(mass / (RHO * 0.2 * 0.4 * 0.16) - 1) < 1e-12

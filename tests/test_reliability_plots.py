@@ -23,8 +23,10 @@ from skfem_npfem.cli import main
 from skfem_npfem.io import ResultWriter, write_checkpoint
 from skfem_npfem.particles import Particles
 from skfem_npfem.scenes.column_collapse import lube_runout
+from skfem_npfem.viz.colours import _robust_range, _style
 from skfem_npfem.viz.figures import Frames2D, crop, load_settlement_figure
-from skfem_npfem.viz.plot import _load, _robust_range, _style, plot_results
+from skfem_npfem.viz.loading import _load
+from skfem_npfem.viz.plot import plot_results
 from skfem_npfem.viz.scenery import scenery
 
 L0, A = 0.2, 2.0

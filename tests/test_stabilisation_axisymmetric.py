@@ -198,3 +198,27 @@ def test_the_axisymmetric_seed_collapse_runs_stabilised_and_smoother():
     assert stab["metrics"]["stress_roughness_max"] < 0.15
     runout = plain["metrics"]["normalised_runout"]
     assert stab["metrics"]["normalised_runout"] == pytest.approx(runout, rel=0.05)
+
+
+def test_the_axisymmetric_seed_column_is_smooth_and_keeps_its_volume_by_default():
+    # The seed column in axisymmetry at its defaults (stabilisation beta = 100,
+    # volume correction kappa = 0.05; docs/seed_column.md) at r0/8 (153
+    # particles), to rest.  Targets of the default spacing r0/18: stress
+    # roughness R <= 0.10 at every output step, volume within 3 % at rest
+    # (measured there: R max 0.081, volume +0.4 %).  At r0/8 the measure's
+    # floor is higher (about 50 interior particles, an irregular coarse
+    # lattice), so the tolerance on R max is doubled, 0.20; R at rest keeps
+    # 0.10.  Measured here: R max 0.188, at rest 0.085, volume -2.2 %; with
+    # --set stabilisation=0 --set volume_correction=0: R max 0.554, at rest 0.244.
+    from skfem_npfem import run_scene
+
+    res = run_scene(
+        "column-collapse",
+        {"geometry": "axisymmetric", "spacing": 0.039 / 8, "threads": 1},
+    )
+    m = res["metrics"]
+    assert m["at_rest"]
+    assert m["stress_roughness_max"] <= 0.20
+    assert m["stress_roughness"] <= 0.10
+    assert abs(m["volume_change"]) <= 0.03
+    assert m["mass_change"] == 0.0

@@ -129,6 +129,9 @@ GEOMETRY_METRICS = {
     "radius within which 99 % of the mass lies, m",
     "reference_runout_lube2004": "cylindrical geometries: Lube et al. 2004, "
     "(r_inf - r0)/r0 = 1.24 a (a <= 1.7), 1.6 a^(1/2) (a > 1.7)",
+    "reference_runout_lajeunesse2004": "cylindrical geometries: Lajeunesse et al. "
+    "2004, (r_inf - r0)/r0 = a (a <= 0.74), 2 a^(1/2) (a > 0.74); with Lube's, "
+    "the experimental band",
     "mass_basis": "3D and axisymmetric: what masses, volumes and energies are "
     "of (axisymmetric: the full ring, 2 pi r weight; 3D: the modelled quarter or "
     "slab)",
@@ -174,7 +177,8 @@ def used_parameters(
     if geometry == "plane-strain":
         return set(plane_names) | {"geometry"}
     common = {"geometry", "dp_match", "size_check", "strength_floor"}
-    common |= {"stabilisation", "nodal_mass", "volume_correction"}
+    common |= {"stabilisation", "stabilisation_mode", "nodal_mass"}
+    common |= {"volume_correction"}
     common |= {
         "spacing", "material", "rho", "E", "nu", "phi", "psi", "c",
         "floor_friction", "K0", "gravity", "dt", "t_end", "rest_fraction",

@@ -217,10 +217,12 @@ PARAMS = [
     *METHOD_PARAMS,
     *fidelity_params(
         COLLAPSE_STABILISATION,
-        " in plane strain, 0 in 3D and axisymmetry",
+        " in plane strain, 0 for box",
         COLLAPSE_VOLUME_CORRECTION,
         f" in plane strain with psi = 0 and rho g H0 / E <= "
         f"{VOLUME_CORRECTION_STRAIN:g}",
+        "full",
+        " in every geometry",
     ),
     *solver_params(),
 ]

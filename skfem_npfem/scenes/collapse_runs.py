@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from ..constants import GRAVITY
-from ..laws import lube2004_runout
+from ..laws import lajeunesse2004_runout, lube2004_runout
 from ..laws import lube2005_runout as lube_runout
 from ..mesh.sources import main_body
 from ..run.simulation import AtRest, Simulation
@@ -38,8 +38,9 @@ from .collapse_geometry import (
     GeometryScene,
     metrics_doc,
 )
-from .column_collapse import SCENE as PLANE_STRAIN
 from .column_collapse import (
+    COLLAPSE_VOLUME_CORRECTION,
+    VOLUME_CORRECTION_STRAIN,
     collapse_scenery,
     collapse_simulation,
     collapse_time,
@@ -48,6 +49,7 @@ from .column_collapse import (
     rest_warnings,
     run_control,
 )
+from .column_collapse import SCENE as PLANE_STRAIN
 from .common import fidelity_from, solver_from
 from .cylinder import ColumnSetup, cylinder_column, mass_quantile, radial_front
 from .methods import with_method
@@ -63,17 +65,38 @@ MASS_BASIS = {
 }
 
 
+#: Defaults of N-PFEM's stress stabilisation and volume correction for the
+#: cylindrical geometries: ``(beta, stabilisation_mode, kappa)``, chosen from
+#: measurements on the seed column (docs/seed_column.md, "Smooth and
+#: volume-keeping by default").  The reference paper's bare method is
+#: ``--set stabilisation=0 --set volume_correction=0``.
+CYLINDER_FIDELITY = {
+    "axisymmetric": (100.0, "full", COLLAPSE_VOLUME_CORRECTION),
+    "quarter-cylinder": (30.0, "mean", 0.0),
+}
+
+
 def column_setup(values: dict[str, Any]) -> ColumnSetup:
     """Particles, model and remesher of a resolved axisymmetric or 3D column.
 
-    The node-mass rule and the stabilisation (``nodal_mass``, ``stabilisation``)
-    are those of the plane-strain scene, with the stabilisation off by default:
-    the seed case is the reference paper's, which uses none, and in 3D the
-    stabilisation doubles the step time.  In axisymmetry its residual carries
-    the hoop terms (docs/seed_column.md measures beta = 30 there).
+    The node-mass rule, the stabilisation and the volume correction
+    (``nodal_mass``, ``stabilisation``, ``stabilisation_mode``,
+    ``volume_correction``) are those of the plane-strain scene with the
+    defaults of :data:`CYLINDER_FIDELITY` for the cylindrical geometries (the
+    volume correction where its premise holds: ``psi = 0`` and a stiff soil,
+    as in plane strain); the box keeps the stabilisation off.  In
+    axisymmetry the residual carries the hoop terms.
     """
     setup = _column_setup(values)
-    fidelity = fidelity_from(values, 0.0)
+    geo = values["geometry"]
+    if geo in CYLINDER_FIDELITY:
+        beta, mode, kappa = CYLINDER_FIDELITY[geo]
+        strain = values["rho"] * values["gravity"] * values["height"] / values["E"]
+        if values["psi"] != 0.0 or strain > VOLUME_CORRECTION_STRAIN:
+            kappa = 0.0
+        fidelity = fidelity_from(values, beta, kappa, mode)
+    else:
+        fidelity = fidelity_from(values, 0.0)
     return replace(setup, model=replace(setup.model, **fidelity))
 
 
@@ -176,6 +199,7 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
         out: dict[str, Any] = {key: run, "normalised_runout": (run - L0) / L0}
         if cyl:
             out["reference_runout_lube2004"] = lube2004_runout(H0 / L0)
+            out["reference_runout_lajeunesse2004"] = lajeunesse2004_runout(H0 / L0)
         else:
             out["runout_main_body"] = main
             out["normalised_runout_main_body"] = (main - L0) / L0
@@ -232,6 +256,11 @@ GEOMETRY_NOTES = {
     "spacing": "cylindrical: default r0/18; box: L0/22",
     "material": "3D: drucker-prager only; cylindrical and box default drucker-prager",
     "dt": "cylindrical: default 2 ms",
+    "stabilisation": "axisymmetric: default 100; quarter-cylinder: default 30; "
+    "the paper's bare method: 0",
+    "stabilisation_mode": "quarter-cylinder: default mean",
+    "volume_correction": "axisymmetric: default 0.05 where psi = 0 and "
+    "rho g h0 / E <= 0.01; quarter-cylinder: 0",
     "max_displacement": "not in axisymmetry",
 }
 
@@ -270,8 +299,30 @@ def with_geometries(plane: Scene) -> GeometryScene:
     )
 
 
+#: What the stress fields of an axisymmetric result are (the VTU slots
+#: xx, yy, zz, xy hold rr, zz, theta-theta, rz).
+AXISYMMETRIC_FIELDS = {
+    "stress_xx": "radial stress \u03c3_rr (tension +)",
+    "stress_yy": "vertical stress \u03c3_zz (tension +)",
+    "stress_zz": "hoop stress \u03c3_\u03b8\u03b8 (tension +)",
+    "stress_xy": "shear stress \u03c3_rz",
+}
+
+
 def geometry_scenery(p: dict, folder: Path | None = None) -> Scenery:
     """The collapse's scenery for its geometry (3D geometries: plane-strain's)."""
+    if p.get("geometry") == "quarter-cylinder":
+        s = collapse_scenery(p, folder)
+        # Look at the two symmetry planes (x = 0, y = 0), where the interior
+        # of the column is, and the free surface above them.
+        s.view, s.floor = (-1.0, -1.4, 0.9), 0.0
+        s.field_names = {"stress_zz": "vertical stress sigma_zz (tension +)"}
+        r0, h0 = number(p, "radius"), number(p, "height")
+        if r0 and h0:
+            g = number(p, "gravity", GRAVITY) or GRAVITY
+            s.tau = math.sqrt(h0 / g)
+            s.label = time_label(s.tau, "h0")
+        return s
     if p.get("geometry") != "axisymmetric":
         return collapse_scenery(p, folder)
     s = Scenery(scene="column-collapse")
@@ -281,7 +332,10 @@ def geometry_scenery(p: dict, folder: Path | None = None) -> Scenery:
     g = number(p, "gravity", GRAVITY) or GRAVITY
     s.floor, s.floor_label = 0.0, "rough floor"
     s.outline = box(0.0, r0, 0.0, h0)
-    s.walls.append((0.0, 1, "axis r = 0 (symmetry)"))
+    # The axis is no wall: the section turns about it (u_r = 0 there).
+    s.symmetry, s.symmetry_label = 0.0, "axis of symmetry r = 0"
+    s.axes = ("r", "z")
+    s.field_names = dict(AXISYMMETRIC_FIELDS)
     s.runout_reference = r0 * (1.0 + lube2004_runout(h0 / r0))
     s.runout_label = "Lube et al. 2004: r\u221e"
     s.tau = math.sqrt(h0 / g)

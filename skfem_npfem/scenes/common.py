@@ -15,6 +15,7 @@ from ..errors import ParameterError
 from ..io import ResultWriter, checkpoint_step
 from ..step.model import NODAL_MASS
 from ..step.solver import ACCURACY_PRESETS, LINEAR_SOLVERS, SolverOptions
+from ..step.stabilisation import STABILISATION_MODES
 from .base import Param
 from .limits import check_size, check_steps
 
@@ -133,6 +134,8 @@ def fidelity_params(
     where: str = "",
     volume_correction: float = 0.0,
     kappa_where: str = "",
+    mode: str = "full",
+    mode_where: str = "",
 ) -> list[Param]:
     """The stress stabilisation, the nodal-mass rule and the volume correction.
 
@@ -140,7 +143,8 @@ def fidelity_params(
     ``beta`` and ``kappa`` for N-PFEM, chosen from measurements
     (docs/validation.md); see :class:`~skfem_npfem.step.model.Model`.  ``where``
     qualifies the stabilisation's default in the help (e.g. "in plane strain"),
-    ``kappa_where`` the volume correction's.
+    ``kappa_where`` the volume correction's; ``mode`` and ``mode_where`` the
+    default ``stabilisation_mode`` and its qualifier.
     """
     if volume_correction:
         kappa_default = None
@@ -169,6 +173,18 @@ def fidelity_params(
             hi=1e4,
         ),
         Param(
+            "stabilisation_mode",
+            None,
+            "-",
+            "what the stabilisation couples: full (every stress component), "
+            "vertical (the vertical momentum row), sigma_v (only the vertical "
+            "normal stress), mean (only the mean stress, one auxiliary scalar "
+            f"per particle); default {mode}{mode_where}; the reduced modes fill "
+            "the step's factor less (docs/theory.md)",
+            str,
+            STABILISATION_MODES,
+        ),
+        Param(
             "nodal_mass",
             "mesh",
             "-",
@@ -193,12 +209,15 @@ def fidelity_params(
 
 
 def fidelity_from(
-    values: dict[str, Any], stabilisation: float, volume_correction: float = 0.0
+    values: dict[str, Any],
+    stabilisation: float,
+    volume_correction: float = 0.0,
+    mode: str = "full",
 ) -> dict[str, Any]:
     """Model keyword arguments of :func:`fidelity_params`.
 
-    ``stabilisation`` and ``volume_correction`` are the scene's defaults for
-    N-PFEM (the other methods default to 0).
+    ``stabilisation``, ``volume_correction`` and ``mode`` are the scene's
+    defaults for N-PFEM (the other methods default to 0).
 
     Raises
     ------
@@ -228,11 +247,15 @@ def fidelity_from(
             f"0 with method={method} (the volume correction acts on the nodal "
             "cells of N-PFEM)",
         )
-    return {
+    out = {
         "stabilisation": float(beta),
         "nodal_mass": values["nodal_mass"],
         "volume_correction": kappa,
     }
+    chosen = values.get("stabilisation_mode")
+    if chosen is not None or mode != "full":
+        out["stabilisation_mode"] = mode if chosen is None else chosen
+    return out
 
 
 def check_soil(values: dict[str, Any]) -> None:

@@ -41,7 +41,21 @@ class Scenery:
     footing : (float, float, float) or None
         ``(x0, x1, surface)``: the footing spans x0..x1 on the soil surface.
     symmetry : float or None
-        x of a symmetry axis (the footing's half model).
+        x of a symmetry axis (the footing's half model, the axis of an
+        axisymmetric section).
+    symmetry_label : str
+        Legend text of the symmetry axis.
+    axes : (str, str)
+        Names of the horizontal and vertical coordinates (``("r", "z")`` for
+        an axisymmetric section).
+    view : (float, float, float) or None
+        3D: direction from the body to the camera (None: the isometric
+        ``(1, 1, 1)``); with it the picture is a perspective view with the
+        floor and axes in metres (the quarter cylinder looks at its two
+        symmetry planes, where the interior of the column is).
+    field_names : dict of str to str
+        What a field is called in this scene when :data:`skfem_npfem.viz.plot.FIELDS`
+        does not say it right (axisymmetry: ``stress_zz`` is the hoop stress).
     runout_reference : float or None
         Lube et al. (2005) final run-out, m from x = 0 (the collapse; Lube et
         al. 2004's run-out radius for an axisymmetric collapse).
@@ -71,6 +85,10 @@ class Scenery:
     outline: np.ndarray | None = None
     footing: tuple[float, float, float] | None = None
     symmetry: float | None = None
+    symmetry_label: str = "symmetry axis"
+    axes: tuple[str, str] = ("x", "y")
+    field_names: dict[str, str] = field(default_factory=dict)
+    view: tuple[float, float, float] | None = None
     runout_reference: float | None = None
     runout_label: str = "reference run-out"
     symmetric: bool = True

@@ -34,7 +34,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .program import Block, Program, Term
-from .stabilisation import residual_penalty
+from .stabilisation import mean_stress_link, residual_penalty
 from .volume import eigenstrain_work
 
 __all__ = [
@@ -151,6 +151,8 @@ def equilibrium(prog: Program) -> Block:
     if prog.size("r"):
         blocks.append(sp.identity(prog.size("r"), format="csc"))
     blocks += [-Nmat[free], -Tmat[free]]
+    if prog.size("mean_stress"):  # not in the equilibrium rows
+        blocks.append(sp.csc_matrix((free.size, prog.size("mean_stress"))))
     rhs = prog.ftilde[free] - G[free] @ prog.sig_n.reshape(-1)
     A = sp.hstack(blocks, format="csc")
     return Block(A, rhs, [clarabel.ZeroConeT(rhs.size)], "force")
@@ -278,4 +280,4 @@ OBJECTIVE_TERMS = (
     eigenstrain_work,
 )
 #: Row families, stacked in this order within each cone kind.
-ROW_FAMILIES = (equilibrium, contact, friction, cutoff, yield_cones)
+ROW_FAMILIES = (equilibrium, contact, friction, cutoff, yield_cones, mean_stress_link)

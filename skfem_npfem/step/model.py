@@ -13,6 +13,7 @@ from ..constants import GRAVITY
 from ..errors import ParameterError
 from ..materials import Material
 from .solver import SolverOptions
+from .stabilisation import STABILISATION_MODES
 
 __all__ = ["NODAL_MASS", "Model"]
 
@@ -57,6 +58,13 @@ class Model:
     stabilisation : float
         Factor ``beta >= 0`` of the consistent element-residual stabilisation
         of the stresses (:mod:`skfem_npfem.step.stabilisation`); 0 switches it off.
+    stabilisation_mode : {"full", "vertical", "sigma_v", "mean"}
+        Which part of the residual the stabilisation couples: all of it
+        (``"full"``, default), its vertical row, the vertical row with only
+        ``sigma_v`` at the end of the step, or only the mean stress (one
+        auxiliary scalar per particle); what is not coupled is taken at the
+        start of the step or left out.  The reduced modes fill the step's
+        factor less (:mod:`skfem_npfem.step.stabilisation`, "Modes").
     nodal_mass : {"mesh", "particle"}
         Masses of a step's nodes.  ``"mesh"`` (default): each node's cell
         volume times the mean density of its material over the current mesh
@@ -104,6 +112,7 @@ class Model:
     nodal_mass: str = "mesh"
     axisymmetric: bool = False
     volume_correction: float = 0.0
+    stabilisation_mode: str = "full"
 
     def __post_init__(self) -> None:
         if self.dim not in (2, 3):
@@ -143,6 +152,12 @@ class Model:
             isinstance(b, int | float) and math.isfinite(b) and b >= 0
         ):
             raise ParameterError("stabilisation", b, "a finite number >= 0")
+        if self.stabilisation_mode not in STABILISATION_MODES:
+            raise ParameterError(
+                "stabilisation_mode",
+                self.stabilisation_mode,
+                f"one of {', '.join(STABILISATION_MODES)}",
+            )
         k = self.volume_correction
         if isinstance(k, bool) or not (
             isinstance(k, int | float) and math.isfinite(k) and 0 <= k <= 1

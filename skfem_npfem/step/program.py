@@ -36,7 +36,8 @@ has its own ``n_p``.
 
 Variables and blocks
 --------------------
-``x = [ds (n_p*n_s) | r (n_free, dynamic) | lambda_n (n_c) | lambda_t (n_t)]``
+``x = [ds (n_p*n_s) | r (n_free, dynamic) | lambda_n (n_c) | lambda_t (n_t)
+| p (n_p, mean-stress stabilisation only)]``
 (:class:`Layout`).  A row family returns a :class:`Block` ``A x + s = b, s in
 cones`` with the unit of its rows (force or stress, for scaling); an objective
 term returns a :class:`Term` ``(P, q)``.  New physics is one more function of
@@ -144,6 +145,9 @@ class ConeInput:
     eigenstrain : ndarray (n_p, n_full) or None
         Stress-free strain prescribed over the step (full Voigt), e.g. the
         volume correction of :mod:`skfem_npfem.step.volume`; None: none.
+    stabilisation_mode : {"full", "vertical", "sigma_v", "mean"}
+        Which stress increments the stabilisation's residual couples
+        (:data:`~skfem_npfem.step.stabilisation.STABILISATION_MODES`).
     """
 
     operator: StrainOperator
@@ -164,6 +168,7 @@ class ConeInput:
     stabilisation: float = 0.0
     a_n: np.ndarray | None = None
     eigenstrain: np.ndarray | None = None
+    stabilisation_mode: str = "full"
 
 
 @dataclass
@@ -277,6 +282,10 @@ class Program:
         self.layout.add("r", self.free.size if data.dynamic else 0, "force")
         self.layout.add("lambda_n", c.size, "force")
         self.layout.add("lambda_t", self.fric.size * (d - 1), "force")
+        # The mean-stress stabilisation couples one auxiliary scalar per point
+        # (skfem_npfem.step.stabilisation); zero-size otherwise.
+        mean = data.stabilisation and data.stabilisation_mode == "mean"
+        self.layout.add("mean_stress", self.n_points if mean else 0, "stress")
         self.compliance = np.empty((self.n_points, self.ns, self.ns))
         self.yield_cones: list[tuple[np.ndarray, ConeRows]] = []
         for m_id, mat in enumerate(data.materials):
@@ -312,7 +321,7 @@ class Program:
         return self.layout.size
 
     def slice(self, name: str) -> slice:
-        """Slice of a variable block (``sigma``, ``r``, ``lambda_n``, ``lambda_t``)."""
+        """Slice of a variable block (``sigma``, ``r``, ``lambda_n``, ...)."""
         return self.layout.slices[name]
 
     def size(self, name: str) -> int:

@@ -62,25 +62,67 @@ nodes whose elements are out of balance deform a little more.  It is the
 pressure-stabilisation idea of equal-order Stokes elements (Hughes, Franca &
 Balestra 1986; Douglas & Wang 1989) applied to the whole stress of a mixed
 Hellinger-Reissner step.
+
+Modes: which stress increments the residual couples
+----------------------------------------------------
+The penalty couples the stress variables of neighbouring particles, and that
+coupling fills the factor of the step's KKT system: in 3D, with all six
+components coupled, the factor of the seed column holds 2.6x the non-zeros
+and takes 4x the flops of the unstabilised one
+(``benchmarks/stabilisation_fill.py``).  ``stabilisation_mode``
+(:data:`STABILISATION_MODES`) chooses what the residual takes at the end of
+the step; the rest of the stress enters it at the start of the step (lagged,
+like the inertia), so the residual is the same, and what changes is which
+increments it can correct within the step:
+
+* ``"full"``: every component (the residual above, exactly);
+* ``"vertical"``: only the vertical row of the residual (the vertical momentum
+  balance), exactly: the components it contains (``sigma_xz, sigma_yz,
+  sigma_zz`` in 3D; ``sigma_rz, sigma_zz`` in axisymmetry) are coupled, the
+  horizontal rows are not penalised.  Consistent like ``"full"``;
+* ``"sigma_v"``: the vertical row with only the vertical normal stress
+  ``sigma_v`` taken at the end of the step (the component whose checkerboard
+  the stress roughness measures): one coupled variable per particle;
+* ``"mean"``: only the mean stress ``p = tr(sigma) / n_v`` of the ``n_v``
+  normal components: ``R = grad p(ds) + div sigma_n + f - m a``.  The step
+  gets one auxiliary variable per particle, ``p_i``, tied to its stress
+  increments by a zero-cone row, and the penalty couples only the ``p_i``:
+  the sparsity of a pressure-projection stabilisation (Dohrmann & Bochev
+  2004), the cheapest coupling of neighbouring stresses there is.
+  (``div (p I) = grad p`` in axisymmetry too: the hoop terms of an isotropic
+  stress vanish.)
+
+The lagged part makes ``"sigma_v"`` and ``"mean"`` consistent at rest, not
+within a step: for the exact solution the penalty is that of the lagged
+increments, ``O(dt)`` in a transient and zero at rest.  In a single elastic
+step from a state out of balance they drive the lagged residual into the
+implicit quantity (the pressure gradient has to absorb the deviatoric
+imbalance), and the full residual can grow (tests/test_stabilisation.py).
 """
 
 from __future__ import annotations
 
 import math
 
+import clarabel
 import numpy as np
 import scipy.sparse as sp
 
 from ..errors import ParameterError
-from .program import Program, Term
+from .program import Block, Program, Term
 
 __all__ = [
+    "STABILISATION_MODES",
     "divergence_matrix",
     "element_mean",
     "element_residual",
     "hoop_matrix",
+    "mean_stress_link",
     "residual_penalty",
 ]
+
+#: Values of ``stabilisation_mode`` (see the module notes).
+STABILISATION_MODES = ("full", "vertical", "sigma_v", "mean")
 
 #: Full-Voigt index of the tensor component (k, j), per dimension.
 _VOIGT = {
@@ -259,23 +301,70 @@ def element_residual(prog: Program) -> tuple[sp.csr_matrix, np.ndarray, np.ndarr
     h2 = (math.factorial(d) * area) ** (2.0 / d)
     w_e = data.stabilisation * h2 * vol / g_e
     w = np.repeat(w_e, d)
+    mode = getattr(data, "stabilisation_mode", "full")
+    if mode in ("vertical", "sigma_v"):
+        keep = np.flatnonzero(np.arange(d * t.shape[1]) % d == d - 1)
+        B, c, w = B.tocsr()[keep], c[keep], w[keep]
+        if mode == "sigma_v":  # the other columns of the row are lagged
+            cols = np.zeros(prog.ns)
+            cols[prog.comp.index(d - 1)] = 1.0
+            B = (B @ sp.diags(np.tile(cols, prog.n_points))).tocsr()
+            B.eliminate_zeros()
+        return B, c, w
+    if mode == "mean":
+        # The residual of the isotropic increment p I: the sum of the normal
+        # stresses' columns (div(p I) = grad p; the hoop terms cancel).
+        base = prog.ns * np.arange(prog.n_points)
+        B = B.tocsc()
+        B = sum(B[:, base + k] for k in _normal_slots(prog.comp)).tocsr()
+        return B, c, w
     return B, c, w
 
 
 def residual_penalty(prog: Program) -> Term:
     """Objective term ``1/2 (B ds + c)^T W (B ds + c)`` (see the module notes).
 
-    No term when the step's ``stabilisation`` factor is 0.
+    No term when the step's ``stabilisation`` factor is 0.  In ``mean`` mode
+    ``B`` acts on the auxiliary mean-stress variables (:func:`mean_stress_link`).
     """
     if not prog.data.stabilisation:
         return Term()
     B, c, w = element_residual(prog)
     K = sp.triu(B.T @ sp.diags(w) @ B, format="coo")
-    off = prog.slice("sigma").start
+    block = "mean_stress" if prog.size("mean_stress") else "sigma"
+    off = prog.slice(block).start
     q = np.zeros(prog.nx)
-    q[prog.slice("sigma")] = B.T @ (w * c)
+    q[prog.slice(block)] = B.T @ (w * c)
     P = sp.coo_matrix((K.data, (K.row + off, K.col + off)), shape=(prog.nx, prog.nx))
     return Term(P=P, q=q)
+
+
+def mean_stress_link(prog: Program) -> Block:
+    """Zero-cone rows ``p_i - mean_k ds_i[kk] = 0`` of the ``mean`` mode.
+
+    An empty block in the other modes (and without stabilisation).
+    """
+    n = prog.size("mean_stress")
+    if not n:
+        return Block(sp.csc_matrix((0, prog.nx)), np.zeros(0), [], "stress")
+    normal = _normal_slots(prog.comp)
+    sig = prog.slice("sigma").start
+    rows = np.repeat(np.arange(n), len(normal) + 1)
+    cols = np.concatenate(
+        [
+            sig + prog.ns * np.arange(n)[:, None] + np.asarray(normal)[None, :],
+            prog.slice("mean_stress").start + np.arange(n)[:, None],
+        ],
+        axis=1,
+    ).ravel()
+    vals = np.tile(np.r_[np.full(len(normal), -1.0 / len(normal)), 1.0], n)
+    A = sp.csc_matrix((vals, (rows, cols)), shape=(n, prog.nx))
+    return Block(A, np.zeros(n), [clarabel.ZeroConeT(n)], "stress")
+
+
+def _normal_slots(comp: tuple[int, ...]) -> list[int]:
+    """Positions of the normal components (full Voigt 0, 1, 2) among ``comp``."""
+    return [k for k, v in enumerate(comp) if v < 3]
 
 
 def _elements(op) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

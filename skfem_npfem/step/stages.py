@@ -165,6 +165,7 @@ def build_operators(
         dynamic=model.mode == "dynamic",
         stress_scale=model.stress_scale,
         stabilisation=model.stabilisation,
+        stabilisation_mode=model.stabilisation_mode,
         a_n=p.a[active],
         eigenstrain=volume_eigenstrain(
             strains,

@@ -135,7 +135,7 @@ def _scenery(ax, sc: Scenery, view: View) -> None:
             )
         )
     if sc.symmetry is not None:
-        ax.axvline(sc.symmetry, color="black", lw=1.0, ls="-.", label="symmetry axis")
+        ax.axvline(sc.symmetry, color="black", lw=1.0, ls="-.", label=sc.symmetry_label)
     if sc.outline is not None:
         ax.plot(
             *sc.outline.T,
@@ -298,8 +298,8 @@ class Frames2D:
         ax.set_aspect("equal")
         ax.set_xlim(*view.xlim)
         ax.set_ylim(*view.ylim)
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
+        ax.set_xlabel(f"{sc.axes[0]} [m]")
+        ax.set_ylabel(f"{sc.axes[1]} [m]")
         ax.grid(True, lw=0.3, alpha=0.5)
         _scenery(ax, sc, view)
         _colorbar(self.fig, ax, style, label, extend)

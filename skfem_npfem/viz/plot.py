@@ -23,14 +23,14 @@ import math
 import os
 import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..constants import GRAVITY
 from ..errors import CheckpointError, ParameterError
-from ..io import check_writable_dir, read_pvd, read_step
+from ..io import check_writable_dir, read_pvd
+from .animation import write_animation
 from .colours import (  # noqa: F401
     _EPS_P_FLOOR,
     _PLASTIC_QUANTILE,
@@ -42,13 +42,15 @@ from .colours import (  # noqa: F401
     _style,
 )
 from .figures import Frames2D, crop, load_settlement_figure
+from .loading import (
+    FIELDS,
+    _load_reporting,
+)
 from .mechanism import plot_mechanism, save_rgb
 from .render import (
     Renderer,
-    Step,
     check_rendering,
     import_pyvista,
-    write_animation,
 )
 from .scenery import scenery
 from .snapshots import (  # noqa: F401
@@ -61,22 +63,7 @@ from .snapshots import (  # noqa: F401
 
 __all__ = ["FIELDS", "plot_results"]
 
-#: Fields :func:`plot_results` can draw, with a short description.
-FIELDS: dict[str, str] = {
-    "stress_xx": "normal stress xx (tension +)",
-    "stress_yy": "normal stress yy (tension +)",
-    "stress_zz": "normal stress zz (tension +)",
-    "stress_xy": "shear stress xy",
-    "stress_yz": "shear stress yz (3D only)",
-    "stress_zx": "shear stress zx (3D only)",
-    "pressure": "pressure, -mean normal stress (compression +)",
-    "plastic_strain_eq": "equivalent plastic strain",
-    "velocity": "velocity magnitude",
-    "displacement": "displacement magnitude",
-}
-
 _ANIMATIONS = ("gif", "mp4", "none")
-_DEFAULT_FIELD = "stress_yy"
 _GRAVITY = GRAVITY
 
 
@@ -97,74 +84,6 @@ def _find_pvd(result_dir: Path) -> Path:
         f"{result_dir}: {what}; not a result folder written by "
         "'skfem-npfem run SCENE --out DIR'"
     )
-
-
-def _field_values(name: str, pdata: Mapping[str, np.ndarray]) -> np.ndarray:
-    """Return the (N,) values of field ``name`` from VTU point data."""
-    if name in _STRESS_INDEX or name == "pressure":
-        key = "stress"
-    elif name in ("velocity", "displacement", "plastic_strain_eq"):
-        key = name
-    else:  # pragma: no cover - names are checked before
-        raise ParameterError("field", name, "one of " + ", ".join(FIELDS))
-    if key not in pdata:
-        raise CheckpointError(
-            f"result has no point data {key!r} (has: {', '.join(pdata)})"
-        )
-    a = np.asarray(pdata[key], dtype=float)
-    if name == "pressure":
-        return -a[:, :3].mean(axis=1)
-    if name in _STRESS_INDEX:
-        return a[:, _STRESS_INDEX[name]].copy()
-    if a.ndim == 2:
-        return np.linalg.norm(a, axis=1)
-    return a.copy()
-
-
-def _read(path: Path, time: float, fields: Sequence[str]) -> tuple[Step, int]:
-    """Read one VTU step; return it and its spatial dimension."""
-    mesh = read_step(path)
-    points = np.asarray(mesh.points, dtype=float)
-    n = len(points)
-    blocks = {b.type: np.asarray(b.data, dtype=np.int64) for b in mesh.cells}
-    stress = mesh.point_data.get("stress")
-    if "tetra" in blocks or (stress is not None and np.shape(stress)[-1] == 6):
-        dim = 3
-    elif "triangle" in blocks or (stress is not None and np.shape(stress)[-1] == 4):
-        dim = 2
-    else:
-        dim = 3 if n and np.ptp(points[:, 2]) > 0 else 2
-    cells = blocks.get("tetra" if dim == 3 else "triangle")
-    cells = np.zeros((0, dim + 1), np.int64) if cells is None else cells
-    in_cell = np.zeros(n, dtype=bool)
-    in_cell[cells.ravel()] = True
-    if "active" in mesh.point_data:
-        in_cell &= np.asarray(mesh.point_data["active"]).ravel() != 0
-    step = Step(time, points, cells, np.flatnonzero(~in_cell))
-    if "mass" in mesh.point_data:
-        step.mass = np.asarray(mesh.point_data["mass"], dtype=float).ravel()
-    for name in fields:
-        if dim == 2 and name in ("stress_yz", "stress_zx"):
-            raise ParameterError("field", name, "a field of 2D results (3D only)")
-        step.values[name] = _field_values(name, mesh.point_data)
-    return step, dim
-
-
-def _resolve_fields(field_arg: str | Sequence[str], dim: int) -> list[str]:
-    """List of field names to draw (the default gives two fields)."""
-    if isinstance(field_arg, str):
-        if field_arg == _DEFAULT_FIELD:
-            vertical = "stress_yy" if dim == 2 else "stress_zz"
-            return [vertical, "plastic_strain_eq"]
-        names = [s.strip() for s in field_arg.split(",") if s.strip()]
-    else:
-        names = [str(s) for s in field_arg]
-    if not names:
-        raise ParameterError("field", field_arg, "at least one field name")
-    for name in names:
-        if name not in FIELDS:
-            raise ParameterError("field", name, "one of " + ", ".join(FIELDS))
-    return list(dict.fromkeys(names))
 
 
 def _check_args(
@@ -213,59 +132,6 @@ def _check_args(
     if not all(math.isfinite(t) for t in req):
         raise ParameterError("times", times, "finite numbers")
     return req
-
-
-@dataclass
-class _Loaded:
-    """The steps of a result read once (see :func:`_load`)."""
-
-    dim: int
-    names: list[str]
-    kept: dict[int, Step]
-    ranges: dict[str, tuple[float, float]]
-    extremes: dict[str, tuple[float, float]]
-    bad: list[int]
-
-
-def _load(
-    entries: list[tuple[float, Path]],
-    field_arg: str | Sequence[str],
-    needed: set[int],
-) -> _Loaded:
-    """Read every step once; keep those in ``needed``.
-
-    A step that cannot be read is skipped with a warning and listed in
-    ``bad``.  ``ranges`` is the robust colour range of each field over all
-    steps, ``extremes`` its true minimum and maximum.
-    """
-    dim, names = 0, []
-    kept: dict[int, Step] = {}
-    pooled: dict[str, list[np.ndarray]] = {}
-    extremes: dict[str, tuple[float, float]] = {}
-    bad: list[int] = []
-    for i, (t, path) in enumerate(entries):
-        try:
-            if not names:
-                _, dim = _read(path, t, [])
-                names = _resolve_fields(field_arg, dim)
-                pooled = {name: [] for name in names}
-            step, _ = _read(path, t, names)
-        except CheckpointError as err:
-            warnings.warn(f"skipped an unreadable step: {err}", UserWarning, 3)
-            bad.append(i)
-            continue
-        for name in names:
-            v = step.values[name]
-            pooled[name].append(v[:: max(1, v.size // _SAMPLE)])
-            lo, hi = extremes.get(name, (np.inf, -np.inf))
-            if v.size:
-                extremes[name] = (min(lo, float(v.min())), max(hi, float(v.max())))
-        if i in needed:
-            kept[i] = step
-    if not names:
-        raise CheckpointError(f"{entries[0][1].parent}: no readable step")
-    ranges = {name: _robust_range(np.concatenate(pooled[name]), name) for name in names}
-    return _Loaded(dim, names, kept, ranges, extremes, bad)
 
 
 def plot_results(
@@ -392,13 +258,9 @@ def plot_results(
             UserWarning,
             stacklevel=2,
         )
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        loaded, entries, snaps, frames = _load_picked(
-            entries, field, req, unit, animation, max_frames
-        )
-    for w in caught:
-        warnings.warn(str(w.message), w.category, stacklevel=2)
+    loaded, entries, snaps, frames = _load_reporting(
+        entries, field, req, unit, animation, max_frames
+    )
     out = folder / "plots" if out_dir is None else Path(out_dir)
     ts = np.array([t for t, _ in entries])
     if loaded.dim == 3:
@@ -413,35 +275,54 @@ def plot_results(
         fixed = clim is not None and name in clim
         lo, hi = (float(v) for v in clim[name]) if fixed else loaded.ranges[name]
         style = _style(name, lo, hi, fixed=fixed)
-        title = f"{sc.scene + ': ' if sc.scene else ''}{FIELDS[name]}"
+        what = sc.field_names.get(name, FIELDS[name])
+        title = f"{sc.scene + ': ' if sc.scene else ''}{what}"
 
-        def make(fast: bool, name=name, style=style, title=title):
+        def make(fast: bool, name=name, style=style, title=title, what=what):
             if loaded.dim == 2:
-                label = f"{FIELDS[name]} [{style.unit}]"
+                label = f"{what} [{style.unit}]"
                 ext = _extend(style, *loaded.extremes.get(name, (0.0, 0.0)))
                 return Frames2D(loaded.kept, name, style, title, label, sc, view, ext)
             return Renderer(
-                pv, loaded.kept, 3, name, style, title, sc.tau, window_size, fast=fast
+                pv,
+                loaded.kept,
+                3,
+                name,
+                style,
+                title,
+                sc.tau,
+                window_size,
+                fast=fast,
+                view=sc.view,
+                floor=sc.floor,
             )
 
-        renderer = make(False)
+        stem = f"{name}_{unit.prefix}"
+        written += _render_field(make, snaps, ts, frames, out, stem, name, animation)
+    return written + _extra_pictures(folder, sc, out, loaded.dim)
+
+
+def _render_field(make, snaps, ts, frames, out, stem, name, animation) -> list[Path]:
+    """One field's snapshots (``<stem><time>.png``) and its animation."""
+    written = []
+    renderer = make(False)
+    try:
+        for i in sorted(snaps, key=lambda k: ts[k]):
+            path = out / f"{stem}{_time_label(snaps[i])}.png"
+            renderer.draw(i)
+            renderer.image(path)
+            written.append(path)
+    finally:
+        renderer.close()
+    if animation != "none":
+        renderer = make(True)
         try:
-            for i in sorted(snaps, key=lambda k: ts[k]):
-                path = out / f"{name}_{unit.prefix}{_time_label(snaps[i])}.png"
-                renderer.draw(i)
-                renderer.image(path)
-                written.append(path)
+            path = out / f"{name}.{animation}"
+            write_animation(renderer, frames, path, animation)
+            written.append(path)
         finally:
             renderer.close()
-        if animation != "none":
-            renderer = make(True)
-            try:
-                path = out / f"{name}.{animation}"
-                write_animation(renderer, frames, path, animation)
-                written.append(path)
-            finally:
-                renderer.close()
-    return written + _extra_pictures(folder, sc, out, loaded.dim)
+    return written
 
 
 def _find_pvd_or_mechanism(result_dir: Path) -> Path:
@@ -466,22 +347,3 @@ def _extra_pictures(folder: Path, sc, out: Path, dim: int) -> list[Path]:
     if (folder / "mechanism.npz").is_file():
         written.append(plot_mechanism(folder / "mechanism.npz", out))
     return written
-
-
-def _load_picked(entries, field, req, unit, animation, max_frames):
-    """Read the steps; pick the snapshots and frames among the readable ones."""
-    ts = np.array([t for t, _ in entries])
-    snaps = _pick_snapshots(ts, req, unit)
-    n_frames = 0 if animation == "none" else max_frames
-    frames = list(_frame_indices(len(ts), n_frames)) if n_frames else []
-    loaded = _load(entries, field, set(snaps) | set(frames))
-    if loaded.bad:  # pick again among the readable steps (rare)
-        entries = [e for k, e in enumerate(entries) if k not in set(loaded.bad)]
-        ts = np.array([t for t, _ in entries])
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # said on the first pass
-            snaps = _pick_snapshots(ts, req, unit)
-            frames = list(_frame_indices(len(ts), n_frames)) if n_frames else []
-            loaded = _load(entries, field, set(snaps) | set(frames))
-        loaded.bad = []
-    return loaded, entries, snaps, frames

@@ -1,13 +1,13 @@
 """Off-screen rendering with pyvista/VTK for :mod:`skfem_npfem.viz.plot`.
 
 :class:`Renderer` holds one off-screen plotter showing one field and draws any
-stored step on demand; :func:`write_animation` turns a sequence of steps into
-a GIF or MP4.  On Linux without ``DISPLAY``, VTK is told to use EGL
-(``VTK_DEFAULT_OPENGL_WINDOW=vtkEGLRenderWindow``, unless already set), and
-before the first picture :func:`check_rendering` runs a tiny test render in a
-child process, because VTK crashes the whole interpreter instead of raising
-when it cannot get an OpenGL context.  Pictures are written through the atomic
-writer of :mod:`skfem_npfem.io`.
+stored step on demand; :func:`~skfem_npfem.viz.animation.write_animation` turns a
+sequence of steps into a GIF or MP4. On Linux without ``DISPLAY``, VTK is told to
+use EGL (``VTK_DEFAULT_OPENGL_WINDOW=vtkEGLRenderWindow``, unless already set), and
+before the first picture :func:`check_rendering` runs a tiny test render in a child
+process, because VTK crashes the whole interpreter instead of raising when it cannot
+get an OpenGL context. Pictures are written through the atomic writer of
+:mod:`skfem_npfem.io`.
 """
 
 from __future__ import annotations
@@ -18,7 +18,6 @@ import os
 import re
 import subprocess
 import sys
-from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -34,7 +33,6 @@ __all__ = [
     "Style",
     "check_rendering",
     "import_pyvista",
-    "write_animation",
 ]
 
 #: Longest side of GIF frames in pixels (snapshots and MP4 keep the full size).
@@ -190,17 +188,22 @@ def _grid(pv: Any, step: Step, dim: int, values: np.ndarray) -> Any:
 
 
 def _view(
-    dim: int, lo: np.ndarray, hi: np.ndarray
+    dim: int,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    direction: tuple[float, float, float] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, tuple[float, float]]:
     """View direction, screen-up vector and screen extent of the box lo..hi.
 
-    2D looks down -z; 3D is an isometric view with z up.
+    2D looks down -z; 3D looks from ``direction`` (default the isometric
+    ``(1, 1, 1)``) with z up.
     """
     if dim == 2:
         view_dir, up = np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0])
     else:
-        view_dir = np.ones(3) / math.sqrt(3.0)
-        up = np.array([0.0, 0.0, 1.0]) - view_dir / math.sqrt(3.0)
+        view_dir = np.asarray(direction or (1.0, 1.0, 1.0), float)
+        view_dir = view_dir / np.linalg.norm(view_dir)
+        up = np.array([0.0, 0.0, 1.0]) - view_dir[2] * view_dir
         up /= np.linalg.norm(up)
     right = np.cross(up, view_dir)
     corners = np.array(
@@ -231,14 +234,21 @@ class Renderer:
         tau: float | None,
         window_size: tuple[int, int] | None,
         fast: bool = False,
+        view: tuple[float, float, float] | None = None,
+        floor: float | None = None,
     ) -> None:
         self.pv, self.steps, self.dim, self.name = pv, steps, dim, name
         self.style, self.title, self.tau = style, title, tau
         pts = np.vstack([s.points for s in steps.values()])
         lo, hi = pts.min(axis=0), pts.max(axis=0)
-        view_dir, up, extent = _view(dim, lo, hi)
+        perspective = dim == 3 and view is not None
+        if perspective and floor is not None:
+            lo[2] = min(lo[2], floor)
+        view_dir, up, extent = _view(dim, lo, hi, view if dim == 3 else None)
         if window_size is None:
             window_size = _window_size(*extent)
+            if perspective:  # room for the axes' labels
+                window_size = (max(window_size[0], 960), max(window_size[1], 880))
         self.size = (int(window_size[0]), int(window_size[1]))
         w, h = self.size
         band = h - _TOP - _BOTTOM
@@ -259,16 +269,57 @@ class Renderer:
         self.depth = 2 * spacing + 1e-3 * float(np.max(size)) if dim == 2 else 0.0
         # camera: parallel projection, the domain (union of all steps) centred
         # in the band between the colour bar and the two text lines
-        self.pl.enable_parallel_projection()
         diag = float(np.linalg.norm(size)) + 1e-12
         focal = (lo + hi) / 2 - (_BOTTOM + band / 2 - h / 2) / scale * up
-        dist = 2.0 * diag + 1.0
         cam = self.pl.camera
+        if perspective:
+            # the same framing at the focal plane as the parallel view, seen
+            # from a distance of ~3 body sizes (view angle 2 atan(1/6))
+            half = h / (2 * scale)
+            dist = max(4.0 * diag, half / math.tan(math.radians(15.0)))
+            cam.view_angle = 2.0 * math.degrees(math.atan(1.3 * half / dist))
+            self._scenery_3d(lo, hi, floor, spacing)
+        else:
+            self.pl.enable_parallel_projection()
+            dist = 2.0 * diag + 1.0
+            cam.parallel_scale = h / (2 * scale)
         cam.focal_point = tuple(focal)
         cam.position = tuple(focal + dist * view_dir)
         cam.up = tuple(up)
-        cam.parallel_scale = h / (2 * scale)
         cam.clipping_range = (max(dist - 2 * diag, 1e-6), dist + 2 * diag)
+
+    def _scenery_3d(
+        self, lo: np.ndarray, hi: np.ndarray, floor: float | None, spacing: float
+    ) -> None:
+        """The floor (a grey plane under the body) and axes in metres."""
+        pl, pv = self.pl, self.pv
+        if floor is not None:
+            pad = 2.0 * spacing
+            mid = (lo + hi) / 2
+            plane = pv.Plane(
+                center=(mid[0], mid[1], floor - 1e-4 * spacing),
+                direction=(0.0, 0.0, 1.0),
+                i_size=hi[0] - lo[0] + 2 * pad,
+                j_size=hi[1] - lo[1] + 2 * pad,
+            )
+            pl.add_mesh(plane, color="#c8c8c8", lighting=False, render=False)
+        pl.show_bounds(
+            bounds=(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]),
+            xtitle="x [m]",
+            ytitle="y [m]",
+            ztitle="z [m]",
+            color="black",
+            font_size=self._font_size() - 4,
+            location="outer",
+            grid=False,
+            all_edges=False,
+            ticks="outside",
+            n_xlabels=3,
+            n_ylabels=3,
+            n_zlabels=3,
+            fmt="%.2f",
+            render=False,
+        )
 
     def _font_size(self) -> int:
         return max(12, min(18, self.size[0] // 48))
@@ -399,57 +450,3 @@ class Renderer:
     def close(self) -> None:
         """Release the plotter."""
         self.pl.close()
-
-
-def write_animation(
-    renderer: Renderer, indices: Sequence[int], path: Path, kind: str
-) -> None:
-    """Write the frames of ``indices`` as a GIF or MP4."""
-    fps = int(np.clip(round(len(indices) / 6), 4, 20))
-    if kind == "mp4":
-        try:
-            import imageio.v2 as imageio
-            import imageio_ffmpeg  # noqa: F401
-        except ImportError as err:
-            raise NpfemError(
-                f"MP4 output needs imageio and imageio-ffmpeg ({err}); "
-                "pip install 'skfem-npfem[viz]' or use animation='gif'"
-            ) from None
-        with atomic_path(path) as tmp:
-            writer = imageio.get_writer(
-                tmp, format="FFMPEG", fps=fps, macro_block_size=16, quality=7
-            )
-            try:
-                for i in indices:
-                    renderer.draw(i)
-                    writer.append_data(renderer.image())
-            finally:
-                writer.close()
-        return
-    try:
-        from PIL import Image  # installed with imageio
-    except ImportError as err:
-        raise NpfemError(
-            f"GIF output needs Pillow ({err}); pip install 'skfem-npfem[viz]'"
-        ) from None
-    w, h = renderer.size
-    shrink = min(1.0, _GIF_MAX_SIDE / max(w, h))
-    frames = []
-    for i in indices:
-        renderer.draw(i)
-        im = Image.fromarray(renderer.image())
-        if shrink < 1:
-            im = im.resize(
-                (round(w * shrink), round(h * shrink)), Image.Resampling.BILINEAR
-            )
-        frames.append(im.quantize(256, method=Image.Quantize.FASTOCTREE))
-    with atomic_path(path) as tmp:
-        frames[0].save(
-            tmp,
-            format="GIF",
-            save_all=True,
-            append_images=frames[1:],
-            duration=round(1000 / fps),
-            loop=0,
-            optimize=False,
-        )
