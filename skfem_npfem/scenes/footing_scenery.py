@@ -14,13 +14,8 @@ from ..constants import GRAVITY
 from ..errors import CheckpointError
 from ..io import latest_checkpoint, load_checkpoint
 from ..laws import prandtl_nc
-from .footing_mesh import (  # noqa: F401
-    graded_coordinates,
-    graded_count,
+from .footing_mesh import (
     resolve_defaults,
-    soil_mesh,
-    soil_particles,
-    unit_weight,
 )
 from .scenery import Scenery, box, number
 

@@ -20,14 +20,8 @@ from ..step.safety import strength_reduction
 from .common import (
     solver_from,
 )
-from .slope_section import (  # noqa: F401
-    _area,
-    _dedupe,
+from .slope_section import (
     _surface_height,
-    parametric_section,
-    section_materials,
-    section_of,
-    supports,
 )
 
 __all__ = [

@@ -22,7 +22,7 @@ def write_animation(
     if kind == "mp4":
         try:
             import imageio.v2 as imageio
-            import imageio_ffmpeg  # noqa: F401
+            import imageio_ffmpeg  # noqa: F401 (the mp4 writer needs it)
         except ImportError as err:
             raise NpfemError(
                 f"MP4 output needs imageio and imageio-ffmpeg ({err}); "

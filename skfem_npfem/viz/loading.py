@@ -15,25 +15,17 @@ import numpy as np
 
 from ..errors import CheckpointError, ParameterError
 from ..io import read_step
-from .colours import (  # noqa: F401
-    _EPS_P_FLOOR,
-    _PLASTIC_QUANTILE,
+from .colours import (
     _SAMPLE,
     _STRESS_INDEX,
-    _UNITS,
-    _extend,
     _robust_range,
-    _style,
 )
 from .render import (
     Step,
 )
-from .snapshots import (  # noqa: F401
+from .snapshots import (
     _frame_indices,
     _pick_snapshots,
-    _time_label,
-    _time_unit,
-    _TimeUnit,
 )
 
 #: The ``field`` argument that draws the vertical stress and the plastic strain.

@@ -12,24 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io import atomic_path, check_writable_dir
-from .colours import (  # noqa: F401
-    _EPS_P_FLOOR,
-    _PLASTIC_QUANTILE,
-    _SAMPLE,
-    _STRESS_INDEX,
-    _UNITS,
-    _extend,
-    _robust_range,
-    _style,
-)
 from .figures import mechanism_figure
-from .snapshots import (  # noqa: F401
-    _frame_indices,
-    _pick_snapshots,
-    _time_label,
-    _time_unit,
-    _TimeUnit,
-)
 
 __all__ = ["plot_mechanism", "save_rgb"]
 

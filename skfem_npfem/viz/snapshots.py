@@ -12,8 +12,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .colours import _EPS_P_FLOOR, _PLASTIC_QUANTILE, _extend, _robust_range, _style  # noqa: F401
-
 __all__ = []
 
 
