@@ -82,8 +82,8 @@ BACKENDS = ("qdldl", "faer", "mkl")
 PRESETS = ("high", "fast")
 #: Solver variants: the two presets of SolverOptions plus diagnostic
 #: combinations that separate the tolerance from the iterative refinement
-#: (``fast-noref`` is the ``fast`` preset before 2026-11-22 01:58, which also
-#: turned the refinement off for qdldl and faer).
+#: (``fast-noref`` is the ``fast`` preset as it first was: it also turned the
+#: refinement off for qdldl and faer).
 PRESET_SPECS = {
     "high": {"accuracy": "high"},
     "fast": {"accuracy": "fast"},

@@ -79,3 +79,28 @@ def test_the_scan_flags_diary_phrasing_and_spares_references():
 def test_docs_page_has_no_diary_phrasing(path):
     found = diary_lines(path.read_text(encoding="utf-8"))
     assert not found, f"{path.relative_to(ROOT)}:\n" + "\n".join(found)
+
+
+def rendered_python() -> list[Path]:
+    """The scripts and modules whose docstrings the site renders (gallery, API)."""
+    roots = [ROOT / "demos", ROOT / "benchmarks", ROOT / "skfem_npfem"]
+    return sorted(p for r in roots for p in r.rglob("*.py"))
+
+
+@pytest.mark.parametrize(
+    "path", rendered_python(), ids=lambda p: str(p.relative_to(ROOT))
+)
+def test_rendered_python_has_no_diary_phrasing(path):
+    # Docstrings and comments of the gallery's scripts and of the package end up
+    # on built pages: no sessions, reruns or dates in their prose either.
+    found = [
+        line
+        for line in diary_lines(path.read_text())
+        if "a date in prose" not in line or not _is_code_date(line)
+    ]
+    assert not found, f"{path.relative_to(ROOT)}:\n" + "\n".join(found)
+
+
+def _is_code_date(line: str) -> bool:
+    """A date that is a format or example in code, not prose (e.g. strftime)."""
+    return any(s in line for s in ("strftime", "%Y", "isoformat", "fromisoformat"))

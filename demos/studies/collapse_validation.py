@@ -31,9 +31,9 @@ stress roughness (at rest and its maximum) and the stabilisation factor and
 volume correction the scene resolved are stored too.
 
 Usage (from the repository root; the command below wrote
-docs/validation/collapse_validation.json with the defaults of 2026-12-02 (14
-minutes of wall time with two cases in parallel, beside a 3D run); the record
-before the stabilisation, run with the same command, is kept in compact form as
+docs/validation/collapse_validation.json with the scene's defaults, about 15
+minutes of wall time with two cases in parallel on two cores; the record with the
+former defaults, run with the same command, is kept in compact form as
 docs/validation/collapse_validation_before.json)::
 
     PYTHONPATH=. python demos/studies/collapse_validation.py \\

@@ -20,8 +20,8 @@ that wall time and peak memory are each run's own:
 3. **Cost** of each run: steps (SPFEM: also its explicit substeps), median
    time per step, total wall time, peak memory of the process.
 
-The committed results (2026-12-03) ran two configurations at a time
-(``--workers 2``) on an otherwise idle 2-core machine.  Writes
+The committed results ran two configurations at a time (``--workers 2``) on
+an otherwise idle 2-core machine (the date is in the record).  Writes
 ``results.json`` and ``results.png`` under ``--out`` (default
 ``docs/validation/comparison``); run folders under ``--work`` (default
 ``out/comparison/results``; a rerun reuses finished runs).

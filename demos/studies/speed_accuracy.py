@@ -321,8 +321,8 @@ def plot(result: dict, path: Path) -> None:
 
 #: N-PFEM collapse defaults recorded with a study (a page made from a study
 #: with other defaults says so), taken from the scene's constants.  The volume
-#: correction became the plane-strain collapse default after the study of
-#: 2026-12-01, whose record lacks it.
+#: correction became a plane-strain collapse default after the first record
+#: of this study was made, which lacks it.
 NPFEM_DEFAULTS = {
     "nodal_mass": "mesh",
     "stabilisation": COLLAPSE_STABILISATION,
