@@ -67,6 +67,7 @@ import numpy as np
 from _common import ROOT
 
 from skfem_npfem.baseline.reporting import save_png
+from skfem_npfem.laws import lube2004_runout
 
 R0, H0, G, RHO = 0.039, 0.078, 9.81, 1800.0
 T_SCALE = math.sqrt(H0 / G)
@@ -148,11 +149,6 @@ LABELS = {
 }
 #: Quick mode: tiny spacings and a few steps (a smoke test of the whole study).
 QUICK = {"spacing_divisions": 4, "steps": 4}
-
-
-def lube2004(a: float) -> float:
-    """(r_inf - r0)/r0 of Lube et al. (2004): 1.24 a (a <= 1.7), 1.6 a^(1/2)."""
-    return 1.24 * a if a <= 1.7 else 1.6 * math.sqrt(a)
 
 
 def case_overrides(name: str, quick: bool, threads: int) -> dict:
@@ -282,7 +278,7 @@ def analyse(name: str, summ: dict, work: Path) -> dict:
         "t_bar_t3": t3["time"] / T_SCALE,
         "final_height": m["final_height"],
         "height_ratio": m["height_ratio"],
-        "reference_runout_lube2004": lube2004(h0 / r0),
+        "reference_runout_lube2004": lube2004_runout(h0 / r0),
         "volume_change": m["volume_change"],
         "mass_change": m["mass_change"],
         "stress_roughness": rough_end,
@@ -426,7 +422,7 @@ def plot_profiles(results: dict, out: Path) -> Path | None:
     for res in results.values():
         prof, r0 = res["profile"], res["r0"]
         ax.plot(np.array(prof["r"]) / r0, np.array(prof["h"]) / r0, label=res["label"])
-    ref = 1.0 + lube2004(H0 / R0)
+    ref = 1.0 + lube2004_runout(H0 / R0)
     ax.axvline(ref, color="k", ls="--", lw=0.8, label="Lube et al. 2004 run-out")
     ax.set_xlabel("r / r0")
     ax.set_ylabel("h / r0")
@@ -461,7 +457,7 @@ def tables(results: dict) -> str:
             f"{res['final_height']:.3f} | {res['height_ratio']:.3f} | "
             f"{100 * res['volume_change']:+.1f} % |"
         )
-    ref = lube2004(H0 / R0)
+    ref = lube2004_runout(H0 / R0)
     lines += ["", f"Lube et al. (2004): (r_inf - r0)/r0 = {ref:.3f} at a = 2.", ""]
     lines += [
         "Wall times compare only between runs measured on the same CPU under the "

@@ -18,7 +18,10 @@ import numpy as np
 from ..errors import ParameterError
 from .limits import MAGNITUDES
 
-__all__ = ["Param", "Renamed", "parse_value"]
+__all__ = ["POSITIVE", "Param", "Renamed", "parse_value"]
+
+#: Bounds of a parameter that must be a finite number > 0 (``Param(..., **POSITIVE)``).
+POSITIVE = {"lo": 0, "lo_open": True}
 
 
 @dataclass(frozen=True)

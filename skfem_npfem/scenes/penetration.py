@@ -44,6 +44,7 @@ from .common import (
     solver_from,
     solver_params,
 )
+from .params import POSITIVE
 from .scenery import Scenery, box, number
 
 __all__ = ["INTERFACES", "SCENE", "graded_axis", "interface_adhesion"]
@@ -51,10 +52,9 @@ __all__ = ["INTERFACES", "SCENE", "graded_axis", "interface_adhesion"]
 #: Footing-soil interfaces.
 INTERFACES = ("smooth", "rough", "adhesion")
 
-_POSITIVE = {"lo": 0, "lo_open": True}
 
 PARAMS = [
-    Param("width", 1.0, "m", "footing width B", float, **_POSITIVE),
+    Param("width", 1.0, "m", "footing width B", float, **POSITIVE),
     Param(
         "domain_width",
         10.0,
@@ -65,7 +65,7 @@ PARAMS = [
         hi=50.0,
     ),
     Param("domain_depth", 5.0, "-", "soil depth / B", float, lo=1.5, hi=50.0),
-    Param("E", 1.0e5, "Pa", "undrained Young's modulus E_u", float, **_POSITIVE),
+    Param("E", 1.0e5, "Pa", "undrained Young's modulus E_u", float, **POSITIVE),
     Param(
         "nu",
         0.495,
@@ -76,7 +76,7 @@ PARAMS = [
         hi=0.5,
         hi_open=True,
     ),
-    Param("su", 1.0e3, "Pa", "undrained shear strength s_u", float, **_POSITIVE),
+    Param("su", 1.0e3, "Pa", "undrained shear strength s_u", float, **POSITIVE),
     Param("interface", "smooth", "-", "footing-soil interface", str, INTERFACES),
     Param(
         "alpha",
@@ -93,7 +93,7 @@ PARAMS = [
         "m",
         "final penetration w (default: B)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param(
         "speed",
@@ -101,7 +101,7 @@ PARAMS = [
         "m/s",
         "footing speed (quasi-static: sets the time unit)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param(
         "dt",
@@ -110,11 +110,9 @@ PARAMS = [
         "time step (default: the footing moves spacing/4 per step; at most "
         "one spacing)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
-    Param(
-        "spacing", 0.05, "m", "particle spacing near the footing", float, **_POSITIVE
-    ),
+    Param("spacing", 0.05, "m", "particle spacing near the footing", float, **POSITIVE),
     Param(
         "grading",
         1.15,

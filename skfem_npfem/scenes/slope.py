@@ -46,6 +46,7 @@ from ..run.simulation import AtRest, Simulation
 from .base import Param, Scene, SceneRun
 from .common import elastic_params, fidelity_params, make_writer, solver_params
 from .limit_mode import LIMIT_METRICS, analysis_param
+from .params import POSITIVE
 from .scenery import Scenery, number
 from .slope_runout import (  # noqa: F401
     deposit_factor_of_safety,
@@ -72,10 +73,9 @@ from .slope_stages import (  # noqa: F401
 )
 
 MATERIALS = ("mohr-coulomb", "tresca")
-_POSITIVE = {"lo": 0, "lo_open": True}
 
 PARAMS = [
-    Param("height", 10.0, "m", "slope height H", float, **_POSITIVE),
+    Param("height", 10.0, "m", "slope height H", float, **POSITIVE),
     Param(
         "angle",
         45.0,
@@ -97,7 +97,7 @@ PARAMS = [
         "parametric slope",
         str,
     ),
-    Param("spacing", None, "m", "particle spacing (default H/10)", float, **_POSITIVE),
+    Param("spacing", None, "m", "particle spacing (default H/10)", float, **POSITIVE),
     Param("material", "mohr-coulomb", "-", "yield criterion", str, MATERIALS),
     *elastic_params(2.0e7),
     Param("c", 1.0e4, "Pa", "cohesion", float, lo=0),
@@ -121,7 +121,7 @@ PARAMS = [
         hi=90,
         hi_open=True,
     ),
-    Param("rho", 2000.0, "kg/m^3", "density", float, **_POSITIVE),
+    Param("rho", 2000.0, "kg/m^3", "density", float, **POSITIVE),
     Param(
         "initial_stress",
         "gravity",
@@ -131,7 +131,7 @@ PARAMS = [
         ("gravity", "k0"),
     ),
     Param(
-        "K0", None, "-", "at-rest coefficient (default 1 - sin phi)", float, **_POSITIVE
+        "K0", None, "-", "at-rest coefficient (default 1 - sin phi)", float, **POSITIVE
     ),
     analysis_param("initial stresses, factor of safety, and run-out if asked"),
     Param("runout", False, "-", "run the failure and run-out stage", bool),
@@ -141,7 +141,7 @@ PARAMS = [
         "-",
         "strength reduction factor of the run-out (default margin x factor of safety)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param("margin", 1.5, "-", "reduction / factor of safety by default", float, lo=1.0),
     Param(
@@ -150,11 +150,9 @@ PARAMS = [
         "s",
         "initial time step (default 0.02 sqrt(H/g))",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
-    Param(
-        "t_end", None, "s", "end time cap (default 15 sqrt(H/g))", float, **_POSITIVE
-    ),
+    Param("t_end", None, "s", "end time cap (default 15 sqrt(H/g))", float, **POSITIVE),
     Param(
         "rest_fraction",
         1e-3,
@@ -173,7 +171,7 @@ PARAMS = [
         "-",
         "largest step displacement / spacing",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     *fidelity_params(0.0),
     *solver_params(),

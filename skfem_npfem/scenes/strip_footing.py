@@ -67,6 +67,7 @@ from .limit_mode import (
 )
 from .limits import SPACING as SPACING_RANGE
 from .methods import METHOD_METRICS, method_params, with_method
+from .params import POSITIVE
 from .plateau import PlateauRule
 
 MATERIALS = ("tresca", "mohr-coulomb", "drucker-prager")
@@ -77,7 +78,6 @@ SETTLEMENT_SCALE = 100.0
 #: Default ``max_settlement`` in units of ``settlement``.
 MAX_SETTLEMENT_FACTOR = 100.0
 
-_POSITIVE = {"lo": 0, "lo_open": True}
 
 PARAMS = [
     Param("material", "tresca", "-", "yield criterion", str, MATERIALS),
@@ -135,10 +135,10 @@ PARAMS = [
         "geostatic stress (default Jaky's 1 - sin phi, phi of the soil; no "
         "effect on a weightless soil)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param("footing", "smooth", "-", "footing-soil interface", str, ("smooth", "rough")),
-    Param("half_width", 1.0, "m", "footing half-width b", float, **_POSITIVE),
+    Param("half_width", 1.0, "m", "footing half-width b", float, **POSITIVE),
     Param(
         "spacing",
         None,
@@ -174,7 +174,7 @@ PARAMS = [
         "minimum settlement, reached in `steps` equal steps (default "
         f"{SETTLEMENT_SCALE:g} (c + gamma b) b / E: 0.01 m at the defaults)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param(
         "steps",
@@ -215,7 +215,7 @@ PARAMS = [
         "cap on the settlement without a plateau (default "
         f"{MAX_SETTLEMENT_FACTOR:g} x settlement)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param("max_steps", 100, "-", "cap on the number of steps", int, lo=1),
     Param(
