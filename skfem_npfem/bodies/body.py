@@ -310,9 +310,12 @@ def spanning_elements(
         tiny = 1e-9
         hit |= np.any((l1 > tiny) & (l2 > tiny) & (l1 + l2 < 1 - tiny), axis=1)
         # Proper crossings of element edges (p, q) with outline edges (a, b).
+        # An end within the outline tolerance of the other line counts as on
+        # it (no crossing): nodes on a sloping face are collinear with it only
+        # up to rounding.
         q = np.roll(p, -1, axis=0)
         b = np.roll(a, -1, axis=0)
-        eps = (1e-9 * body.size) ** 2
+        near_line = _ON_OUTLINE * body.size
 
         def orient(o, u, w):
             return (u[..., 0] - o[..., 0]) * (w[..., 1] - o[..., 1]) - (
@@ -323,10 +326,17 @@ def spanning_elements(
         A, B = a[None, None], b[None, None]  # (1, 1, m, 2)
         o1, o2 = orient(P, Q, A), orient(P, Q, B)
         o3, o4 = orient(A, B, P), orient(A, B, Q)
-        cross = (o1 * o2 < -eps * eps) & (o3 * o4 < -eps * eps)
+        t12 = near_line * np.linalg.norm(Q - P, axis=-1)  # (3, k, 1)
+        t34 = near_line * np.linalg.norm(B - A, axis=-1)  # (1, 1, m)
+        cross = _opposite(o1, o2, t12) & _opposite(o3, o4, t34)
         hit |= np.any(cross, axis=(0, 2))
         drop[near[hit]] = True
     return drop
+
+
+def _opposite(u: np.ndarray, w: np.ndarray, tol: np.ndarray) -> np.ndarray:
+    """``u`` and ``w`` of opposite signs, each farther than ``tol`` from zero."""
+    return ((u > tol) & (w < -tol)) | ((u < -tol) & (w > tol))
 
 
 def project_out_of_bodies(
