@@ -306,9 +306,9 @@ def test_remeshed_sphere_run_keeps_particles_and_elements_out():
 
 
 # --- interface laws ----------------------------------------------------------
-def test_coulomb_plane_drags_block_at_mu_g():
-    """A block on a rough plane moving under it: slip at mu g (lagged normal)."""
-    L, H, h, dt, phi, V = 0.2, 0.1, 0.05, 2.5e-3, 20.0, 1.0
+def _carried_block(phi=0.0, adhesion=0.0, V=1.0, dt=2.5e-3, t_end=0.05):
+    """An L x L x H elastic block on a plane moving at V along x under it."""
+    L, H, h = 0.2, 0.1, 0.05
     n, m = round(L / h) + 1, round(H / h) + 1
     mesh = MeshTet.init_tensor(
         np.linspace(0, L, n), np.linspace(0, L, n), np.linspace(0, H, m)
@@ -320,12 +320,12 @@ def test_coulomb_plane_drags_block_at_mu_g():
         [0.0, 0.0, 1.0],
         velocity=[V, 0.0, 0.0],
         friction_angle=phi,
+        adhesion=adhesion,
         name="belt",
     )
     # The weight as the lagged normal force of the first step, by tributary area.
-    area = face_tributary(
-        x, boundary_faces(mesh.t), np.tile([0.0, 0.0, 1.0], (x.shape[0], 1))
-    )
+    up = np.tile([0.0, 0.0, 1.0], (x.shape[0], 1))
+    area = face_tributary(x, boundary_faces(mesh.t), up)
     base = np.isclose(x[:, 2], 0.0)
     lagged = np.zeros((x.shape[0], 1))
     lagged[base, 0] = mass.sum() * G * area[base] / area[base].sum()
@@ -337,17 +337,44 @@ def test_coulomb_plane_drags_block_at_mu_g():
         bodies=[belt],
     )
     sim = npfem.Simulation(p, model, mesh, dt, progress=False)
-    records = sim.run(t_end=0.05)
+    records = sim.run(t_end=t_end)
+    return {
+        "s": float(sim.particles.u[:, 0] @ mass / mass.sum()),
+        "t": sim.time,
+        "mass": float(mass.sum()),
+        "area": L * L,
+        "last": records[-1].extra,
+        "penetration": max(r.extra["belt_penetration"] for r in records),
+    }
+
+
+def test_coulomb_plane_drags_block_at_mu_g():
+    """A block on a rough plane moving under it: slip at mu g (lagged normal)."""
+    dt, phi = 2.5e-3, 20.0
+    r = _carried_block(phi=phi, dt=dt)
     mu = math.tan(math.radians(phi))
-    t = sim.time
-    s = float(sim.particles.u[:, 0] @ mass / mass.sum())
-    # backward Euler: a t (t + dt) / 2 while it slips (test_bodies.py)
-    assert s == pytest.approx(0.5 * mu * G * t * (t + dt), rel=2e-3)
-    weight = mass.sum() * G
-    rec = records[-1].extra
-    assert rec["belt_force_x"] == pytest.approx(-mu * weight, rel=1e-6)
-    assert rec["belt_force_z"] == pytest.approx(-weight, rel=1e-6)
-    assert abs(rec["belt_force_y"]) < 1e-6 * weight
+    t = r["t"]
+    # backward Euler: a t (t + dt) / 2 while it slips (test_bodies.py);
+    # measured -4.7e-4
+    assert r["s"] == pytest.approx(0.5 * mu * G * t * (t + dt), rel=2e-3)
+    weight = r["mass"] * G
+    assert r["last"]["belt_force_x"] == pytest.approx(-mu * weight, rel=1e-6)
+    assert r["last"]["belt_force_z"] == pytest.approx(-weight, rel=1e-6)
+    assert abs(r["last"]["belt_force_y"]) < 1e-6 * weight
+    assert r["penetration"] == 0.0
+
+
+def test_adhesion_plane_drags_block_at_a_A_over_m():
+    """Tresca adhesion: the bound is the strength times the contact area."""
+    dt, adhesion = 2.5e-3, 500.0
+    r = _carried_block(adhesion=adhesion, V=5.0, dt=dt)
+    a = adhesion * r["area"] / r["mass"]
+    t = r["t"]
+    # The lagged normal force given to the first step marks the base nodes
+    # in contact from the start: backward Euler, a t (t + dt) / 2 (measured
+    # +1.2e-4; the force +1.4e-4: the base strains elastically).
+    assert r["s"] == pytest.approx(0.5 * a * t * (t + dt), rel=2e-3)
+    assert r["last"]["belt_force_x"] == pytest.approx(-adhesion * r["area"], rel=1e-3)
 
 
 # --- resume ------------------------------------------------------------------
