@@ -313,7 +313,7 @@ class BodyOfRevolution(_Moving3D):
     >>> d, n, _ = punch.signed_distance(x, 0.0)
     >>> d.round(3).tolist()
     [0.1, 0.1, -0.1]
-    >>> n.round(3).tolist()
+    >>> (n.round(3) + 0.0).tolist()
     [[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]]
     """
 
@@ -643,10 +643,13 @@ def face_tributary(
 
     Examples
     --------
+    One tetrahedron: projected on a horizontal surface, its base and its
+    slanted face count 1/2 m^2 each, its two vertical faces nothing.
+
     >>> x = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
     >>> f = boundary_faces(np.array([[0, 1, 2, 3]]).T)
     >>> face_tributary(x, f, np.tile([0.0, 0, 1], (4, 1))).round(3).tolist()
-    [0.167, 0.167, 0.167, 0.0]
+    [0.167, 0.333, 0.333, 0.167]
     """
     cross = np.cross(x[faces[1]] - x[faces[0]], x[faces[2]] - x[faces[0]])
     area = 0.5 * np.linalg.norm(cross, axis=1)
