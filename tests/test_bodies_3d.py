@@ -107,6 +107,34 @@ def test_spanning_tetrahedra():
     assert spanning_tetrahedra([cut], x, t, 0.0).tolist() == [True, False]
 
 
+def test_a_node_on_a_punch_rim_takes_the_face_that_moves_onto_it():
+    # As in 2D: the bisector would let it slide off the rim diagonally.
+    x = np.array([[0.0, 0.2, 1.0]])  # on the rim of the base, at y = r
+    bisector = np.array([[0.0, 0.5**0.5, -(0.5**0.5)]])
+    for velocity, face in (
+        ([0.0, 0.0, -1.0], [0.0, 0.0, -1.0]),  # pushed down: the base
+        ([0.0, 1.0, 0.0], [0.0, 1.0, 0.0]),  # towards +y: the side
+        ([0.0, 0.0, 0.0], bisector[0]),  # at rest: the bisector
+    ):
+        punch = BodyOfRevolution.cylinder([0, 0, 1.0], 0.2, 0.5, velocity=velocity)
+        d, n, _ = punch.signed_distance(x, 0.0)
+        assert d[0] == pytest.approx(0.0, abs=1e-12)
+        assert n[0].tolist() == pytest.approx(bisector[0].tolist())
+        assert punch.corner_normals(x, n, 0.0)[0].tolist() == pytest.approx(face)
+
+
+def test_particles_inside_a_3d_body_at_the_start_are_refused():
+    mesh = MeshTet.init_tensor(*3 * [np.linspace(0.0, 1.0, 3)])
+    soil = npfem.LinearElastic(E, NU, RHO)
+    p = npfem.Particles.from_mesh(mesh, soil)
+    pile = BodyOfRevolution.cylinder([0.5, 0.5, 0.4], 0.1, 2.0, name="pile")
+    model = npfem.Model(dim=3, materials=[soil], bodies=[pile], mode="static")
+    with pytest.raises(ParameterError) as info:
+        npfem.Simulation(p, model, mesh, 0.1)
+    # the node at (0.5, 0.5, 0.5) and the one at (0.5, 0.5, 1.0)
+    assert "pile" in str(info.value) and "2 particle(s) inside" in str(info.value)
+
+
 @pytest.mark.parametrize(
     ("make", "name"),
     [
