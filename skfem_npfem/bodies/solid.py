@@ -51,6 +51,9 @@ __all__ = [
 #: nodes on a curved surface cuts into it by its sagitta, h^2 / (8 R)).
 _SPAN_DEPTH = 0.05
 
+#: Points times profile edges in one block of a distance evaluation.
+_BLOCK = 1 << 20
+
 
 def _tangents(normals: np.ndarray) -> np.ndarray:
     """The cone program's tangent basis (n, 2, 3) of unit normals (n, 3).
@@ -549,7 +552,13 @@ class BodyOfRevolution(_Moving3D):
         """
         x = np.asarray(x, float).reshape(-1, 3)
         q, e_r = self._axis_frame(x, t)
-        dist, n2, c2 = self.profile_distance(q)
+        # In blocks: the distance works on (points, edges, 2) arrays.
+        block = max(1, _BLOCK // self.profile.shape[0])
+        parts = [
+            self.profile_distance(q[i : i + block])
+            for i in range(0, max(q.shape[0], 1), block)
+        ]
+        dist, n2, c2 = (np.concatenate(a) for a in zip(*parts, strict=True))
         normal = n2[:, :1] * e_r + n2[:, 1:] * self.axis
         closest = self.axis_point_at(t) + c2[:, :1] * e_r + c2[:, 1:] * self.axis
         return dist, normal, closest
@@ -615,7 +624,13 @@ def boundary_faces(t: np.ndarray) -> np.ndarray:
     [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]
     """
     faces = np.concatenate([t[[0, 1, 2]], t[[0, 1, 3]], t[[0, 2, 3]], t[[1, 2, 3]]], 1)
-    faces = np.sort(faces, axis=0)
+    faces = np.sort(faces, axis=0).astype(np.int64)
+    n = int(faces.max(initial=0)) + 1
+    if n**3 < 2**62:  # one integer key per face: a 1D unique, 10x faster
+        key = (faces[0] * n + faces[1]) * n + faces[2]
+        _, first, counts = np.unique(key, return_index=True, return_counts=True)
+        out = faces[:, first[counts == 1]]
+        return out[:, np.lexsort(out[::-1])]
     uniq, counts = np.unique(faces, axis=1, return_counts=True)
     return uniq[:, counts == 1]
 
@@ -694,11 +709,19 @@ def spanning_tetrahedra(
         if not near.size:
             continue
         p = xe[:, near]  # (4, k, 3)
+        edge = np.stack([np.linalg.norm(p[i] - p[j], axis=1) for i, j in pairs])
+        longest = edge.max(axis=0)
+        # Every probe is within the longest edge of the centroid: elements
+        # whose centroid is farther from the body than that are clear.
+        centroid = p.mean(axis=0)
+        close = body.signed_distance(centroid, time)[0] < longest
+        near, p, longest = near[close], p[:, close], longest[close]
+        if not near.size:
+            continue
         mids = np.stack([0.5 * (p[i] + p[j]) for i, j in pairs])
         face_c = (p.sum(axis=0)[None] - p) / 3.0
         probes = np.concatenate([p.mean(axis=0)[None], mids, face_c])  # (11, k, 3)
-        edge = np.stack([np.linalg.norm(p[i] - p[j], axis=1) for i, j in pairs])
-        depth = _SPAN_DEPTH * edge.max(axis=0)
+        depth = _SPAN_DEPTH * longest
         dist = body.signed_distance(probes.reshape(-1, 3), time)[0]
         inside = dist.reshape(probes.shape[:2]) < -np.maximum(
             depth, _ON_OUTLINE * body.size

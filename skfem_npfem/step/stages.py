@@ -225,7 +225,10 @@ def _with_body_contacts(
             p.fixed[active],
             p.v_prescribed[active],
             lagged[active],
-            boundary_faces(local_t),
+            # Contact areas: Tresca adhesion only.
+            boundary_faces(local_t)
+            if any(b.adhesion > 0 for b in model.bodies)
+            else np.zeros((3, 0), int),
             dt,
             h,
             model.gravity,
