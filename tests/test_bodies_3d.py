@@ -291,7 +291,9 @@ def test_sphere_in_a_quarter_block_matches_the_axisymmetric_model():
     at 0.1 m, -1.9 % at 0.05 m).  The square quarter block has rollers where
     the ring model's cylinder has its outer wall, 0.75 m from the axis
     against a contact radius of 0.2 m.  The axisymmetric force converges to
-    +4.6 % above this spacing's value at a sixth of it.
+    +4.6 % above this spacing's value at a sixth of it.  One step: in later
+    steps the 2D model drops the elements whose edge is a chord between two
+    nodes on the polygon (docs/theory.md, "Moving rigid bodies").
     """
     delta = 0.04
     sim, _, _ = _quarter_sphere(delta, steps=1, mesher=False)
