@@ -4,7 +4,10 @@
   velocity), the elements a body spans, particles put back out of a body, the
   loads a body takes;
 * :mod:`.contact` -- contact with the particles' boundary, found every step
-  (boundary nodes against faces, body corners against boundary edges).
+  (boundary nodes against faces, body corners against boundary edges);
+* :mod:`.solid` -- 3D models: :class:`RigidPlane` (a moving half-space) and
+  :class:`BodyOfRevolution` (an ``(r, z)`` profile turned about an axis), the
+  tetrahedra that span them, their contacts and loads.
 """
 
 from .body import (
@@ -21,16 +24,32 @@ from .contact import (
     corner_contacts,
     oriented_boundary,
 )
+from .solid import (
+    BodyOfRevolution,
+    RigidPlane,
+    boundary_faces,
+    face_tributary,
+    solid_contacts,
+    solid_loads,
+    spanning_tetrahedra,
+)
 
 __all__ = [
+    "BodyOfRevolution",
     "RigidBody",
+    "RigidPlane",
     "body_contacts",
     "body_loads",
+    "boundary_faces",
     "boundary_facets",
     "boundary_tributary",
     "check_clear",
     "corner_contacts",
+    "face_tributary",
     "oriented_boundary",
     "project_out_of_bodies",
+    "solid_contacts",
+    "solid_loads",
     "spanning_elements",
+    "spanning_tetrahedra",
 ]
