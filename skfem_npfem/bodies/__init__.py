@@ -5,9 +5,10 @@
   loads a body takes;
 * :mod:`.contact` -- contact with the particles' boundary, found every step
   (boundary nodes against faces, body corners against boundary edges);
-* :mod:`.solid` -- 3D models: :class:`RigidPlane` (a moving half-space) and
-  :class:`BodyOfRevolution` (an ``(r, z)`` profile turned about an axis), the
-  tetrahedra that span them, their contacts and loads.
+* 3D models: :class:`RigidPlane` (:mod:`.plane`, a moving half-space) and
+  :class:`BodyOfRevolution` (:mod:`.revolution`, an ``(r, z)`` profile turned
+  about an axis), with what they share in :mod:`.solid`; :mod:`.contact3d` --
+  the tetrahedra that span them, their contacts and loads.
 """
 
 from .body import (
@@ -24,15 +25,15 @@ from .contact import (
     corner_contacts,
     oriented_boundary,
 )
-from .solid import (
-    BodyOfRevolution,
-    RigidPlane,
+from .contact3d import (
     boundary_faces,
     face_tributary,
     solid_contacts,
     solid_loads,
     spanning_tetrahedra,
 )
+from .plane import RigidPlane
+from .revolution import BodyOfRevolution
 
 __all__ = [
     "BodyOfRevolution",
