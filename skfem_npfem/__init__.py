@@ -33,7 +33,7 @@ from ._deprecated import renamed as _renamed
 
 # isort: split
 from .baseline.roughness import stress_roughness
-from .bodies import RigidBody
+from .bodies import BodyOfRevolution, RigidBody, RigidPlane
 from .boundary import Contacts, RigidWall, floor, wall_x
 from .errors import (
     CheckpointError,
@@ -104,7 +104,15 @@ __all__ += [
     "compliance_matrix",
 ]
 #: Boundaries.
-__all__ += ["Contacts", "RigidBody", "RigidWall", "floor", "wall_x"]
+__all__ += [
+    "BodyOfRevolution",
+    "Contacts",
+    "RigidBody",
+    "RigidPlane",
+    "RigidWall",
+    "floor",
+    "wall_x",
+]
 #: One step.
 __all__ += [
     "ConeInput",

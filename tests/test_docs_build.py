@@ -196,3 +196,8 @@ def test_tutorial_own_body_matches_uniaxial_strain(site):
     assert float(m[1]) == pytest.approx(float(m[2]), rel=1e-6)
     deepest = re.search(r"deepest particle inside the pipe: ([\d.e+-]+) m", text)
     assert float(deepest[1]) <= 0.5 * 0.05
+    # In 3D: the plate on a quarter block, and the sphere pressed into it
+    m = re.search(r"force ([\d.]+) N, uniaxial strain ([\d.]+) N\b", text)
+    assert float(m[1]) == pytest.approx(float(m[2]), rel=1e-6)
+    inside = re.findall(r"deepest particle inside ([\d.e+-]+) m", text)
+    assert len(inside) == 3 and max(map(float, inside)) <= 0.5 * 0.125

@@ -4,7 +4,11 @@
   velocity), the elements a body spans, particles put back out of a body, the
   loads a body takes;
 * :mod:`.contact` -- contact with the particles' boundary, found every step
-  (boundary nodes against faces, body corners against boundary edges).
+  (boundary nodes against faces, body corners against boundary edges);
+* 3D models: :class:`RigidPlane` (:mod:`.plane`, a moving half-space) and
+  :class:`BodyOfRevolution` (:mod:`.revolution`, an ``(r, z)`` profile turned
+  about an axis), with what they share in :mod:`.solid`; :mod:`.contact3d` --
+  the tetrahedra that span them, their contacts and loads.
 """
 
 from .body import (
@@ -21,16 +25,32 @@ from .contact import (
     corner_contacts,
     oriented_boundary,
 )
+from .contact3d import (
+    boundary_faces,
+    face_tributary,
+    solid_contacts,
+    solid_loads,
+    spanning_tetrahedra,
+)
+from .plane import RigidPlane
+from .revolution import BodyOfRevolution
 
 __all__ = [
+    "BodyOfRevolution",
     "RigidBody",
+    "RigidPlane",
     "body_contacts",
     "body_loads",
+    "boundary_faces",
     "boundary_facets",
     "boundary_tributary",
     "check_clear",
     "corner_contacts",
+    "face_tributary",
     "oriented_boundary",
     "project_out_of_bodies",
+    "solid_contacts",
+    "solid_loads",
     "spanning_elements",
+    "spanning_tetrahedra",
 ]

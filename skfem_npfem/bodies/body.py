@@ -200,6 +200,16 @@ class RigidBody:
         """The moment's reference point (2,) at time ``t``."""
         return self.reference + self.displacement(t)
 
+    @property
+    def dim(self) -> int:
+        """2: a body of 2D models (plane strain or axisymmetric)."""
+        return 2
+
+    def bounds_at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """Bounding box (lo, hi) of the outline at time ``t``, each (2,)."""
+        v = self.vertices_at(t)
+        return v.min(axis=0), v.max(axis=0)
+
     def signed_distance(
         self, x: np.ndarray, t: float
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -264,10 +274,9 @@ def _vector(name: str, value) -> np.ndarray:
     return v
 
 
-def _near(body: RigidBody, x: np.ndarray, t: float, reach: float | np.ndarray):
-    """Indices of points within ``reach`` of the body's bounding box."""
-    v = body.vertices_at(t)
-    lo, hi = v.min(axis=0), v.max(axis=0)
+def _near(body, x: np.ndarray, t: float, reach: float | np.ndarray):
+    """Indices of points within ``reach`` of the body's bounding box (2D or 3D)."""
+    lo, hi = body.bounds_at(t)
     r = np.asarray(reach)[..., None] if np.ndim(reach) else reach
     return np.flatnonzero(np.all((x > lo - r) & (x < hi + r), axis=1))
 
@@ -345,11 +354,13 @@ def project_out_of_bodies(
     """Put points that are inside a body at ``time`` back on its outline.
 
     The velocity loses its component into the body (relative to the body's
-    velocity).
+    velocity).  2D and 3D: the bodies are :class:`RigidBody` objects, or
+    :class:`~skfem_npfem.RigidPlane` and :class:`~skfem_npfem.BodyOfRevolution`
+    ones (points (n, 3)).
 
     Returns
     -------
-    x, v : ndarray (n, 2)
+    x, v : ndarray (n, d)
         Projected positions and velocities (copies if anything moved).
     depth : ndarray (n_bodies,)
         Deepest point inside each body before the projection, m (0: none).
@@ -407,6 +418,8 @@ def check_clear(
     bodies: Sequence[RigidBody], x: np.ndarray, time: float, tolerance: float
 ) -> None:
     """Refuse particles deeper than ``tolerance`` inside a body at ``time``.
+
+    2D and 3D bodies alike (as :func:`project_out_of_bodies`).
 
     Raises
     ------

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..bodies import RigidBody
+from ..bodies import BodyOfRevolution, RigidBody, RigidPlane
 from ..boundary import RigidWall
 from ..constants import GRAVITY
 from ..errors import ParameterError
@@ -40,11 +40,13 @@ class Model:
         default; 1/2, 1/2: trapezoidal, energy conserving, elastic waves only).
     walls : list of RigidWall
         Rigid planes the particles may touch.
-    bodies : list of RigidBody
-        Rigid polygons moving with a prescribed velocity (2D only;
-        :mod:`skfem_npfem.bodies`).  Their lagged normal forces are the
-        columns ``len(walls) ..`` of :attr:`Particles.wall_force` (added by
-        :func:`~skfem_npfem.advance` when missing).
+    bodies : list of RigidBody, RigidPlane or BodyOfRevolution
+        Rigid bodies moving with a prescribed velocity
+        (:mod:`skfem_npfem.bodies`): polygons (:class:`RigidBody`) in 2D
+        models, planes and bodies of revolution in 3D ones.  Their lagged
+        normal forces are the columns ``len(walls) ..`` of
+        :attr:`Particles.wall_force` (added by :func:`~skfem_npfem.advance`
+        when missing).
     objective_rotation : bool
         Rotate stresses with the smoothed spin (Hughes-Winget, exactly orthogonal).
     update_geometry : bool
@@ -178,22 +180,31 @@ class Model:
             self._check_axisymmetric()
 
     def _check_bodies(self) -> None:
-        """Bodies are RigidBody objects of a 2D model, with distinct names."""
-        if isinstance(self.bodies, RigidBody):
+        """Bodies of the model's dimension, with distinct names."""
+        if isinstance(self.bodies, RigidBody | RigidPlane | BodyOfRevolution):
             self.bodies = [self.bodies]
         names = []
         for i, body in enumerate(self.bodies):
-            if not isinstance(body, RigidBody):
+            if not isinstance(body, RigidBody | RigidPlane | BodyOfRevolution):
                 raise ParameterError(
-                    f"bodies[{i}]", body, "a RigidBody(vertices, velocity, ...)"
+                    f"bodies[{i}]",
+                    body,
+                    "a RigidBody (2D), RigidPlane or BodyOfRevolution (3D)",
                 )
             names.append(body.name)
-        if self.bodies and self.dim != 2:
-            raise ParameterError(
-                "bodies",
-                f"{len(self.bodies)} bodies in a {self.dim}D model",
-                "rigid bodies in 2D models (plane strain or axisymmetric) only",
-            )
+            if body.dim != self.dim:
+                allowed = (
+                    "a RigidBody polygon in 2D models (plane strain or "
+                    "axisymmetric); RigidPlane and BodyOfRevolution are for 3D"
+                    if self.dim == 2
+                    else "a RigidPlane or a BodyOfRevolution in 3D models "
+                    "(RigidBody polygons are for 2D models)"
+                )
+                raise ParameterError(
+                    f"bodies[{i}]",
+                    f"a {type(body).__name__} in a {self.dim}D model",
+                    allowed,
+                )
         if len(set(names)) != len(names):
             raise ParameterError("bodies", names, "bodies with distinct names")
 

@@ -35,9 +35,13 @@ from .._deprecated import renamed
 from ..bodies import (
     body_contacts,
     body_loads,
+    boundary_faces,
     oriented_boundary,
     project_out_of_bodies,
+    solid_contacts,
+    solid_loads,
     spanning_elements,
+    spanning_tetrahedra,
 )
 from ..boundary import Contacts, project_to_walls, wall_contacts
 from ..errors import ParameterError
@@ -183,7 +187,8 @@ def _without_body_elements(
     model: Model, x: np.ndarray, active: np.ndarray, local_t: np.ndarray, time: float
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """Drop the elements that span a rigid body; renumber the remaining nodes."""
-    drop = spanning_elements(model.bodies, x[active], local_t, time)
+    spanning = spanning_tetrahedra if model.dim == 3 else spanning_elements
+    drop = spanning(model.bodies, x[active], local_t, time)
     if not np.any(drop):
         return active, local_t, 0
     local_t = local_t[:, ~drop]
@@ -212,6 +217,27 @@ def _with_body_contacts(
     nw = len(model.walls)
     lagged = p.wall_force[:, nw : nw + len(model.bodies)]
     x = p.x[active]
+    if model.dim == 3:
+        bc, body_ids = solid_contacts(
+            model.bodies,
+            x,
+            p.v[active],
+            p.fixed[active],
+            p.v_prescribed[active],
+            lagged[active],
+            # Contact areas: Tresca adhesion only.
+            boundary_faces(local_t)
+            if any(b.adhesion > 0 for b in model.bodies)
+            else np.zeros((3, 0), int),
+            dt,
+            h,
+            model.gravity,
+            time,
+            noise_ref=lagged,
+        )
+        return Contacts.concat([contacts, bc]), np.concatenate(
+            [wall_ids, nw + body_ids]
+        )
     facets = oriented_boundary(x, local_t)
     bc, body_ids = body_contacts(
         model.bodies,
@@ -384,7 +410,12 @@ def advance(
         ring in axisymmetry, where ``force_x`` is 0), ``<name>_moment``
         (N m per m, about its reference point; 0 in axisymmetry) and
         ``<name>_penetration`` (the deepest a particle got inside it before
-        being put back on its outline, m); and ``dropped_elements``.
+        being put back on its outline, m); and ``dropped_elements``.  A 3D
+        body (:class:`~skfem_npfem.RigidPlane`,
+        :class:`~skfem_npfem.BodyOfRevolution`) has ``<name>_x``, ``_y``,
+        ``_z``, ``<name>_force_x``, ``_y``, ``_z`` (N, on the modelled part:
+        a quarter domain carries a quarter of the load), ``<name>_moment_x``,
+        ``_y``, ``_z`` (N m) and ``<name>_penetration``.
 
     Raises
     ------
@@ -468,6 +499,9 @@ def _record_bodies(
     sel = ops.wall_ids >= nw
     c = ops.contacts
     sub = c.subset(sel)
+    if model.dim == 3:
+        _record_solids(rec, model, p, ops, sol, t_end, depth, sel, sub)
+        return
     loads = body_loads(
         model.bodies,
         sub,
@@ -487,6 +521,40 @@ def _record_bodies(
         )
         rec.extra[f"{body.name}_force_y"] = float(force[1])
         rec.extra[f"{body.name}_moment"] = 0.0 if model.axisymmetric else moment
+        rec.extra[f"{body.name}_penetration"] = (
+            0.0 if depth is None else float(depth[k])
+        )
+    rec.extra["dropped_elements"] = ops.dropped
+
+
+def _record_solids(
+    rec: StepRecord,
+    model: Model,
+    p: Particles,
+    ops: StepOperators,
+    sol: ConeSolution,
+    t_end: float,
+    depth: np.ndarray | None,
+    sel: np.ndarray,
+    sub: Contacts,
+) -> None:
+    """Position, force and moment vectors and penetration of each 3D body."""
+    nw = len(model.walls)
+    loads = solid_loads(
+        model.bodies,
+        sub,
+        ops.wall_ids[sel] - nw,
+        sol.lambda_n[sel],
+        sol.lambda_t[sel],
+        p.x[ops.active],
+        t_end,
+    )
+    for k, (body, (force, moment)) in enumerate(zip(model.bodies, loads, strict=True)):
+        disp = body.displacement(t_end)
+        for i, axis in enumerate("xyz"):
+            rec.extra[f"{body.name}_{axis}"] = float(disp[i])
+            rec.extra[f"{body.name}_force_{axis}"] = float(force[i])
+            rec.extra[f"{body.name}_moment_{axis}"] = float(moment[i])
         rec.extra[f"{body.name}_penetration"] = (
             0.0 if depth is None else float(depth[k])
         )
