@@ -127,9 +127,7 @@ def _corner_normals(
     share along that face's normal (with either normal alone the shaft's
     horizontal pressure leaks into the cone's vertical force: 14 % of it at
     four spacings per cone radius under an isotropic initial stress).
-    Otherwise:
-
-    A node on a corner has no closest-point direction.  The bisector would
+    Otherwise the node has no closest-point direction to go by.  The bisector would
     let the node under a footing's edge slide off diagonally with a fraction
     of its load (measured: the first step of the footing-penetration scene
     at h = B/10 lost 15 % of the load, and the soil under the edge sagged
