@@ -57,12 +57,17 @@ __all__ = [
     "Step",
     "StepOperators",
     "StepRecord",
+    "add_body_contacts",
     "advance",
     "build_operators",
+    "keep_out_of_bodies",
     "move_particles",
+    "record_bodies",
     "skfem_fields",
     "strain_operator",
     "update_particles",
+    "with_body_columns",
+    "without_body_elements",
 ]
 
 
@@ -129,7 +134,7 @@ def build_operators(
     active, local_t = mesh_source(p.x)
     dropped = 0
     if model.bodies:
-        active, local_t, dropped = _without_body_elements(
+        active, local_t, dropped = without_body_elements(
             model, p.x, active, local_t, time
         )
     mesh = p1_mesh(p.x[active], local_t)
@@ -179,10 +184,35 @@ def build_operators(
     )
 
 
-def _without_body_elements(
+def without_body_elements(
     model: Model, x: np.ndarray, active: np.ndarray, local_t: np.ndarray, time: float
 ) -> tuple[np.ndarray, np.ndarray, int]:
-    """Drop the elements that span a rigid body; renumber the remaining nodes."""
+    """Drop the elements that span a rigid body; renumber the remaining nodes.
+
+    Shared by every method that steps on a mesh of the particles (N-PFEM,
+    FEM-remap): an element whose vertices lie on both sides of a body (or
+    that covers one) is not soil.
+
+    Parameters
+    ----------
+    model : Model
+        Its :attr:`~skfem_npfem.step.model.Model.bodies`.
+    x : ndarray (N, 2)
+        Positions of all particles.
+    active, local_t : ndarray
+        The mesh source's mesh: its particles and its connectivity (3, ne)
+        in numbers local to ``active``.
+    time : float
+        Time at the start of the step, s (where the bodies are).
+
+    Returns
+    -------
+    active, local_t : ndarray
+        The mesh without the spanning elements (particles in no element left
+        out, the connectivity renumbered).
+    dropped : int
+        Number of elements dropped.
+    """
     drop = spanning_elements(model.bodies, x[active], local_t, time)
     if not np.any(drop):
         return active, local_t, 0
@@ -209,23 +239,87 @@ def _with_body_contacts(
     wall_ids: np.ndarray,
 ) -> tuple[Contacts, np.ndarray]:
     """The wall candidates followed by the rigid-body ones (ids after the walls)."""
-    nw = len(model.walls)
-    lagged = p.wall_force[:, nw : nw + len(model.bodies)]
     x = p.x[active]
-    facets = oriented_boundary(x, local_t)
-    bc, body_ids = body_contacts(
-        model.bodies,
+    return add_body_contacts(
+        model,
+        contacts,
+        wall_ids,
         x,
         p.v[active],
         p.fixed[active],
         p.v_prescribed[active],
-        lagged[active],
+        p.wall_force[active],
+        oriented_boundary(x, local_t),
+        dt,
+        h,
+        time,
+        noise_ref=p.wall_force,
+    )
+
+
+def add_body_contacts(
+    model: Model,
+    contacts: Contacts,
+    wall_ids: np.ndarray,
+    x: np.ndarray,
+    v: np.ndarray,
+    fixed: np.ndarray,
+    v_prescribed: np.ndarray,
+    lagged: np.ndarray,
+    facets: np.ndarray,
+    dt: float,
+    h: float,
+    time: float,
+    noise_ref: np.ndarray,
+) -> tuple[Contacts, np.ndarray]:
+    """The wall candidates followed by the rigid-body ones (ids after the walls).
+
+    The body rows of one step on any set of displacement nodes (the
+    particles of N-PFEM, the P1 or P2 nodes of FEM-remap):
+    :func:`~skfem_npfem.bodies.body_contacts` with the bodies' corners, the
+    lagged normal forces of the body columns, adhesion and friction as the
+    bodies define them.
+
+    Parameters
+    ----------
+    model : Model
+        Its walls (how many) and bodies.
+    contacts, wall_ids : Contacts, ndarray (nc,) int
+        The wall candidates of the step and the wall of each.
+    x, v, fixed, v_prescribed : ndarray (n, 2)
+        Positions, velocities, prescribed dofs and their velocities of the
+        nodes at the start of the step.
+    lagged : ndarray (n, n_columns)
+        Lagged normal forces of the nodes, one column per wall then per body
+        (:func:`with_body_columns`), N.
+    facets : ndarray (2, nb)
+        Boundary edges of the nodes' mesh with the mesh on their left
+        (:func:`~skfem_npfem.bodies.oriented_boundary`).
+    dt, h, time : float
+        Step (s), spacing (m), time at the start of the step (s).
+    noise_ref : ndarray (m, n_columns)
+        Forces that set the noise level of ``lagged`` (all particles' columns).
+
+    Returns
+    -------
+    Contacts, ndarray (nc',) int
+        All candidates and their walls; body ``k`` is ``len(model.walls) + k``.
+    """
+    nw = len(model.walls)
+    cols = slice(nw, nw + len(model.bodies))
+    bc, body_ids = body_contacts(
+        model.bodies,
+        x,
+        v,
+        fixed,
+        v_prescribed,
+        lagged[:, cols],
         facets,
         dt,
         h,
         model.gravity,
         time,
-        noise_ref=lagged,
+        noise_ref=noise_ref[:, cols],
         axisymmetric=model.axisymmetric,
         corners=True,
     )
@@ -420,18 +514,14 @@ def advance(
     mesh_source = as_mesh_source(mesh_source)
     t_start = float(time)
     if model.bodies:
-        p = _with_body_columns(p, model)
+        p = with_body_columns(p, model)
     t0 = perf_counter()
     ops = build_operators(p, model, dt, mesh_source, volume_state, t_start)
     t1 = perf_counter()
     sol = solve_step(ops.data, model.solver, step=step)
     t2 = perf_counter()
     new = update_particles(p, model, dt, ops, sol)
-    depth = None
-    if model.bodies and model.update_geometry:
-        x, v, depth = project_out_of_bodies(model.bodies, new.x, new.v, t_start + dt)
-        if x is not new.x:
-            new = new.replace(x=x, v=v, u=new.u + (x - new.x))
+    new, depth = keep_out_of_bodies(model, new, t_start + dt)
     timings = {"mesh": t1 - t0, **sol.timings, "update": perf_counter() - t2}
     rec = StepRecord.of_step(
         step, dt, new, model.gravity, ops.active, ops.operator, sol, timings
@@ -440,11 +530,21 @@ def advance(
     if ops.volume_strains is not None:
         rec.extra["volume_correction_strain"] = [float(x) for x in ops.volume_strains]
     if model.bodies:
-        _record_bodies(rec, model, p, ops, sol, t_start + dt, depth)
+        record_bodies(
+            rec,
+            model,
+            ops.contacts,
+            ops.wall_ids,
+            sol,
+            p.x[ops.active],
+            t_start + dt,
+            depth,
+            ops.dropped,
+        )
     return new, Step(rec, sol, ops.active, ops.local_t, ops.operator, new)
 
 
-def _with_body_columns(p: Particles, model: Model) -> Particles:
+def with_body_columns(p: Particles, model: Model) -> Particles:
     """Particles with one lagged-force column per wall and body."""
     need = len(model.walls) + len(model.bodies)
     have = p.wall_force.shape[1]
@@ -454,27 +554,73 @@ def _with_body_columns(p: Particles, model: Model) -> Particles:
     return p.replace(wall_force=np.concatenate([p.wall_force, pad], axis=1))
 
 
-def _record_bodies(
+def keep_out_of_bodies(
+    model: Model, new: Particles, t_end: float
+) -> tuple[Particles, np.ndarray | None]:
+    """Particles that ended a step inside a body put back on its outline.
+
+    Returns
+    -------
+    Particles
+        ``new``, or a copy with the projected positions, velocities and
+        displacements.
+    ndarray (n_bodies,) or None
+        Deepest particle inside each body before the projection, m (None
+        without bodies or with ``update_geometry`` off).
+    """
+    if not (model.bodies and model.update_geometry):
+        return new, None
+    x, v, depth = project_out_of_bodies(model.bodies, new.x, new.v, t_end)
+    if x is not new.x:
+        new = new.replace(x=x, v=v, u=new.u + (x - new.x))
+    return new, depth
+
+
+def record_bodies(
     rec: StepRecord,
     model: Model,
-    p: Particles,
-    ops: StepOperators,
+    contacts: Contacts,
+    wall_ids: np.ndarray,
     sol: ConeSolution,
+    x: np.ndarray,
     t_end: float,
     depth: np.ndarray | None,
+    dropped: int,
 ) -> None:
-    """Position, load and penetration of each body in the step's record."""
+    """Position, load and penetration of each body in the step's record.
+
+    The keys are those of :func:`advance` (``<name>_x``, ``<name>_y``,
+    ``<name>_force_x``, ``<name>_force_y``, ``<name>_moment``,
+    ``<name>_penetration``, ``dropped_elements``).
+
+    Parameters
+    ----------
+    rec : StepRecord
+        The record to fill (its ``extra``).
+    model : Model
+    contacts, wall_ids : Contacts, ndarray (nc,) int
+        The step's candidates and their walls (bodies after the walls).
+    sol : ConeSolution
+        Its ``lambda_n`` and ``lambda_t`` per candidate.
+    x : ndarray (n, 2)
+        Positions of the nodes the candidates index (start of the step).
+    t_end : float
+        Time at the end of the step, s.
+    depth : ndarray (n_bodies,) or None
+        From :func:`keep_out_of_bodies`.
+    dropped : int
+        Elements dropped by :func:`without_body_elements`.
+    """
     nw = len(model.walls)
-    sel = ops.wall_ids >= nw
-    c = ops.contacts
-    sub = c.subset(sel)
+    sel = wall_ids >= nw
+    sub = contacts.subset(sel)
     loads = body_loads(
         model.bodies,
         sub,
-        ops.wall_ids[sel] - nw,
+        wall_ids[sel] - nw,
         sol.lambda_n[sel],
         sol.lambda_t[sel],
-        p.x[ops.active],
+        x,
         t_end,
     )
     for k, (body, (force, moment)) in enumerate(zip(model.bodies, loads, strict=True)):
@@ -490,7 +636,7 @@ def _record_bodies(
         rec.extra[f"{body.name}_penetration"] = (
             0.0 if depth is None else float(depth[k])
         )
-    rec.extra["dropped_elements"] = ops.dropped
+    rec.extra["dropped_elements"] = dropped
 
 
 def __getattr__(name: str) -> object:
