@@ -49,12 +49,19 @@ def test_footing_penetration_rough_interface_runs():
         ({"width": -1.0}, "width"),
         ({"nu": 0.5}, "nu"),
         ({"interface": "glued"}, "interface"),
+        ({"method": "spfem"}, "method"),
+        ({"method": "npfem", "element": "p2"}, "element"),
     ],
 )
 def test_footing_penetration_bad_input(over, name):
     with pytest.raises(ParameterError) as info:
         run_scene(SCENE, over)
     assert info.value.name == name and "\n" not in str(info.value)
+
+
+def test_footing_penetration_refuses_spfem_saying_why():
+    with pytest.raises(ParameterError, match="quasi-static"):
+        run_scene(SCENE, {"method": "spfem"})
 
 
 def test_footing_penetration_near_incompressible_runs():
