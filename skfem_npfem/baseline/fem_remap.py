@@ -24,20 +24,57 @@ scikit-fem (:mod:`skfem_npfem.baseline.operators`).  Each step:
 
 So a comparison with N-PFEM isolates integration and mapping: the program,
 the solver, the contact rules and the particle update are the same code.
+
+Rigid bodies (``model.bodies``) enter as in N-PFEM, through the same stage
+functions of :mod:`skfem_npfem.step.stages`: the elements that span a body
+are dropped before the state is remapped
+(:func:`~skfem_npfem.step.body_stages.without_body_elements`), the body contact
+rows are added after the wall rows
+(:func:`~skfem_npfem.step.body_stages.add_body_contacts`: the body's faces
+against the soil's boundary nodes and its corners against the boundary
+edges, friction or adhesion bounded with the lagged normal forces of the
+body's column), the particles that end a step inside a body are put back
+on its outline (:func:`~skfem_npfem.step.body_stages.keep_out_of_bodies`) and the
+body's position, force, moment and penetration go on the step record under
+the same keys (:func:`~skfem_npfem.step.body_stages.record_bodies`).
+
+With P2 elements the body rows act on the displacement nodes on the soil's
+boundary, the vertices *and* the mid-side nodes, as the wall rows of
+:mod:`skfem_npfem.baseline.fem_nodes` do: a mid-side node that only
+followed its end vertices could bulge into a flat body (the consistent
+load of a uniform contact pressure puts two thirds of each edge's force on
+its mid-side node).  The boundary edges the bodies see are the half edges
+vertex - mid-side node - vertex (straight, as the elements are); a corner
+row interpolates linearly along a half edge.  A mid-side node's contact
+force is stored half on each end particle, and its lagged normal force
+comes back with the consistent shares
+(:func:`~skfem_npfem.baseline.fem_nodes.split_wall_forces`), as for walls.
+The adhesion area of a node is half its boundary half edges along the body
+(``L/4, L/2, L/4`` of an edge of length ``L``, not the consistent ``L/6,
+2L/3, L/6``): the total along a face is right, its split between vertices
+and mid-side nodes is not the consistent one.
 """
 
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
+from time import perf_counter
 
 import numpy as np
 
+from ..bodies import oriented_boundary
 from ..boundary import node_contacts
 from ..errors import ParameterError
 from ..mesh.sources import MeshSource
 from ..particles import Particles
+from ..step.body_stages import (
+    add_body_contacts,
+    keep_out_of_bodies,
+    record_bodies,
+    with_body_columns,
+    without_body_elements,
+)
 from ..step.conic import ConeSolution, solve_step
 from ..step.kinematics import equivalent_strain, rotate_stress
 from ..step.model import Model
@@ -227,45 +264,87 @@ class FemRemap:
         dt: float,
         mesh_source: MeshSource,
         step: int | None = None,
+        time: float = 0.0,
     ) -> tuple[GaussState, Step]:
         """Advance one step (the counterpart of :func:`skfem_npfem.advance`).
+
+        Parameters
+        ----------
+        state : GaussState
+            From :meth:`initial_state` or the previous step.
+        model : Model
+        dt : float
+            Time step, s.
+        mesh_source : MeshSource
+            ``x -> (active, local_t)``.
+        step : int, optional
+            Step index (for error messages).
+        time : float
+            Time at the start of the step, s: where the model's rigid bodies
+            are (only read when ``model.bodies`` is not empty).
 
         Returns
         -------
         GaussState, Step
             ``result.record.extra`` holds ``remapped``, ``yield_violations``
-            and ``outside_old_mesh``; ``result.solution`` is on the particles
-            (recovered nodal stresses, mid-edge reactions split to the ends);
-            ``result.operator`` is the Gauss-point operator.
+            and ``outside_old_mesh`` (and, with rigid bodies, the body keys of
+            :func:`skfem_npfem.advance`); ``result.solution`` is on the
+            particles (recovered nodal stresses, mid-edge reactions split to
+            the ends); ``result.operator`` is the Gauss-point operator.
         """
         self.check_state(state, model, dt)
-        t0 = time.perf_counter()
+        t_start = float(time)
+        if model.bodies:
+            state = with_body_columns(state, model)
+        t0 = perf_counter()
         active, local_t = mesh_source(state.x)
+        dropped = 0
+        if model.bodies:
+            active, local_t, dropped = without_body_elements(
+                model, state.x, active, local_t, t_start
+            )
         cells = np.ascontiguousarray(active[local_t].T)
-        ta = time.perf_counter()
+        ta = perf_counter()
         sig_gp, eps_gp, info = self.remap(state, cells, model)
-        t_map = time.perf_counter() - ta
+        t_map = perf_counter() - ta
         gm = gauss_mesh(state.x[active], local_t, self.element, model.components)
-        data, wall_ids = self._step_data(state, model, dt, gm, active, cells, sig_gp)
-        t1 = time.perf_counter()
+        data, wall_ids = self._step_data(
+            state, model, dt, gm, active, local_t, cells, sig_gp, t_start
+        )
+        t1 = perf_counter()
         sol = solve_step(data, model.solver, step=step)
-        t2 = time.perf_counter()
+        t2 = perf_counter()
         new, out = self._update(state, model, dt, gm, active, cells, sol, eps_gp)
         new = new.replace(
             wall_force=self._wall_forces(state, gm, active, data, wall_ids, sol)
         )
+        new, depth = keep_out_of_bodies(model, new, t_start + dt)
         timings = {
             "mesh": t1 - t0 - t_map,
             "transfer": t_map,
             **sol.timings,
-            "update": time.perf_counter() - t2,
+            "update": perf_counter() - t2,
         }
         rec = StepRecord.of_step(
             step, dt, new, model.gravity, active, gm.points, sol, timings, **info
         )
+        if model.bodies:
+            record_bodies(
+                rec,
+                model,
+                data.contacts,
+                wall_ids,
+                sol,
+                gm.node_x,
+                t_start + dt,
+                depth,
+                dropped,
+            )
         return new, Step(rec, out, active, local_t, gm.points, new)
 
-    def _step_data(self, state, model, dt, gm: GaussMesh, active, cells, sig_gp):
+    def _step_data(
+        self, state, model, dt, gm: GaussMesh, active, local_t, cells, sig_gp, t
+    ):
         """The cone step's data on the Gauss points, and each contact's wall."""
         nodes = node_data(state, model, gm, active)
         vol_e = gm.points.volumes.reshape(-1, gm.nq).sum(axis=1)
@@ -281,6 +360,22 @@ class FemRemap:
             h,
             model.gravity,
         )
+        if model.bodies:
+            contacts, wall_ids = add_body_contacts(
+                model,
+                contacts,
+                wall_ids,
+                gm.node_x,
+                nodes.v,
+                nodes.fixed,
+                nodes.v_prescribed,
+                nodes.lagged,
+                _boundary_half_edges(gm, local_t),
+                dt,
+                h,
+                t,
+                noise_ref=state.wall_force,
+            )
         data = ConeInput(
             operator=gm.points,
             materials=model.materials,
@@ -346,6 +441,27 @@ class FemRemap:
         if not contacts.size:
             return wall
         per_node = np.zeros((gm.node_x.shape[0], wall.shape[1]))
-        per_node[contacts.node, wall_ids] = sol.lambda_n
+        # A body's corner row pushes on two nodes of an edge (weights 1 - s, s).
+        nodes, w, _ = contacts.weights()
+        np.add.at(per_node, (nodes, wall_ids[:, None]), w * sol.lambda_n[:, None])
         wall[active] = to_particles(gm, per_node)
         return wall
+
+
+def _boundary_half_edges(gm: GaussMesh, local_t: np.ndarray) -> np.ndarray:
+    """Boundary edges (2, nb) of the displacement nodes, the mesh on their left.
+
+    P1: the mesh's boundary edges.  P2: each split at its mid-side node
+    (vertex - mid-side node - vertex), so that the bodies see every boundary
+    node of the element.
+    """
+    x = gm.node_x[: gm.n_vertices]
+    facets = oriented_boundary(x, local_t)
+    if gm.element == "p1" or not facets.size:
+        return facets
+    nv = gm.n_vertices
+    key = np.sort(gm.edges, axis=1) @ np.array([nv, 1])
+    order = np.argsort(key)
+    want = np.sort(facets, axis=0).T @ np.array([nv, 1])
+    mid = nv + order[np.searchsorted(key, want, sorter=order)]
+    return np.concatenate([np.stack([facets[0], mid]), np.stack([mid, facets[1]])], 1)

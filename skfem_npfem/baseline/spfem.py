@@ -47,8 +47,8 @@ estimate's measured margin of at least 29 %).  Every record reports
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
+from time import perf_counter
 
 import numpy as np
 
@@ -159,6 +159,7 @@ class SPFEM:
                 "dynamic: SPFEM is explicit (quasi-static problems: npfem or "
                 "fem-remap)",
             )
+        _refuse_bodies(model)
         stable = self.stable_dt(p, model, mesh_source)
         if self.explicit_dt is not None and self.explicit_dt > stable:
             raise ParameterError(
@@ -177,6 +178,7 @@ class SPFEM:
         dt: float,
         mesh_source: MeshSource,
         step: int | None = None,
+        time: float = 0.0,
     ) -> tuple[Particles, Step]:
         """Advance by ``dt`` in explicit substeps on one mesh.
 
@@ -184,23 +186,29 @@ class SPFEM:
         ``result.record.extra`` holds ``substeps``, ``stable_dt``,
         ``explicit_dt`` and ``cfl``.
 
+        ``time`` (the time at the start of the step) is accepted for the
+        signature's sake: SPFEM refuses rigid bodies, the only thing that
+        reads it.
+
         Raises
         ------
         ParameterError
-            A static model, or a given ``explicit_dt`` above
-            :data:`MID_RUN_MARGIN` times the stable step of this step's mesh.
+            A static model, a model with rigid bodies, or a given
+            ``explicit_dt`` above :data:`MID_RUN_MARGIN` times the stable step
+            of this step's mesh.
         """
         if model.mode != "dynamic":
             raise ParameterError("mode", model.mode, "dynamic: SPFEM is explicit")
+        _refuse_bodies(model)
         if not (math.isfinite(dt) and dt > 0):
             raise ParameterError("dt", dt, "a finite time step > 0 (s)")
-        t0 = time.perf_counter()
+        t0 = perf_counter()
         active, local_t = mesh_source(p.x)
         ni = nodal_integration(p1_mesh(p.x[active], local_t))
         stable = stable_time_step(ni, model, p.mass[active], p.material[active])
         n_sub = self._substeps(dt, stable, step)
         h = dt / n_sub
-        t1 = time.perf_counter()
+        t1 = perf_counter()
         q, impulse = p, np.zeros_like(p.wall_force)
         GT = ni.G.T.tocsr()  # strains of every substep (G is fixed in the step)
         for _ in range(n_sub):  # explicit substeps: the method's own time loop
@@ -209,7 +217,7 @@ class SPFEM:
         wall_force = impulse / dt
         q = q.replace(wall_force=wall_force)
         sol = self._solution(p, q, model, active, ni)
-        timings = {"mesh": t1 - t0, "update": time.perf_counter() - t1}
+        timings = {"mesh": t1 - t0, "update": perf_counter() - t1}
         rec = StepRecord.of_step(
             step,
             dt,
@@ -310,4 +318,15 @@ class SPFEM:
             lambda_t=np.zeros((0, d - 1)),
             status="Explicit",
             iterations=0,
+        )
+
+
+def _refuse_bodies(model: Model) -> None:
+    """SPFEM has no rigid-body contact: refuse a model with bodies."""
+    if model.bodies:
+        raise ParameterError(
+            "bodies",
+            [b.name for b in model.bodies],
+            "no rigid bodies with SPFEM (its explicit substeps have no contact "
+            "rows): use npfem or fem-remap",
         )

@@ -86,7 +86,8 @@ class Simulation:
         ``f(particles) -> dict`` of more point data for the VTU files.
     stepper : callable or None
         The step, ``stepper(particles, model, dt, mesh_source, step=k) ->
-        (particles, Step)``; None: N-PFEM's
+        (particles, Step)``, called with ``time=`` (the time at the start
+        of the step) as well when the model has rigid bodies; None: N-PFEM's
         :func:`~skfem_npfem.step.stages.advance`.  Another method (FEM with remapping,
         explicit SPFEM: :mod:`skfem_npfem.baseline`) plugs in here and may keep
         more state in a subclass of :class:`Particles`; checkpoints keep it.
@@ -421,6 +422,8 @@ class Simulation:
     def _advance(self, dt: float) -> tuple[Particles, Step]:
         args = (self.particles, self.model, dt, self.mesh_source)
         if self.stepper is not None:
+            if self.model.bodies:  # the bodies move: the stepper needs the time
+                return self.stepper(*args, step=self.step + 1, time=self.time)
             return self.stepper(*args, step=self.step + 1)
         # The volume correction's filter state lives in the last record (so
         # checkpoints, which keep the records, carry it).

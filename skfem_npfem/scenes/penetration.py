@@ -15,6 +15,11 @@ over its width.  References: Prandtl's ``q/s_u = 2 + pi`` once the soil
 yields under a surface footing (smooth or rough: the same in weightless
 Tresca soil); past it the pressure rises as the footing is embedded and the
 soil heaves beside it.
+
+``method`` runs the same scene with N-PFEM (default) or FEM-remap (P1 or P2
+elements, Gauss-point state remapped after each remesh; the footing enters
+its steps through the same stage functions); docs/validation/penetration_methods.md
+compares the three curves.
 """
 
 from __future__ import annotations
@@ -44,6 +49,7 @@ from .common import (
     solver_from,
     solver_params,
 )
+from .methods import METHOD_METRICS, method_params, with_method
 from .params import POSITIVE
 from .scenery import Scenery, box, number
 
@@ -131,6 +137,13 @@ PARAMS = [
         lo=0.8,
         hi=3.0,
     ),
+    *method_params(
+        ("npfem", "fem-remap"),
+        missing="spfem is not available in footing-penetration: it is explicit "
+        "dynamics and this scene is quasi-static, without inertia (and SPFEM "
+        "has no rigid-body contact); docs/validation/penetration_methods.md "
+        "compares npfem and fem-remap here",
+    ),
     *fidelity_params(0.0),
     *solver_params(),
 ]
@@ -148,6 +161,12 @@ METRICS = {
     "max_heave": "largest upward displacement of the soil surface / B",
     "curve": "list of [w/B, q/s_u] per step",
     "n_particles": "number of particles",
+    **METHOD_METRICS,
+    # spfem is not offered here: its metrics are always null.
+    **{
+        k: "spfem only: always null here (spfem is not available in this scene)"
+        for k in ("explicit_steps", "stable_dt", "explicit_dt")
+    },
 }
 
 
@@ -331,7 +350,7 @@ def build(
             "n_particles": int(particles.n),
         }
 
-    return SceneRun(sim, {"t_end": t_end}, metrics)
+    return with_method(values, SceneRun(sim, {"t_end": t_end}, metrics))
 
 
 def penetration_curve(records, B: float, su: float) -> list[list[float]]:

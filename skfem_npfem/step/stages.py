@@ -32,17 +32,6 @@ import numpy as np
 from skfem import Mesh
 
 from .._deprecated import renamed
-from ..bodies import (
-    body_contacts,
-    body_loads,
-    boundary_faces,
-    oriented_boundary,
-    project_out_of_bodies,
-    solid_contacts,
-    solid_loads,
-    spanning_elements,
-    spanning_tetrahedra,
-)
 from ..boundary import Contacts, project_to_walls, wall_contacts
 from ..errors import ParameterError
 from ..mesh.axisymmetric import axisymmetric_integration
@@ -50,6 +39,13 @@ from ..mesh.delaunay import p1_mesh
 from ..mesh.smoothing import NodalIntegration, nodal_integration
 from ..mesh.sources import MeshSource, as_mesh_source
 from ..particles import Particles
+from .body_stages import (
+    keep_out_of_bodies,
+    record_bodies,
+    with_body_columns,
+    with_body_contacts,
+    without_body_elements,
+)
 from .conic import ConeSolution, solve_step
 from .kinematics import equivalent_strain, rotate_stress
 from .model import Model
@@ -133,7 +129,7 @@ def build_operators(
     active, local_t = mesh_source(p.x)
     dropped = 0
     if model.bodies:
-        active, local_t, dropped = _without_body_elements(
+        active, local_t, dropped = without_body_elements(
             model, p.x, active, local_t, time
         )
     mesh = p1_mesh(p.x[active], local_t)
@@ -149,7 +145,7 @@ def build_operators(
     )
     contacts, wall_ids = wall_contacts(model.walls, p, active, dt, h, model.gravity)
     if model.bodies:
-        contacts, wall_ids = _with_body_contacts(
+        contacts, wall_ids = with_body_contacts(
             model, p, active, local_t, dt, h, time, contacts, wall_ids
         )
     data = ConeInput(
@@ -181,81 +177,6 @@ def build_operators(
     return StepOperators(
         active, local_t, op, wall_ids, data, strains, float(time), dropped
     )
-
-
-def _without_body_elements(
-    model: Model, x: np.ndarray, active: np.ndarray, local_t: np.ndarray, time: float
-) -> tuple[np.ndarray, np.ndarray, int]:
-    """Drop the elements that span a rigid body; renumber the remaining nodes."""
-    spanning = spanning_tetrahedra if model.dim == 3 else spanning_elements
-    drop = spanning(model.bodies, x[active], local_t, time)
-    if not np.any(drop):
-        return active, local_t, 0
-    local_t = local_t[:, ~drop]
-    used = np.unique(local_t)
-    if used.size == 0:
-        raise ParameterError(
-            "bodies",
-            [b.name for b in model.bodies],
-            "bodies that leave some soil: every element of the mesh spans a body",
-        )
-    return active[used], np.searchsorted(used, local_t), int(drop.sum())
-
-
-def _with_body_contacts(
-    model: Model,
-    p: Particles,
-    active: np.ndarray,
-    local_t: np.ndarray,
-    dt: float,
-    h: float,
-    time: float,
-    contacts: Contacts,
-    wall_ids: np.ndarray,
-) -> tuple[Contacts, np.ndarray]:
-    """The wall candidates followed by the rigid-body ones (ids after the walls)."""
-    nw = len(model.walls)
-    lagged = p.wall_force[:, nw : nw + len(model.bodies)]
-    x = p.x[active]
-    if model.dim == 3:
-        bc, body_ids = solid_contacts(
-            model.bodies,
-            x,
-            p.v[active],
-            p.fixed[active],
-            p.v_prescribed[active],
-            lagged[active],
-            # Contact areas: Tresca adhesion only.
-            boundary_faces(local_t)
-            if any(b.adhesion > 0 for b in model.bodies)
-            else np.zeros((3, 0), int),
-            dt,
-            h,
-            model.gravity,
-            time,
-            noise_ref=lagged,
-        )
-        return Contacts.concat([contacts, bc]), np.concatenate(
-            [wall_ids, nw + body_ids]
-        )
-    facets = oriented_boundary(x, local_t)
-    bc, body_ids = body_contacts(
-        model.bodies,
-        x,
-        p.v[active],
-        p.fixed[active],
-        p.v_prescribed[active],
-        lagged[active],
-        facets,
-        dt,
-        h,
-        model.gravity,
-        time,
-        noise_ref=lagged,
-        axisymmetric=model.axisymmetric,
-        corners=True,
-    )
-    return Contacts.concat([contacts, bc]), np.concatenate([wall_ids, nw + body_ids])
 
 
 def strain_operator(mesh, model: Model) -> tuple[NodalIntegration, float]:
@@ -451,18 +372,14 @@ def advance(
     mesh_source = as_mesh_source(mesh_source)
     t_start = float(time)
     if model.bodies:
-        p = _with_body_columns(p, model)
+        p = with_body_columns(p, model)
     t0 = perf_counter()
     ops = build_operators(p, model, dt, mesh_source, volume_state, t_start)
     t1 = perf_counter()
     sol = solve_step(ops.data, model.solver, step=step)
     t2 = perf_counter()
     new = update_particles(p, model, dt, ops, sol)
-    depth = None
-    if model.bodies and model.update_geometry:
-        x, v, depth = project_out_of_bodies(model.bodies, new.x, new.v, t_start + dt)
-        if x is not new.x:
-            new = new.replace(x=x, v=v, u=new.u + (x - new.x))
+    new, depth = keep_out_of_bodies(model, new, t_start + dt)
     timings = {"mesh": t1 - t0, **sol.timings, "update": perf_counter() - t2}
     rec = StepRecord.of_step(
         step, dt, new, model.gravity, ops.active, ops.operator, sol, timings
@@ -471,94 +388,18 @@ def advance(
     if ops.volume_strains is not None:
         rec.extra["volume_correction_strain"] = [float(x) for x in ops.volume_strains]
     if model.bodies:
-        _record_bodies(rec, model, p, ops, sol, t_start + dt, depth)
+        record_bodies(
+            rec,
+            model,
+            ops.contacts,
+            ops.wall_ids,
+            sol,
+            p.x[ops.active],
+            t_start + dt,
+            depth,
+            ops.dropped,
+        )
     return new, Step(rec, sol, ops.active, ops.local_t, ops.operator, new)
-
-
-def _with_body_columns(p: Particles, model: Model) -> Particles:
-    """Particles with one lagged-force column per wall and body."""
-    need = len(model.walls) + len(model.bodies)
-    have = p.wall_force.shape[1]
-    if have >= need:
-        return p
-    pad = np.zeros((p.n, need - have))
-    return p.replace(wall_force=np.concatenate([p.wall_force, pad], axis=1))
-
-
-def _record_bodies(
-    rec: StepRecord,
-    model: Model,
-    p: Particles,
-    ops: StepOperators,
-    sol: ConeSolution,
-    t_end: float,
-    depth: np.ndarray | None,
-) -> None:
-    """Position, load and penetration of each body in the step's record."""
-    nw = len(model.walls)
-    sel = ops.wall_ids >= nw
-    c = ops.contacts
-    sub = c.subset(sel)
-    if model.dim == 3:
-        _record_solids(rec, model, p, ops, sol, t_end, depth, sel, sub)
-        return
-    loads = body_loads(
-        model.bodies,
-        sub,
-        ops.wall_ids[sel] - nw,
-        sol.lambda_n[sel],
-        sol.lambda_t[sel],
-        p.x[ops.active],
-        t_end,
-    )
-    for k, (body, (force, moment)) in enumerate(zip(model.bodies, loads, strict=True)):
-        disp = body.displacement(t_end)
-        rec.extra[f"{body.name}_x"] = float(disp[0])
-        rec.extra[f"{body.name}_y"] = float(disp[1])
-        # A body of revolution takes no net radial force.
-        rec.extra[f"{body.name}_force_x"] = (
-            0.0 if model.axisymmetric else float(force[0])
-        )
-        rec.extra[f"{body.name}_force_y"] = float(force[1])
-        rec.extra[f"{body.name}_moment"] = 0.0 if model.axisymmetric else moment
-        rec.extra[f"{body.name}_penetration"] = (
-            0.0 if depth is None else float(depth[k])
-        )
-    rec.extra["dropped_elements"] = ops.dropped
-
-
-def _record_solids(
-    rec: StepRecord,
-    model: Model,
-    p: Particles,
-    ops: StepOperators,
-    sol: ConeSolution,
-    t_end: float,
-    depth: np.ndarray | None,
-    sel: np.ndarray,
-    sub: Contacts,
-) -> None:
-    """Position, force and moment vectors and penetration of each 3D body."""
-    nw = len(model.walls)
-    loads = solid_loads(
-        model.bodies,
-        sub,
-        ops.wall_ids[sel] - nw,
-        sol.lambda_n[sel],
-        sol.lambda_t[sel],
-        p.x[ops.active],
-        t_end,
-    )
-    for k, (body, (force, moment)) in enumerate(zip(model.bodies, loads, strict=True)):
-        disp = body.displacement(t_end)
-        for i, axis in enumerate("xyz"):
-            rec.extra[f"{body.name}_{axis}"] = float(disp[i])
-            rec.extra[f"{body.name}_force_{axis}"] = float(force[i])
-            rec.extra[f"{body.name}_moment_{axis}"] = float(moment[i])
-        rec.extra[f"{body.name}_penetration"] = (
-            0.0 if depth is None else float(depth[k])
-        )
-    rec.extra["dropped_elements"] = ops.dropped
 
 
 def __getattr__(name: str) -> object:
