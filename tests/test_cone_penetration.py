@@ -60,7 +60,7 @@ def test_cone_particles_start_on_the_cone_and_outside_it():
         ({"diameter": 0.0}, "diameter"),
         ({"diameter": -0.01}, "diameter"),
         ({"nu": 0.5}, "nu"),
-        ({"interface": "rough"}, "interface"),
+        ({"interface": "glued"}, "interface"),
         ({"rigidity_index": 0.5}, "rigidity_index"),
     ],
 )
@@ -87,6 +87,16 @@ def test_cone_adhesion_adds_the_shaft_and_keeps_q_c(tmp_path):
     )
     assert values["su"] == 1e4
     assert m["curve"][-1][1] >= smooth["curve"][-1][1] - 0.5
+
+
+@pytest.mark.parametrize("over", [{"nu": 0.4999}, {"interface": "rough"}])
+def test_cone_extremes_run_and_keep_particles_out(over):
+    res = run_scene(SCENE, {"spacing": D / 4, "penetration": D / 4, **over})
+    m = res["metrics"]
+    assert set(res["solver"]["statuses"]) <= {"Solved", "AlmostSolved"}
+    assert m["max_body_penetration"] <= 0.5 * D / 4
+    # the cone pushes: q_c above sigma_0 (N_c > 0) after a quarter diameter
+    assert m["curve"][-1][1] > 0.0
 
 
 def test_cone_resumed_run_repeats_the_uninterrupted_one(tmp_path):

@@ -137,11 +137,55 @@ def picture(rows: dict[str, dict], path: Path) -> None:
     plt.close(fig)
 
 
+def plastic_zone(out: Path, spacing: float = D / 8) -> None:
+    """A push of 2 D with output: the plastic zone and sigma_zz round the cone."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.tri import Triangulation
+
+    from skfem_npfem.io import read_pvd, read_step
+
+    folder = Path("out") / "cone_penetration" / "zone"
+    npfem.run_scene(
+        "cone-penetration", {"spacing": spacing, "penetration": 2 * D}, out=folder
+    )
+    series = read_pvd(folder / "result.pvd")
+    m = read_step(series[-1][1])
+    tri = Triangulation(
+        m.points[:, 0] / D, m.points[:, 1] / D, m.cells_dict["triangle"]
+    )
+    eps = m.point_data["plastic_strain_eq"]
+    szz = -m.point_data["stress"][:, 1] / 1e4
+    fig, axes = plt.subplots(1, 2, figsize=(9, 5.2), sharey=True)
+    for ax, f, label, cmap in (
+        (axes[0], eps, "equivalent plastic strain", "magma"),
+        (axes[1], szz, "-sigma_zz / s_u", "viridis"),
+    ):
+        pc = ax.tripcolor(tri, f, shading="gouraud", cmap=cmap)
+        fig.colorbar(pc, ax=ax, orientation="horizontal", label=label, pad=0.12)
+        ax.set_aspect("equal")
+        ax.set_xlim(0, 6)
+        ax.set_ylim(6.5, 15)
+        ax.set_xlabel("r / D")
+    axes[0].set_ylabel("z / D")
+    fig.suptitle(
+        f"cone-penetration at D/{D / spacing:.0f}, pushed 2 D (I_r = 100, smooth)"
+    )
+    fig.tight_layout()
+    fig.savefig(out / "cone_penetration_zone.png", dpi=100)
+    plt.close(fig)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", default=",".join(CASES))
     ap.add_argument("--out", default="docs/validation")
     ap.add_argument("--redo", action="store_true")
+    ap.add_argument(
+        "--zone", action="store_true", help="also draw the plastic zone (a D/8 run)"
+    )
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -164,6 +208,8 @@ def main() -> None:
     rows = json.loads(path.read_text())
     (out / "cone_penetration.inc").write_text(markdown(rows))
     picture(rows, out / "cone_penetration.png")
+    if args.zone:
+        plastic_zone(out)
 
 
 if __name__ == "__main__":

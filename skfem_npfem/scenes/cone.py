@@ -51,13 +51,13 @@ from .common import (
     solver_params,
 )
 from .params import POSITIVE
-from .penetration import _axis_count, graded_axis
+from .penetration import _axis_count, graded_axis, interface_adhesion
 from .scenery import Scenery, box, number
 
 __all__ = ["INTERFACES", "SCENE", "cone_body", "steady_factor"]
 
 #: Cone-soil interfaces.
-INTERFACES = ("smooth", "adhesion")
+INTERFACES = ("smooth", "rough", "adhesion")
 
 #: Apex angle of the standard cone, degrees.
 APEX = 60.0
@@ -96,7 +96,14 @@ PARAMS = [
         float,
         lo=0.0,
     ),
-    Param("interface", "smooth", "-", "cone-soil interface", str, INTERFACES),
+    Param(
+        "interface",
+        "smooth",
+        "-",
+        "cone-soil interface: smooth, rough (adhesion s_u) or adhesion (alpha s_u)",
+        str,
+        INTERFACES,
+    ),
     Param(
         "alpha",
         0.5,
@@ -283,9 +290,7 @@ def cone_body(values: dict[str, Any]) -> RigidBody:
     g = _sizes(values)
     R = g["D"] / 2
     tall = R / math.tan(math.radians(APEX / 2))
-    adhesion = (
-        values["alpha"] * values["su"] if values["interface"] == "adhesion" else 0
-    )
+    adhesion = interface_adhesion(values)
     top = g["top"] + g["w"] + g["D"]
     return RigidBody(
         [[0.0, g["z_tip"]], [R, g["z_tip"] + tall], [R, top], [0.0, top]],
