@@ -307,7 +307,7 @@ def test_elements_along_a_sloping_face_do_not_span_it():
     """
     R = 0.01785
     tip = np.array([0.0, 0.3927])
-    shoulder = tip + [R, R * math.sqrt(3.0)]
+    shoulder = tip + np.array([R, R * math.sqrt(3.0)])
     cone = RigidBody([tip, shoulder, [R, 1.0], [0.0, 1.0]], name="cone")
     s = np.linspace(0.0, 1.0, 6)
     face = tip + s[:, None] * (shoulder - tip)
@@ -318,3 +318,17 @@ def test_elements_along_a_sloping_face_do_not_span_it():
     drop = spanning_elements([cone], x, tri, 0.0)
     assert not drop[:5].any()
     assert drop[5]
+
+
+def test_adhesion_per_edge_follows_the_corners_order():
+    # Given clockwise, stored counter-clockwise: each edge keeps its strength.
+    square = [[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]]  # clockwise
+    body = RigidBody(square, adhesion=[1.0, 2.0, 3.0, 4.0])
+    x = np.array([[-0.1, 0.5], [0.5, 1.1], [1.1, 0.5], [0.5, -0.1]])
+    assert body.adhesion_at(x, 0.0).tolist() == [1.0, 2.0, 3.0, 4.0]
+    assert body.interface == "adhesion"
+    with pytest.raises(ParameterError, match="one per edge"):
+        RigidBody(square, adhesion=[1.0, 2.0])
+    with pytest.raises(ParameterError, match="one per edge"):
+        RigidBody(square, adhesion=[1.0, -2.0, 0.0, 0.0])
+    assert RigidBody(square, adhesion=2.0).adhesion == 2.0

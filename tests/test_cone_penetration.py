@@ -11,7 +11,6 @@ last third of a 3 D push 5.22 at D/8 (-46 %), 9.18 at D/12 (-5.6 %).
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 import pytest
@@ -70,23 +69,18 @@ def test_cone_penetration_bad_input(over, name):
     assert info.value.name == name and "\n" not in str(info.value)
 
 
-def test_cone_adhesion_adds_the_shaft_and_keeps_q_c(tmp_path):
-    # Two steps at D/4: the shaft's share alpha s_u pi D L is taken out of
-    # q_c, so the smooth and adhesive cone factors stay close at the start
-    # (the face's adhesion raises N_c a little), while the body's force
-    # grows by the shaft's share.
-    over = {"spacing": D / 4, "penetration": D / 4}
-    smooth = run_scene(SCENE, over)["metrics"]
-    glued = run_scene(SCENE, {**over, "interface": "adhesion", "alpha": 1.0})
-    m = glued["metrics"]
-    values = get_scene(SCENE).resolve(over)
-    top = 8 * D + D / 4 + 5 * D
-    shoulder = 8 * D + D / 4 + 0.5 * D * math.sqrt(3.0) - D / 4
-    assert m["shaft_force"] == pytest.approx(
-        1e4 * math.pi * D * (top - shoulder), rel=1e-9
-    )
-    assert values["su"] == 1e4
-    assert m["curve"][-1][1] >= smooth["curve"][-1][1] - 0.5
+def test_cone_adhesion_acts_on_the_face_only():
+    # The shaft is smooth whatever the interface: its adhesion would add
+    # alpha s_u pi D L (several times q_c) to the body's force.
+    sc = get_scene(SCENE)
+    cone = sc.build(sc.resolve({"spacing": D / 4, "interface": "rough"}))
+    body = cone.simulation.model.bodies[0]
+    assert body.adhesion.tolist() == [1e4, 0.0, 0.0, 0.0]
+    mid_face = 0.5 * (body.vertices[0] + body.vertices[1])
+    mid_shaft = 0.5 * (body.vertices[1] + body.vertices[2])
+    outward = np.array([[0.001, 0.0]])
+    assert body.adhesion_at(mid_face + outward, 0.0).tolist() == [1e4]
+    assert body.adhesion_at(mid_shaft + outward, 0.0).tolist() == [0.0]
 
 
 @pytest.mark.parametrize("over", [{"nu": 0.4999}, {"interface": "rough"}])

@@ -287,11 +287,12 @@ def body_contacts(
         tang = np.stack([-normal[:, 1], normal[:, 0]], axis=1)
         lam = lagged[cand, b_id]
         touching = lam > 1e-8 * np.max(np.abs(noise_ref[:, b_id]), initial=0.0)
-        if body.adhesion > 0:
+        if np.max(body.adhesion) > 0:
             along = np.zeros_like(x)
             along[cand] = tang
             area = boundary_tributary(x, facets, along, axisymmetric)[cand]
-            bound = np.where(touching, body.adhesion * area, 0.0)
+            strength = body.adhesion_at(x[cand], time)
+            bound = np.where(touching, strength * area, 0.0)
         else:
             bound = np.where(touching, body.mu * lam, 0.0)
         parts.append(

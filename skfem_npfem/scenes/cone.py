@@ -14,11 +14,10 @@ on a graded lattice: ``spacing`` within ``1.5 D`` of the axis and over the
 tip's path (from ``2 D`` below its end to ``2 D`` above its start), growing
 by ``grading`` per row beyond.
 
-The cone and its shaft are one :class:`~skfem_npfem.RigidBody`.  The tip
-resistance ``q_c`` is its vertical force over ``pi D^2/4`` less the shaft's
-share: none for a smooth interface, ``alpha s_u`` over the shaft's length in
-the soil with adhesion (the shaft slides through the soil, so the adhesion
-is fully mobilised there).
+The cone and its shaft are one :class:`~skfem_npfem.RigidBody`; the
+interface (smooth, or Tresca adhesion ``alpha s_u``) acts on the cone's face
+and the shaft is smooth, so the body's vertical force over ``pi D^2/4`` is the
+tip resistance ``q_c`` (the sleeve friction of a real cone is not modelled).
 
 Reference: Teh & Houlsby's (1991) cone factor of a smooth cone in steady
 penetration, ``N_c = (q_c - sigma_0)/s_u = 1.25 + 1.84 ln I_r``.
@@ -100,7 +99,8 @@ PARAMS = [
         "interface",
         "smooth",
         "-",
-        "cone-soil interface: smooth, rough (adhesion s_u) or adhesion (alpha s_u)",
+        "interface of the cone's face: smooth, rough (adhesion s_u) or adhesion "
+        "(alpha s_u); the shaft is smooth",
         str,
         INTERFACES,
     ),
@@ -213,8 +213,6 @@ METRICS = {
     "max_body_penetration": "deepest a particle got inside the cone "
     "before being put back on its outline, m (over the run)",
     "curve": "list of [w/D, N_c] per step (w: how far the cone has been pushed)",
-    "shaft_force": "the shaft's vertical share at the end (adhesion over the shaft "
-    "in the soil; 0 when smooth), N",
     "n_particles": "number of particles",
 }
 
@@ -291,6 +289,8 @@ def cone_body(values: dict[str, Any]) -> RigidBody:
     R = g["D"] / 2
     tall = R / math.tan(math.radians(APEX / 2))
     adhesion = interface_adhesion(values)
+    if adhesion > 0:  # on the face only (edge 0); the shaft is smooth
+        adhesion = [adhesion, 0.0, 0.0, 0.0]
     top = g["top"] + g["w"] + g["D"]
     return RigidBody(
         [[0.0, g["z_tip"]], [R, g["z_tip"] + tall], [R, top], [0.0, top]],
@@ -386,20 +386,13 @@ def build(
         meta={"scene": "cone-penetration", "parameters": values},
     )
     area = math.pi * D**2 / 4
-    shoulder = g["z_tip"] + 0.5 * D / math.tan(math.radians(APEX / 2))
-    adhesion = cone.adhesion
-
-    def shaft_force(w: float) -> float:
-        """The shaft's vertical force: full adhesion over its length in the soil."""
-        return adhesion * math.pi * D * max(g["top"] - (shoulder - w), 0.0)
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
-        curve = []
-        for r in sim_.records:
-            if "cone_force_y" in r.extra:
-                w = -r.extra["cone_y"]
-                q_c = (r.extra["cone_force_y"] - shaft_force(w)) / area
-                curve.append([w / D, (q_c - s0) / su])
+        curve = [
+            [-r.extra["cone_y"] / D, (r.extra["cone_force_y"] / area - s0) / su]
+            for r in sim_.records
+            if "cone_force_y" in r.extra
+        ]
         factor, spread = steady_factor(curve, values["steady_from"])
         ref = teh_houlsby_nc(values["rigidity_index"])
         pen = [r.extra.get("cone_penetration", 0.0) for r in sim_.records]
@@ -410,7 +403,6 @@ def build(
             "relative_error": None if factor is None else factor / ref - 1.0,
             "max_body_penetration": max(pen, default=0.0),
             "curve": curve,
-            "shaft_force": shaft_force(curve[-1][0] * D) if curve else 0.0,
             "n_particles": int(particles.n),
         }
 
