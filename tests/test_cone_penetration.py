@@ -11,7 +11,6 @@ last third of a 3 D push 5.22 at D/8 (-46 %), 9.18 at D/12 (-5.6 %).
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 
