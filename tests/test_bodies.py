@@ -295,3 +295,40 @@ def test_wedge_tip_between_nodes_pushes_the_soil_edge():
     assert y_edge == pytest.approx(1.0 - 0.01, abs=1e-8)
     assert sim.records[-1].extra["wedge_force_y"] > 0.0
     assert sim.records[-1].extra["wedge_penetration"] == 0.0
+
+
+def test_elements_along_a_sloping_face_do_not_span_it():
+    """Nodes placed on a sloping edge are on it only up to rounding.
+
+    A 60-degree cone's face carries nodes computed as ``tip + s (shoulder -
+    tip)``; the elements that join two of them to a node outside have no
+    part inside the cone and must stay, while an element reaching across the
+    face must go.
+    """
+    R = 0.01785
+    tip = np.array([0.0, 0.3927])
+    shoulder = tip + np.array([R, R * math.sqrt(3.0)])
+    cone = RigidBody([tip, shoulder, [R, 1.0], [0.0, 1.0]], name="cone")
+    s = np.linspace(0.0, 1.0, 6)
+    face = tip + s[:, None] * (shoulder - tip)
+    normal = np.array([math.sqrt(3.0) / 2, -0.5])
+    outside = 0.5 * (face[:-1] + face[1:]) + 0.004 * normal
+    x = np.concatenate([face, outside, [face[2] - 0.004 * normal]])
+    tri = np.array([[i, i + 1, 6 + i] for i in range(5)] + [[6, 7, 11]]).T
+    drop = spanning_elements([cone], x, tri, 0.0)
+    assert not drop[:5].any()
+    assert drop[5]
+
+
+def test_adhesion_per_edge_follows_the_corners_order():
+    # Given clockwise, stored counter-clockwise: each edge keeps its strength.
+    square = [[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]]  # clockwise
+    body = RigidBody(square, adhesion=[1.0, 2.0, 3.0, 4.0])
+    x = np.array([[-0.1, 0.5], [0.5, 1.1], [1.1, 0.5], [0.5, -0.1]])
+    assert body.adhesion_at(x, 0.0).tolist() == [1.0, 2.0, 3.0, 4.0]
+    assert body.interface == "adhesion"
+    with pytest.raises(ParameterError, match="one per edge"):
+        RigidBody(square, adhesion=[1.0, 2.0])
+    with pytest.raises(ParameterError, match="one per edge"):
+        RigidBody(square, adhesion=[1.0, -2.0, 0.0, 0.0])
+    assert RigidBody(square, adhesion=2.0).adhesion == 2.0

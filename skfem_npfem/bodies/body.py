@@ -76,9 +76,11 @@ class RigidBody:
         Constant velocity, m/s (static models: per unit of pseudo-time).
     friction_angle : float
         Coulomb interface friction angle, degrees, in [0, 90).
-    adhesion : float
-        Tresca interface strength ``alpha s_u``, Pa, >= 0.  At most one of
-        ``friction_angle`` and ``adhesion`` may be > 0; both 0: frictionless.
+    adhesion : float or array_like (m,)
+        Tresca interface strength ``alpha s_u``, Pa, >= 0; or one per edge
+        (edge ``j`` from corner ``j`` to ``j + 1`` as given: a cone with a
+        smooth shaft).  At most one of ``friction_angle`` and ``adhesion``
+        may be > 0; both 0: frictionless.
     name : str
         Label: the step record's keys start with it (``<name>_force_y``).
     reference : array_like (2,), optional
@@ -144,12 +146,8 @@ class RigidBody:
             isinstance(fa, int | float) and math.isfinite(fa) and 0.0 <= fa < 90.0
         ):
             raise ParameterError("friction_angle", fa, "degrees in [0, 90)")
-        ad = self.adhesion
-        if isinstance(ad, bool) or not (
-            isinstance(ad, int | float) and math.isfinite(ad) and ad >= 0.0
-        ):
-            raise ParameterError("adhesion", ad, "a finite stress >= 0 (Pa)")
-        if fa > 0 and ad > 0:
+        ad = _adhesion(self.adhesion, v.shape[0] if area > 0 else -v.shape[0])
+        if fa > 0 and np.max(ad) > 0:
             raise ParameterError(
                 "adhesion",
                 ad,
@@ -168,7 +166,7 @@ class RigidBody:
         object.__setattr__(self, "vertices", v)
         object.__setattr__(self, "velocity", vel)
         object.__setattr__(self, "friction_angle", float(fa))
-        object.__setattr__(self, "adhesion", float(ad))
+        object.__setattr__(self, "adhesion", ad)
         object.__setattr__(self, "reference", ref)
 
     @property
@@ -179,7 +177,7 @@ class RigidBody:
     @property
     def interface(self) -> str:
         """``"smooth"``, ``"adhesion"`` or ``"coulomb"``."""
-        if self.adhesion > 0:
+        if np.max(self.adhesion) > 0:
             return "adhesion"
         return "coulomb" if self.friction_angle > 0 else "smooth"
 
@@ -257,10 +255,48 @@ class RigidBody:
         normal[far] = sign[far, None] * (x[far] - closest[far]) / dist[far, None]
         return sign * dist, normal, closest
 
+    def adhesion_at(self, x: np.ndarray, t: float) -> np.ndarray | float:
+        """Adhesion (Pa) of the edge closest to each point (n,), or the scalar."""
+        if np.ndim(self.adhesion) == 0:
+            return self.adhesion
+        a = self.vertices_at(t)
+        ab = np.roll(a, -1, axis=0) - a
+        ap = np.asarray(x, float).reshape(-1, 2)[:, None, :] - a[None]
+        s = np.clip(np.einsum("nmk,mk->nm", ap, ab) / np.sum(ab * ab, axis=1), 0, 1)
+        d2 = np.sum((ap - s[..., None] * ab[None]) ** 2, axis=2)
+        return self.adhesion[np.argmin(d2, axis=1)]
+
     def contains(self, x: np.ndarray, t: float) -> np.ndarray:
         """Points (n, 2) strictly inside the outline at time ``t`` (n,) bool."""
         dist, _, _ = self.signed_distance(x, t)
         return dist < -_ON_OUTLINE * self.size
+
+
+def _adhesion(value, m: int) -> float | np.ndarray:
+    """A finite stress >= 0, or one per edge (``m`` edges; ``-m``: reversed)."""
+    if np.ndim(value) == 0:
+        if isinstance(value, bool) or not (
+            isinstance(value, int | float | np.floating)
+            and math.isfinite(value)
+            and value >= 0.0
+        ):
+            raise ParameterError("adhesion", value, "a finite stress >= 0 (Pa)")
+        return float(value)
+    try:
+        ad = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        ad = np.full(0, np.nan)
+    n = abs(m)
+    if ad.shape != (n,) or not np.all(np.isfinite(ad)) or np.any(ad < 0):
+        raise ParameterError(
+            "adhesion",
+            getattr(ad, "shape", value),
+            f"a finite stress >= 0 (Pa), or one per edge ({n} values, edge j "
+            "from corner j to corner j + 1)",
+        )
+    if m < 0:  # corners reversed to counter-clockwise: edge j is edge n-2-j
+        ad = ad[(n - 2 - np.arange(n)) % n]
+    return ad
 
 
 def _vector(name: str, value) -> np.ndarray:
@@ -319,9 +355,12 @@ def spanning_elements(
         tiny = 1e-9
         hit |= np.any((l1 > tiny) & (l2 > tiny) & (l1 + l2 < 1 - tiny), axis=1)
         # Proper crossings of element edges (p, q) with outline edges (a, b).
+        # An end within the outline tolerance of the other line counts as on
+        # it (no crossing): nodes on a sloping face are collinear with it only
+        # up to rounding.
         q = np.roll(p, -1, axis=0)
         b = np.roll(a, -1, axis=0)
-        eps = (1e-9 * body.size) ** 2
+        near_line = _ON_OUTLINE * body.size
 
         def orient(o, u, w):
             return (u[..., 0] - o[..., 0]) * (w[..., 1] - o[..., 1]) - (
@@ -332,10 +371,17 @@ def spanning_elements(
         A, B = a[None, None], b[None, None]  # (1, 1, m, 2)
         o1, o2 = orient(P, Q, A), orient(P, Q, B)
         o3, o4 = orient(A, B, P), orient(A, B, Q)
-        cross = (o1 * o2 < -eps * eps) & (o3 * o4 < -eps * eps)
+        t12 = near_line * np.linalg.norm(Q - P, axis=-1)  # (3, k, 1)
+        t34 = near_line * np.linalg.norm(B - A, axis=-1)  # (1, 1, m)
+        cross = _opposite(o1, o2, t12) & _opposite(o3, o4, t34)
         hit |= np.any(cross, axis=(0, 2))
         drop[near[hit]] = True
     return drop
+
+
+def _opposite(u: np.ndarray, w: np.ndarray, tol: np.ndarray) -> np.ndarray:
+    """``u`` and ``w`` of opposite signs, each farther than ``tol`` from zero."""
+    return ((u > tol) & (w < -tol)) | ((u < -tol) & (w > tol))
 
 
 def project_out_of_bodies(

@@ -111,11 +111,23 @@ def boundary_tributary(
 
 
 def _corner_normals(
-    body: RigidBody, x: np.ndarray, normal: np.ndarray, time: float
+    body: RigidBody,
+    x: np.ndarray,
+    normal: np.ndarray,
+    time: float,
+    shares: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Normals of nodes on a corner: the face that moves onto them.
+    """Normals of nodes on a corner: the faces the soil lies against.
 
-    A node on a corner has no closest-point direction.  The bisector would
+    ``shares`` (m, 2), optional: the soil's boundary next to each node along
+    the corner's two faces (:func:`_face_shares`).  A node with soil against
+    both faces (the shoulder of a cone with soil on its face and along its
+    shaft) takes their normals weighted by those shares: the direction of the
+    load of a uniform pressure on it, so the corner node carries each face's
+    share along that face's normal (with either normal alone the shaft's
+    horizontal pressure leaks into the cone's vertical force: 14 % of it at
+    four spacings per cone radius under an isotropic initial stress).
+    Otherwise the node has no closest-point direction to go by.  The bisector would
     let the node under a footing's edge slide off diagonally with a fraction
     of its load (measured: the first step of the footing-penetration scene
     at h = B/10 lost 15 % of the load, and the soil under the edge sagged
@@ -148,7 +160,56 @@ def _corner_normals(
     )
     normal = normal.copy()
     normal[on[use]] = faces[use, best[use]]
+    if shares is not None:
+        w = shares[on]
+        both = np.all(w > 0.0, axis=1)
+        mixed = np.einsum("mk,mkd->md", w[both], faces[both])
+        normal[on[both]] = mixed / np.linalg.norm(mixed, axis=1, keepdims=True)
     return normal
+
+
+def _face_shares(
+    body: RigidBody,
+    x: np.ndarray,
+    facets: np.ndarray,
+    time: float,
+    axisymmetric: bool,
+) -> np.ndarray:
+    """Each node's boundary share along the two faces of its nearest corner.
+
+    For every node (n, 2): the tributary length (ring area / 2 pi in
+    axisymmetry, the P1 weight of the node) of the soil's boundary edges at
+    the node that run along the face before (column 0) and after (column 1)
+    the body's corner nearest to it, within 10 degrees; 0 where none does.
+    """
+    V = body.vertices_at(time)
+    out = np.zeros((x.shape[0], 2))
+    if not facets.size:
+        return out
+    d2 = np.sum((x[:, None, :] - V[None]) ** 2, axis=2)
+    k = np.argmin(d2, axis=1)
+    ab = np.roll(V, -1, axis=0) - V
+    ab /= np.linalg.norm(ab, axis=1, keepdims=True)
+    # Directions along each face away from the corner: back along the edge
+    # before it, forward along the edge after it.
+    away = np.stack([-ab[k - 1], ab[k]], axis=1)  # (n, 2, 2)
+    a, b = facets
+    for node, other in ((a, b), (b, a)):
+        e = x[other] - x[node]
+        length = np.linalg.norm(e, axis=1)
+        cos = (
+            np.einsum("ed,ekd->ek", e, away[node]) / np.maximum(length, 1e-300)[:, None]
+        )
+        along = cos > math.cos(math.radians(10.0))
+        if axisymmetric:
+            weight = length * (2.0 * x[node, 0] + x[other, 0]) / 6.0
+        else:
+            weight = 0.5 * length
+        for j in (0, 1):
+            out[:, j] += np.bincount(
+                node, weights=np.where(along[:, j], weight, 0.0), minlength=x.shape[0]
+            )
+    return out
 
 
 def body_contacts(
@@ -218,18 +279,20 @@ def body_contacts(
         dist, normal, _ = body.signed_distance(x[near], time)
         keep = dist < reach[near]
         cand, dist, normal = near[keep], dist[keep], normal[keep]
-        normal = _corner_normals(body, x[cand], normal, time)
+        shares = _face_shares(body, x, facets, time, axisymmetric)[cand]
+        normal = _corner_normals(body, x[cand], normal, time, shares)
         free = ~np.all(fixed[cand] | (np.abs(normal) == 0.0), axis=1)
         cand, dist, normal = cand[free], dist[free], normal[free]
         rel = du_pres[cand] - dU
         tang = np.stack([-normal[:, 1], normal[:, 0]], axis=1)
         lam = lagged[cand, b_id]
         touching = lam > 1e-8 * np.max(np.abs(noise_ref[:, b_id]), initial=0.0)
-        if body.adhesion > 0:
+        if np.max(body.adhesion) > 0:
             along = np.zeros_like(x)
             along[cand] = tang
             area = boundary_tributary(x, facets, along, axisymmetric)[cand]
-            bound = np.where(touching, body.adhesion * area, 0.0)
+            strength = body.adhesion_at(x[cand], time)
+            bound = np.where(touching, strength * area, 0.0)
         else:
             bound = np.where(touching, body.mu * lam, 0.0)
         parts.append(

@@ -8,6 +8,7 @@ from typing import Any
 from ..errors import ParameterError
 from .base import Param, Scene
 from .collapse_runs import COLUMN_COLLAPSE
+from .cone import SCENE as CONE_PENETRATION
 from .elastic_column import SCENE as ELASTIC_COLUMN
 from .penetration import SCENE as FOOTING_PENETRATION
 from .slope import SCENE as SLOPE
@@ -23,6 +24,7 @@ SCENES: dict[str, Scene] = {
         COLUMN_COLLAPSE,
         SLOPE,
         FOOTING_PENETRATION,
+        CONE_PENETRATION,
     )
 }
 

@@ -1,0 +1,216 @@
+#!/usr/bin/env python
+"""The cone factor N_c: convergence, speed against accuracy, and its trend with I_r.
+
+Runs the ``cone-penetration`` scene (smooth cone, wished in place, pushed
+3 D) for each case below and tabulates the steady cone factor against Teh &
+Houlsby's (1991) ``1.25 + 1.84 ln I_r`` with the wall time of each run:
+
+* resolutions D/8, D/12, D/16 at I_r = 100 (the cone moves half a spacing a
+  step): the finest run is the convergence reference of the speed-accuracy
+  curve;
+* the time step: D/12 with the cone moving a quarter of a spacing a step;
+* the trend: I_r = 30 and 300 at D/12.
+
+Each case is a separate process-sized run; cases already in the JSON are
+kept unless ``--redo`` (so the study can be run in parts, e.g. two at once on
+two cores with ``--cases``).
+
+Usage (from the repository root)::
+
+    python demos/studies/cone_penetration.py [--cases d8,d12,...] [--redo]
+        [--out docs/validation]
+
+Writes ``<out>/cone_penetration.json``, ``<out>/cone_penetration.inc`` (the
+table of docs/validation/cone_penetration.md) and
+``<out>/cone_penetration.png`` (the curves, and N_c error against wall
+time); ``--cases ""`` only renders the table and the picture from the JSON.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+from pathlib import Path
+
+import skfem_npfem as npfem
+
+D = 0.0357
+
+#: Case name -> scene overrides (beyond the defaults).
+CASES: dict[str, dict] = {
+    "d8": {"spacing": D / 8},
+    "d12": {"spacing": D / 12},
+    "d16": {"spacing": D / 16},
+    "d12-dt": {"spacing": D / 12, "dt": 0.25 * (D / 12) / 0.02},
+    "d12-ir30": {"spacing": D / 12, "rigidity_index": 30.0},
+    "d12-ir300": {"spacing": D / 12, "rigidity_index": 300.0},
+}
+RESOLUTION = ("d8", "d12", "d16")
+
+
+def run_case(name: str) -> dict:
+    """One run: the steady N_c, its window's range, the curve and the cost."""
+    overrides = dict(CASES[name])
+    t0 = time.perf_counter()
+    s = npfem.run_scene("cone-penetration", overrides)
+    m = s["metrics"]
+    return {
+        "case": name,
+        "overrides": overrides,
+        "D_over_h": round(D / overrides["spacing"], 3),
+        "rigidity_index": overrides.get("rigidity_index", 100.0),
+        "N_c": m["cone_factor"],
+        "N_c_range": m["cone_factor_range"],
+        "reference": m["cone_factor_reference"],
+        "error": m["relative_error"],
+        "max_body_penetration": m["max_body_penetration"],
+        "particles": m["n_particles"],
+        "steps": s["solver"]["steps"],
+        "ipm_iterations": s["solver"]["ipm_iterations_total"],
+        "peak_memory_mb": s["solver"].get("peak_memory_mb"),
+        "wall_s": time.perf_counter() - t0,
+        "curve": [[round(w, 4), round(q, 4)] for w, q in m["curve"]],
+        "cpu_count": os.cpu_count(),
+    }
+
+
+def markdown(rows: dict[str, dict]) -> str:
+    """The table of every case, and the resolution errors against the finest."""
+    finest = next((rows[c] for c in reversed(RESOLUTION) if c in rows), None)
+    lines = [
+        "| case | D/h | I_r | particles | steps | N_c | range (last third) "
+        "| Teh & Houlsby | error | vs finest | wall (s) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name in CASES:
+        if name not in rows:
+            continue
+        r = rows[name]
+        vs = "–"
+        if finest and r["rigidity_index"] == finest["rigidity_index"]:
+            vs = f"{r['N_c'] / finest['N_c'] - 1:+.1%}"
+        lo, hi = r["N_c_range"]
+        lines.append(
+            f"| {name} | {r['D_over_h']:g} | {r['rigidity_index']:g} "
+            f"| {r['particles']} | {r['steps']} | {r['N_c']:.2f} "
+            f"| {lo:.2f}–{hi:.2f} | {r['reference']:.2f} | {r['error']:+.1%} "
+            f"| {vs} | {r['wall_s']:.0f} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def picture(rows: dict[str, dict], path: Path) -> None:
+    """Left: N_c against w/D per case; right: |error vs finest| against wall time."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
+    for name, r in rows.items():
+        c = list(zip(*r["curve"], strict=True)) if r["curve"] else ([], [])
+        a.plot(c[0], c[1], lw=1, label=f"{name} (N_c {r['N_c']:.2f})")
+    for ir in sorted({r["rigidity_index"] for r in rows.values()}):
+        a.axhline(npfem.laws.teh_houlsby_nc(ir), ls="--", lw=0.8, color="grey")
+    a.set_xlabel("w / D (push from the embedded start)")
+    a.set_ylabel("N_c = (q_c - sigma_0) / s_u")
+    a.set_title("cone factor; dashed: Teh & Houlsby (1991)")
+    a.legend(fontsize=7)
+    finest = next((rows[c] for c in reversed(RESOLUTION) if c in rows), None)
+    for name, r in rows.items():
+        if finest is None or r is finest:
+            continue
+        if r["rigidity_index"] != finest["rigidity_index"]:
+            continue
+        err = abs(r["N_c"] / finest["N_c"] - 1)
+        b.loglog(r["wall_s"], max(err, 1e-3), "o")
+        b.annotate(name, (r["wall_s"], max(err, 1e-3)), fontsize=8)
+    b.axhline(0.03, ls=":", color="grey")
+    b.axvline(900, ls=":", color="grey")
+    b.set_xlabel("wall time (s)")
+    b.set_ylabel("|N_c / N_c(finest) - 1|")
+    b.set_title("speed against accuracy (I_r = 100)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plastic_zone(out: Path, spacing: float = D / 8) -> None:
+    """A push of 2 D with output: the plastic zone and sigma_zz round the cone."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.tri import Triangulation
+
+    from skfem_npfem.io import read_pvd, read_step
+
+    folder = Path("out") / "cone_penetration" / "zone"
+    npfem.run_scene(
+        "cone-penetration", {"spacing": spacing, "penetration": 2 * D}, out=folder
+    )
+    series = read_pvd(folder / "result.pvd")
+    m = read_step(series[-1][1])
+    tri = Triangulation(
+        m.points[:, 0] / D, m.points[:, 1] / D, m.cells_dict["triangle"]
+    )
+    eps = m.point_data["plastic_strain_eq"]
+    szz = -m.point_data["stress"][:, 1] / 1e4
+    fig, axes = plt.subplots(1, 2, figsize=(9, 5.2), sharey=True)
+    for ax, f, label, cmap in (
+        (axes[0], eps, "equivalent plastic strain", "magma"),
+        (axes[1], szz, "-sigma_zz / s_u", "viridis"),
+    ):
+        pc = ax.tripcolor(tri, f, shading="gouraud", cmap=cmap)
+        fig.colorbar(pc, ax=ax, orientation="horizontal", label=label, pad=0.12)
+        ax.set_aspect("equal")
+        ax.set_xlim(0, 6)
+        ax.set_ylim(6.5, 15)
+        ax.set_xlabel("r / D")
+    axes[0].set_ylabel("z / D")
+    fig.suptitle(
+        f"cone-penetration at D/{D / spacing:.0f}, pushed 2 D (I_r = 100, smooth)"
+    )
+    fig.tight_layout()
+    fig.savefig(out / "cone_penetration_zone.png", dpi=100)
+    plt.close(fig)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cases", default=",".join(CASES))
+    ap.add_argument("--out", default="docs/validation")
+    ap.add_argument("--redo", action="store_true")
+    ap.add_argument(
+        "--zone", action="store_true", help="also draw the plastic zone (a D/8 run)"
+    )
+    args = ap.parse_args()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "cone_penetration.json"
+    for name in filter(None, args.cases.split(",")):
+        if name not in CASES:
+            raise SystemExit(f"error: unknown case {name!r}: one of {', '.join(CASES)}")
+        rows = json.loads(path.read_text()) if path.exists() else {}
+        if name in rows and not args.redo:
+            continue
+        row = run_case(name)
+        print(
+            f"{name}: N_c {row['N_c']:.3f} ({row['error']:+.1%}), "
+            f"{row['wall_s']:.0f} s",
+            flush=True,
+        )
+        rows = json.loads(path.read_text()) if path.exists() else {}
+        rows[name] = row
+        path.write_text(json.dumps(rows, separators=(",", ":")) + "\n")
+    rows = json.loads(path.read_text())
+    (out / "cone_penetration.inc").write_text(markdown(rows))
+    picture(rows, out / "cone_penetration.png")
+    if args.zone:
+        plastic_zone(out)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,476 @@
+"""Scene ``cone-penetration``: a 60-degree cone with its shaft pushed through clay.
+
+Axisymmetric (the ``(r, z)`` half-section), quasi-static steps with
+remeshing.  A rigid cone of diameter ``diameter`` (default the standard
+10 cm^2 cone, 35.7 mm) with a 60-degree apex and its shaft starts embedded
+("wished in place"), its tip ``depth`` below the soil's surface, and is
+pushed down at ``speed`` by ``penetration``.  The soil is a weightless
+Tresca material (``s_u``, shear modulus ``rigidity_index * s_u``) under an
+isotropic initial stress ``sigma_0``: the surface is held on rollers (as by
+the overburden of a deep test), the base is fixed, the far side on rollers,
+and the axis is a frictionless wall.  Particles start on the cone's face and
+shaft (an unsupported cavity would close plastically under ``sigma_0``) and
+on a graded lattice: ``spacing`` within ``1.5 D`` of the axis and over the
+tip's path (from ``2 D`` below its end to ``2 D`` above its start), growing
+by ``grading`` per row beyond.
+
+The cone and its shaft are one :class:`~skfem_npfem.RigidBody`; the
+interface (smooth, or Tresca adhesion ``alpha s_u``) acts on the cone's face
+and the shaft is smooth, so the body's vertical force over ``pi D^2/4`` is the
+tip resistance ``q_c`` (the sleeve friction of a real cone is not modelled).
+
+Reference: Teh & Houlsby's (1991) cone factor of a smooth cone in steady
+penetration, ``N_c = (q_c - sigma_0)/s_u = 1.25 + 1.84 ln I_r``.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..bodies import RigidBody
+from ..boundary import wall_x
+from ..errors import ParameterError
+from ..laws import teh_houlsby_nc
+from ..mesh.axisymmetric import AxisymmetricMohrCoulomb
+from ..mesh.sources import AlphaShapeMesher
+from ..particles import Particles
+from ..run.simulation import Simulation
+from ..step.model import Model
+from .base import Param, Scene, SceneRun
+from .common import (
+    check_size,
+    fidelity_from,
+    fidelity_params,
+    make_writer,
+    solver_from,
+    solver_params,
+)
+from .params import POSITIVE
+from .penetration import _axis_count, graded_axis, interface_adhesion
+from .scenery import Scenery, box, number
+
+__all__ = ["INTERFACES", "SCENE", "cone_body", "steady_factor"]
+
+#: Cone-soil interfaces.
+INTERFACES = ("smooth", "rough", "adhesion")
+
+#: Apex angle of the standard cone, degrees.
+APEX = 60.0
+
+_POSITIVE = POSITIVE
+
+PARAMS = [
+    Param(
+        "diameter", 0.0357, "m", "cone diameter D (10 cm^2 cone)", float, **_POSITIVE
+    ),
+    Param("su", 1.0e4, "Pa", "undrained shear strength s_u", float, **_POSITIVE),
+    Param(
+        "rigidity_index",
+        100.0,
+        "-",
+        "rigidity index I_r = G/s_u",
+        float,
+        lo=1.0,
+        hi=1.0e5,
+    ),
+    Param(
+        "nu",
+        0.49,
+        "-",
+        "undrained Poisson's ratio",
+        float,
+        lo=0.0,
+        hi=0.5,
+        hi_open=True,
+    ),
+    Param(
+        "sigma0",
+        5.0e4,
+        "Pa",
+        "isotropic initial (total) stress, compression positive",
+        float,
+        lo=0.0,
+    ),
+    Param(
+        "interface",
+        "smooth",
+        "-",
+        "interface of the cone's face: smooth, rough (adhesion s_u) or adhesion "
+        "(alpha s_u); the shaft is smooth",
+        str,
+        INTERFACES,
+    ),
+    Param(
+        "alpha",
+        0.5,
+        "-",
+        "adhesion factor (interface=adhesion): |t| <= alpha s_u",
+        float,
+        lo=0.0,
+        hi=1.0,
+    ),
+    Param(
+        "penetration",
+        None,
+        "m",
+        "how far the cone is pushed from where it starts (default 3 D)",
+        float,
+        **_POSITIVE,
+    ),
+    Param(
+        "depth",
+        None,
+        "m",
+        "depth of the cone's tip below the soil's surface at the start "
+        "(default 5 D; the cone starts embedded, wished in place)",
+        float,
+        **_POSITIVE,
+    ),
+    Param(
+        "below",
+        8.0,
+        "-",
+        "soil below the tip's final position / D",
+        float,
+        lo=2.0,
+        hi=100.0,
+    ),
+    Param(
+        "domain_radius",
+        15.0,
+        "-",
+        "soil radius / D",
+        float,
+        lo=3.0,
+        hi=100.0,
+    ),
+    Param(
+        "speed",
+        0.02,
+        "m/s",
+        "cone speed (standard 2 cm/s; quasi-static: sets the time unit)",
+        float,
+        **_POSITIVE,
+    ),
+    Param(
+        "dt",
+        None,
+        "s",
+        "time step (default: the cone moves spacing/2 per step; at most one spacing)",
+        float,
+        **_POSITIVE,
+    ),
+    Param(
+        "spacing",
+        None,
+        "m",
+        "particle spacing near the cone (default D/12)",
+        float,
+        **_POSITIVE,
+    ),
+    Param(
+        "grading",
+        1.15,
+        "-",
+        "spacing growth per row away from the cone",
+        float,
+        lo=1.0,
+        hi=2.0,
+    ),
+    Param(
+        "alpha_shape",
+        1.3,
+        "-",
+        "alpha-shape factor of the remeshing",
+        float,
+        lo=0.8,
+        hi=3.0,
+    ),
+    Param(
+        "steady_from",
+        2 / 3,
+        "-",
+        "the steady state: the penetration from this fraction of it on (default "
+        "the last third)",
+        float,
+        lo=0.0,
+        hi=0.95,
+    ),
+    *fidelity_params(0.0),
+    *solver_params(),
+]
+
+METRICS = {
+    "cone_factor": "steady N_c = (q_c - sigma_0)/s_u: the mean of the curve over "
+    "the penetration from steady_from x penetration on",
+    "cone_factor_range": "[min, max] of N_c over that window",
+    "cone_factor_reference": "Teh & Houlsby (1991): 1.25 + 1.84 ln I_r",
+    "relative_error": "cone_factor / reference - 1",
+    "max_body_penetration": "deepest a particle got inside the cone "
+    "before being put back on its outline, m (over the run)",
+    "curve": "list of [w/D, N_c] per step (w: how far the cone has been pushed)",
+    "n_particles": "number of particles",
+}
+
+
+def _sizes(values: dict[str, Any]) -> dict[str, float]:
+    """Lengths of the set-up, m: D, spacing, push, tip depth, soil, radius."""
+    D = values["diameter"]
+    h = values["spacing"] if values["spacing"] is not None else D / 12
+    w = values["penetration"] if values["penetration"] is not None else 3 * D
+    depth = values["depth"] if values["depth"] is not None else 5 * D
+    z_tip = values["below"] * D + w  # the tip's height at time 0
+    return {
+        "D": D,
+        "h": h,
+        "w": w,
+        "depth": depth,
+        "z_tip": z_tip,
+        "top": z_tip + depth,
+        "radius": values["domain_radius"] * D,
+    }
+
+
+def _fine_window(g: dict[str, float]) -> tuple[float, float]:
+    """Heights between which the lattice has the fine spacing."""
+    return max(g["z_tip"] - g["w"] - 2 * g["D"], 0.0), min(
+        g["z_tip"] + 2 * g["D"], g["top"]
+    )
+
+
+def _heights(g: dict[str, float], ratio: float) -> np.ndarray:
+    """Lattice heights: fine around the tip's path, growing below and above."""
+    lo, hi = _fine_window(g)
+    h = g["h"]
+    fine = np.linspace(lo, hi, max(1, math.ceil((hi - lo) / h - 1e-9)) + 1)
+    below = lo - graded_axis(h, h, lo, ratio)[::-1] if lo > 0 else np.zeros(0)
+    above = hi + graded_axis(h, h, g["top"] - hi, ratio) if g["top"] > hi else fine
+    return np.unique(np.concatenate([below, fine, above]).round(12))
+
+
+def check(values: dict[str, Any]) -> float:
+    """Refuse bad combinations before anything is built; return ``dt``."""
+    g = _sizes(values)
+    D, h = g["D"], g["h"]
+    if h > D / 4:
+        raise ParameterError("spacing", h, f"at most D/4 = {D / 4:g} m")
+    if g["depth"] < 2 * D:
+        raise ParameterError(
+            "depth",
+            g["depth"],
+            f"at least 2 D = {2 * D:g} m: the cone starts embedded, its tip "
+            "this deep below the surface",
+        )
+    dt = values["dt"]
+    if dt is None:
+        dt = 0.5 * h / values["speed"]
+    if values["speed"] * dt > h * (1 + 1e-9):
+        raise ParameterError(
+            "speed",
+            values["speed"],
+            f"at most spacing/dt = {h / dt:g} m/s: the cone may move at most one "
+            "spacing per step (lower speed or dt)",
+        )
+    lo, hi = _fine_window(g)
+    nr = _axis_count(1.5 * D, h, g["radius"], values["grading"])
+    nz = (hi - lo) / h + _axis_count(h, h, lo, values["grading"])
+    nz += _axis_count(h, h, g["top"] - hi, values["grading"])
+    check_size(nr * nz, 2, values, advice="use a larger spacing or grading")
+    return dt
+
+
+def cone_body(values: dict[str, Any]) -> RigidBody:
+    """The cone with its shaft at time 0, wished in place, moving down."""
+    g = _sizes(values)
+    R = g["D"] / 2
+    tall = R / math.tan(math.radians(APEX / 2))
+    adhesion = interface_adhesion(values)
+    if adhesion > 0:  # on the face only (edge 0); the shaft is smooth
+        adhesion = [adhesion, 0.0, 0.0, 0.0]
+    top = g["top"] + g["w"] + g["D"]
+    return RigidBody(
+        [[0.0, g["z_tip"]], [R, g["z_tip"] + tall], [R, top], [0.0, top]],
+        velocity=[0.0, -values["speed"]],
+        adhesion=adhesion,
+        name="cone",
+        reference=[0.0, g["z_tip"]],
+    )
+
+
+def soil_points(values: dict[str, Any], body: RigidBody) -> tuple[np.ndarray, ...]:
+    """Particle positions round the cone and each one's lattice spacing.
+
+    A graded lattice without the points inside the cone or closer to it
+    than half their spacing, plus points on the cone's face and shaft (the
+    soil starts in contact with the cone: an unsupported cavity would close
+    plastically under sigma_0).
+    """
+    g = _sizes(values)
+    rs = graded_axis(1.5 * g["D"], g["h"], g["radius"], values["grading"])
+    zs = _heights(g, values["grading"])
+    R, z_tip, h = g["D"] / 2, g["z_tip"], g["h"]
+    shoulder = z_tip + R / math.tan(math.radians(APEX / 2))
+    n_face = max(2, math.ceil(math.hypot(R, shoulder - z_tip) / h - 1e-9))
+    s = np.linspace(0.0, 1.0, n_face + 1)
+    face = np.stack([s * R, z_tip + s * (shoulder - z_tip)], axis=1)
+    shaft_z = zs[zs > shoulder + 0.5 * h]
+    shaft = np.stack([np.full(shaft_z.size, R), shaft_z], axis=1)
+    rr, zz = np.meshgrid(rs, zs, indexing="ij")
+    lattice = np.stack([rr.ravel(), zz.ravel()], axis=1)
+    gap = _lattice_gap(lattice, rs, zs)
+    dist, _, _ = body.signed_distance(lattice, 0.0)
+    keep = dist > 0.5 * gap
+    x = np.concatenate([face, shaft, lattice[keep]])
+    return x, _lattice_gap(x, rs, zs)
+
+
+def _lattice_gap(x: np.ndarray, rs: np.ndarray, zs: np.ndarray) -> np.ndarray:
+    """The larger of the lattice row and column gaps at each point."""
+    gr, gz = np.diff(rs), np.diff(zs)
+    ir = np.clip(np.searchsorted(rs, x[:, 0] - 1e-12), 0, gr.size - 1)
+    iz = np.clip(np.searchsorted(zs, x[:, 1] - 1e-12), 0, gz.size - 1)
+    return np.maximum(
+        np.maximum(gr[ir], gr[np.maximum(ir - 1, 0)]),
+        np.maximum(gz[iz], gz[np.maximum(iz - 1, 0)]),
+    )
+
+
+def build(
+    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
+) -> SceneRun:
+    """Build the cone-penetration simulation."""
+    dt = check(values)
+    g = _sizes(values)
+    D, su, s0 = g["D"], values["su"], values["sigma0"]
+    G = values["rigidity_index"] * su
+    E = 2 * G * (1 + values["nu"])
+    soil = AxisymmetricMohrCoulomb(E, values["nu"], 1.0, c=su, phi=0.0)
+    cone = cone_body(values)
+    x, spacing = soil_points(values, cone)
+    fixed = np.zeros_like(x, dtype=bool)
+    fixed[np.isclose(x[:, 1], 0.0)] = True
+    fixed[np.isclose(x[:, 0], g["radius"]), 0] = True
+    fixed[np.isclose(x[:, 1], g["top"]), 1] = True  # rollers hold sigma_0 on top
+    stress = np.zeros((x.shape[0], 4))
+    stress[:, :3] = -s0
+    axis = wall_x(2, 0.0, facing=1)
+    # Weightless soil: tiny masses (static steps do not use them).
+    particles = Particles.create(
+        x, np.full(x.shape[0], 1e-12), fixed=fixed, stress=stress, n_walls=2
+    )
+    model = Model(
+        dim=2,
+        axisymmetric=True,
+        materials=[soil],
+        gravity=0.0,
+        mode="static",
+        walls=[axis],
+        bodies=[cone],
+        solver=solver_from(values),
+        **fidelity_from(values, 0.0),
+    )
+    mesher = AlphaShapeMesher(
+        g["h"], values["alpha_shape"], spacing=spacing, walls=[axis]
+    )
+    sim = Simulation(
+        particles,
+        model,
+        mesher,
+        dt,
+        writer=make_writer(out, resume),
+        progress=progress,
+        meta={"scene": "cone-penetration", "parameters": values},
+    )
+    area = math.pi * D**2 / 4
+
+    def metrics(sim_: Simulation) -> dict[str, Any]:
+        curve = [
+            [-r.extra["cone_y"] / D, (r.extra["cone_force_y"] / area - s0) / su]
+            for r in sim_.records
+            if "cone_force_y" in r.extra
+        ]
+        factor, spread = steady_factor(curve, values["steady_from"])
+        ref = teh_houlsby_nc(values["rigidity_index"])
+        pen = [r.extra.get("cone_penetration", 0.0) for r in sim_.records]
+        return {
+            "cone_factor": factor,
+            "cone_factor_range": spread,
+            "cone_factor_reference": ref,
+            "relative_error": None if factor is None else factor / ref - 1.0,
+            "max_body_penetration": max(pen, default=0.0),
+            "curve": curve,
+            "n_particles": int(particles.n),
+        }
+
+    return SceneRun(sim, {"t_end": g["w"] / values["speed"]}, metrics)
+
+
+def steady_factor(
+    curve: list[list[float]], start: float
+) -> tuple[float | None, list[float] | None]:
+    """Mean and range of the curve over its last part, from ``start`` x its end on.
+
+    The mean is that of the linear interpolant (trapezoidal, over the
+    window's length); None for an empty curve.
+
+    Examples
+    --------
+    >>> steady_factor([[1.0, 4.0], [2.0, 6.0], [3.0, 8.0], [4.0, 6.0]], 0.5)
+    (7.0, [6.0, 8.0])
+    """
+    if not curve:
+        return None, None
+    c = np.asarray(curve, float)
+    lo, hi = start * c[-1, 0], c[-1, 0]
+    if hi <= lo or c.shape[0] < 2:
+        return float(c[-1, 1]), [float(c[-1, 1])] * 2
+    inner = c[(c[:, 0] > lo) & (c[:, 0] < hi)]
+    ws = np.concatenate([[lo], inner[:, 0], [hi]])
+    qs = np.interp(ws, c[:, 0], c[:, 1])
+    mean = float(np.sum(0.5 * (qs[1:] + qs[:-1]) * np.diff(ws)) / (hi - lo))
+    return mean, [float(qs.min()), float(qs.max())]
+
+
+def cone_scenery(p: dict, folder: Path | None = None) -> Scenery:
+    """Base, rollers, the axis, the cone and its shaft where they are."""
+    s = Scenery(scene="cone-penetration")
+    values = {
+        "diameter": number(p, "diameter", 0.0357),
+        "spacing": number(p, "spacing"),
+        "penetration": number(p, "penetration"),
+        "depth": number(p, "depth"),
+        "below": number(p, "below", 8.0),
+        "domain_radius": number(p, "domain_radius", 15.0),
+    }
+    speed = number(p, "speed", 0.02)
+    if None in (values["diameter"], values["below"], values["domain_radius"], speed):
+        return s
+    g = _sizes(values)
+    s.floor, s.floor_label = 0.0, "fixed base"
+    s.walls.append((g["radius"], -1, "rollers"))
+    s.symmetry = 0.0
+    s.outline = box(0.0, g["radius"], 0.0, g["top"])
+    R = g["D"] / 2
+    tall = R / math.tan(math.radians(APEX / 2))
+    top = g["top"] + g["w"] + g["D"]
+    outline = np.array(
+        [[0, g["z_tip"]], [R, g["z_tip"] + tall], [R, top], [0, top]], float
+    )
+    s.bodies.append((outline, np.array([0.0, -speed]), "cone"))
+    D = g["D"]
+    s.label = lambda t: f"w/D = {speed * t / D:.3g}"
+    return s
+
+
+SCENE = Scene(
+    name="cone-penetration",
+    description=__doc__.strip().splitlines()[0].split(": ", 1)[1],
+    params=PARAMS,
+    build=build,
+    metrics_doc=METRICS,
+    scenery=cone_scenery,
+)
