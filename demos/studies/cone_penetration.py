@@ -34,6 +34,8 @@ import os
 import time
 from pathlib import Path
 
+import numpy as np
+
 import skfem_npfem as npfem
 
 D = 0.0357
@@ -137,8 +139,11 @@ def picture(rows: dict[str, dict], path: Path) -> None:
     plt.close(fig)
 
 
-def plastic_zone(out: Path, spacing: float = D / 8) -> None:
-    """A push of 2 D with output: the plastic zone and sigma_zz round the cone."""
+def plastic_zone(out: Path, spacing: float = D / 8, redo: bool = False) -> None:
+    """A push of 2 D with output: the plastic zone and sigma_zz round the cone.
+
+    The run's folder (``out/cone_penetration/zone``) is reused unless ``redo``.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -148,26 +153,33 @@ def plastic_zone(out: Path, spacing: float = D / 8) -> None:
     from skfem_npfem.io import read_pvd, read_step
 
     folder = Path("out") / "cone_penetration" / "zone"
-    npfem.run_scene(
-        "cone-penetration", {"spacing": spacing, "penetration": 2 * D}, out=folder
-    )
+    if redo or not (folder / "result.pvd").exists():
+        npfem.run_scene(
+            "cone-penetration", {"spacing": spacing, "penetration": 2 * D}, out=folder
+        )
     series = read_pvd(folder / "result.pvd")
     m = read_step(series[-1][1])
     tri = Triangulation(
         m.points[:, 0] / D, m.points[:, 1] / D, m.cells_dict["triangle"]
     )
-    eps = m.point_data["plastic_strain_eq"]
-    szz = -m.point_data["stress"][:, 1] / 1e4
+    sig = m.point_data["stress"]  # rr, zz, theta-theta, rz
+    centre, radius = (
+        0.5 * (sig[:, 0] + sig[:, 1]),
+        np.hypot(0.5 * (sig[:, 0] - sig[:, 1]), sig[:, 3]),
+    )
+    principal = np.stack([centre + radius, centre - radius, sig[:, 2]], axis=1)
+    mobilised = 0.5 * np.ptp(principal, axis=1) / 1e4  # Tresca: 1 = yielding
+    szz = -sig[:, 1] / 1e4
     fig, axes = plt.subplots(1, 2, figsize=(9, 5.2), sharey=True)
-    for ax, f, label, cmap in (
-        (axes[0], eps, "equivalent plastic strain", "magma"),
-        (axes[1], szz, "-sigma_zz / s_u", "viridis"),
+    for ax, f, label, cmap, top in (
+        (axes[0], mobilised, "mobilised strength (s1 - s3) / 2 s_u", "magma", 1.0),
+        (axes[1], szz, "-sigma_zz / s_u", "viridis", None),
     ):
-        pc = ax.tripcolor(tri, f, shading="gouraud", cmap=cmap)
+        pc = ax.tripcolor(tri, f, shading="gouraud", cmap=cmap, vmax=top)
         fig.colorbar(pc, ax=ax, orientation="horizontal", label=label, pad=0.12)
         ax.set_aspect("equal")
         ax.set_xlim(0, 6)
-        ax.set_ylim(6.5, 15)
+        ax.set_ylim(4.5, 15)
         ax.set_xlabel("r / D")
     axes[0].set_ylabel("z / D")
     fig.suptitle(
@@ -209,7 +221,7 @@ def main() -> None:
     (out / "cone_penetration.inc").write_text(markdown(rows))
     picture(rows, out / "cone_penetration.png")
     if args.zone:
-        plastic_zone(out)
+        plastic_zone(out, redo=args.redo)
 
 
 if __name__ == "__main__":
