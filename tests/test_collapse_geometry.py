@@ -164,6 +164,12 @@ def test_geometry_defaults_are_the_seed_case():
     assert (v["radius"], v["height"], v["aspect"]) == (R0, H0, 2.0)
     assert v["spacing"] == R0 / 18 and v["dt"] == 2e-3
     assert (v["material"], v["dp_match"]) == ("drucker-prager", "compression")
+    # The 3D quarter's alpha shape: 2.0 (docs/seed_column.md, "Where the 3D
+    # volume goes"); the sections keep 1.3, and a given alpha is kept.
+    assert v["alpha"] == 2.0
+    assert scene.resolve({"geometry": "axisymmetric"})["alpha"] == 1.3
+    assert scene.resolve({"geometry": "box"})["alpha"] == 1.3
+    assert scene.resolve({"geometry": "quarter-cylinder", "alpha": 1.3})["alpha"] == 1.3
     v = scene.resolve({"geometry": "axisymmetric", "radius": 0.05, "aspect": 1.5})
     assert v["height"] == pytest.approx(0.075, rel=1e-15)
     v = scene.resolve({"geometry": "axisymmetric", "height": 0.1})
@@ -171,6 +177,7 @@ def test_geometry_defaults_are_the_seed_case():
     # Plane strain keeps its own defaults (unchanged).
     v = scene.resolve({})
     assert v["dt"] == 5e-3 and v["material"] == "mohr-coulomb" and v["radius"] is None
+    assert v["alpha"] == 1.3
 
 
 def test_lube_2004_law():

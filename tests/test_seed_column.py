@@ -100,3 +100,50 @@ def test_keep_adds_a_case_to_the_results_of_an_earlier_study(quick):
     assert demo.main([*argv, "--cases", "axi-18"]) == 0
     alone = json.loads((out / "seed_column.json").read_text())
     assert list(alone["cases"]) == ["axi-18"]
+
+
+def test_3d_volume_budget_of_a_short_run(tmp_path, monkeypatch):
+    # demos/studies/seed_3d_volume.py on the quarter at r0/4 for 3 steps: the
+    # masses are rho times the initial mesh's cells, so the first step's mesh
+    # holds exactly what the particles carry, and the budget's parts agree
+    # with the run's own volume change.
+    study = importlib.import_module("seed_3d_volume")
+    tiny = {
+        "geometry": "quarter-cylinder",
+        "spacing": study.R0 / 4,
+        "t_end": 0.006,
+        "rest_fraction": 0.0,
+        "threads": 1,
+    }
+    monkeypatch.setitem(study.CASES, "tiny", tiny)
+    rec = study.run_case("tiny", tmp_path)
+    rows = json.loads((tmp_path / "tiny" / "budget.json").read_text())
+    assert len(rows) == rec["steps"] == 3
+    assert rows[0]["mesh"] == pytest.approx(1.0, rel=1e-12)
+    last = rec["budget_at_rest"]
+    assert last["mesh"] == pytest.approx(1.0 + rec["volume_change"], abs=1e-4)
+    # The scene's 3D default (alpha 2.0: the lattice at rest is meshed whole).
+    assert rec["settings"]["alpha"] == 2.0 and last["inactive"] == 0.0
+    assert rec["settings"]["stabilisation_mode"] == "vertical"
+
+
+def test_3d_volume_record_is_consistent():
+    # docs/seed_column/volume_3d.json: the mesh at rest over sum(m)/rho is the
+    # run's volume change (the same record, rounded to 4 digits), and the
+    # r0/12 case ran with the scene's 3D default.
+    from skfem_npfem.scenes.collapse_runs import CYLINDER_FIDELITY
+    from skfem_npfem.scenes.cylinder import GEOMETRY_ALPHA
+
+    path = ROOT / "docs" / "seed_column" / "volume_3d.json"
+    cases = json.loads(path.read_text())["cases"]
+    for case in cases.values():
+        mesh = case["budget_at_rest"]["mesh"]
+        assert mesh == pytest.approx(1.0 + case["volume_change"], abs=1e-4)
+        assert case["at_rest"]
+    beta, mode, kappa = CYLINDER_FIDELITY["quarter-cylinder"]
+    assert cases["r12-default"]["settings"] == {
+        "alpha": GEOMETRY_ALPHA["quarter-cylinder"],
+        "stabilisation": beta,
+        "stabilisation_mode": mode,
+        "volume_correction": kappa,
+    }

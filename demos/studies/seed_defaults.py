@@ -14,6 +14,8 @@ defaults buy and cost on the reference paper's seed column:
   r0/18: floor friction (smooth, 20 degrees, rough = phi), phi 28-34, the
   stabilisation and the volume correction, against the laws of Lube et al.
   (2004) and Lajeunesse et al. (2004) (:mod:`skfem_npfem.laws`);
+* ``q12-default``: the 3D quarter cylinder at its defaults to rest at r0/12
+  with the speed levers (``accuracy=fast``, dt = 4 ms), for its picture;
 * ``q8-*``: the 3D quarter cylinder at r0/8 over t = 0.06 s (t_bar = 0.67)
   with each stabilisation mode (:mod:`skfem_npfem.step.stabilisation`): R
   max, time per step, against the unstabilised step; with the factor flops
@@ -27,7 +29,8 @@ Each case is one ``column-collapse`` run whose summary is kept in ``--work``
 ``runout_sensitivity.png``; with ``--pictures`` the snapshots of
 :data:`PICTURES` (the axisymmetric defaults at t_bar = 0, 1, 2, 3 with the
 vertical and the hoop stress; the 3D quarter at r0/8 without and with the
-stabilisation, seen on its symmetry planes).
+stabilisation, and at its defaults at r0/12 to rest, seen on its symmetry
+planes).
 
 Usage::
 
@@ -67,7 +70,16 @@ Q8 = {
     "rest_fraction": 0.0,
     "threads": 1,
 }
-
+#: 3D to rest: r0/12 with both speed levers (solver preset fast, dt = 4 ms),
+#: every step written (the picture's t_bar = 1, 2, 3 are steps 22, 45, 67).
+Q12 = {
+    "geometry": "quarter-cylinder",
+    "spacing": R0 / 12,
+    "accuracy": "fast",
+    "dt": 4e-3,
+    "output_every": 1,
+    "threads": 1,
+}
 
 MODE = "stabilisation_mode"
 
@@ -101,6 +113,8 @@ CASES: dict[str, tuple[str, dict[str, Any]]] = {
     "q8-vertical-30": ("q8", {**Q8, "stabilisation": 30.0, MODE: "vertical"}),
     "q8-sigma_v-30": ("q8", {**Q8, "stabilisation": 30.0, MODE: "sigma_v"}),
     "q8-mean-30": ("q8", {**Q8, "stabilisation": 30.0, MODE: "mean"}),
+    # The 3D default to rest at r0/12 with the speed levers (its picture).
+    "q12-default": ("q12", {**Q12}),
 }  # fmt: skip
 
 
@@ -433,6 +447,7 @@ PICTURES = {
     "hoop_axi_default.png": ("axi-18-default", "stress_zz", (0, 1, 2, 3)),
     "sigma_v_3d_bare.png": ("q8-bare", "stress_zz", (0, 0.33, 0.67)),
     "sigma_v_3d_stab.png": ("q8-mean-30", "stress_zz", (0, 0.33, 0.67)),
+    "sigma_v_3d_default.png": ("q12-default", "stress_zz", (0, 1, 2, 3)),
 }
 
 

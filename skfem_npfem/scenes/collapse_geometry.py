@@ -36,7 +36,7 @@ from ..errors import ParameterError
 from .base import Param, Scene
 from .box_column import DEPTH_SPACINGS
 from .common import check_soil
-from .cylinder import SEED, SEED_DIVISIONS
+from .cylinder import GEOMETRY_ALPHA, SEED, SEED_DIVISIONS
 from .limits import LENGTH, check_size
 from .sizing import lattice_particles
 
@@ -226,6 +226,8 @@ def finalize(
         _cylinder_sizes(values, given)
         if "dt" not in given:
             values["dt"] = SEED_DT
+        if "alpha" not in given:
+            values["alpha"] = GEOMETRY_ALPHA[geo]
     else:
         h = values["spacing"] or values["half_width"] / 22.0
         values["spacing"] = h

@@ -68,11 +68,13 @@ MASS_BASIS = {
 #: Defaults of N-PFEM's stress stabilisation and volume correction for the
 #: cylindrical geometries: ``(beta, stabilisation_mode, kappa)``, chosen from
 #: measurements on the seed column (docs/seed_column.md, "Smooth and
-#: volume-keeping by default").  The reference paper's bare method is
-#: ``--set stabilisation=0 --set volume_correction=0``.
+#: volume-keeping by default" and "The 3D default to rest").  The 3D quarter
+#: goes with the alpha-shape factor 2.0
+#: (:data:`~skfem_npfem.scenes.cylinder.GEOMETRY_ALPHA`).  The reference
+#: paper's bare method is ``--set stabilisation=0 --set volume_correction=0``.
 CYLINDER_FIDELITY = {
     "axisymmetric": (100.0, "full", COLLAPSE_VOLUME_CORRECTION),
-    "quarter-cylinder": (30.0, "mean", 0.0),
+    "quarter-cylinder": (30.0, "vertical", 0.15),
 }
 
 
@@ -258,9 +260,10 @@ GEOMETRY_NOTES = {
     "dt": "cylindrical: default 2 ms",
     "stabilisation": "axisymmetric: default 100; quarter-cylinder: default 30; "
     "the paper's bare method: 0",
-    "stabilisation_mode": "quarter-cylinder: default mean",
-    "volume_correction": "axisymmetric: default 0.05 where psi = 0 and "
-    "rho g h0 / E <= 0.01; quarter-cylinder: 0",
+    "stabilisation_mode": "quarter-cylinder: default vertical",
+    "volume_correction": "axisymmetric: default 0.05, quarter-cylinder: 0.15, "
+    "where psi = 0 and rho g h0 / E <= 0.01",
+    "alpha": "quarter-cylinder: default 2.0",
     "max_displacement": "not in axisymmetry",
 }
 
