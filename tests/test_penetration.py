@@ -95,3 +95,15 @@ def test_footing_penetration_fem_remap_p2_near_prandtl_and_p1_locks():
     assert m2["max_body_penetration"] <= 0.5 * 0.1  # measured 6e-15
     p1 = run_scene(SCENE, {**case, "element": "p1"})["metrics"]
     assert p1["relative_error"] > 0.5
+
+
+def test_footing_penetration_warns_when_a_particle_gets_deep_inside():
+    # At B/10 with the footing moving a quarter spacing a step, two particles
+    # on the symmetry line meet under the footing near w/B = 0.8 and the lower
+    # one ends 0.89 spacings inside before it is put back (measured); half
+    # the step keeps it to 0.42.
+    with pytest.warns(UserWarning, match="spacings inside the body"):
+        res = run_scene(SCENE, {"spacing": 0.1, "penetration": 1.0})
+    m = res["metrics"]
+    assert m["max_body_penetration"] > 0.5 * 0.1
+    assert m["warnings"] and "lower dt" in m["warnings"][0]

@@ -50,7 +50,12 @@ from .common import (
     solver_params,
 )
 from .params import POSITIVE
-from .penetration import _axis_count, graded_axis, interface_adhesion
+from .penetration import (
+    _axis_count,
+    graded_axis,
+    interface_adhesion,
+    penetration_warnings,
+)
 from .scenery import Scenery, box, number
 
 __all__ = ["INTERFACES", "SCENE", "cone_body", "steady_factor"]
@@ -214,6 +219,8 @@ METRICS = {
     "before being put back on its outline, m (over the run)",
     "curve": "list of [w/D, N_c] per step (w: how far the cone has been pushed)",
     "n_particles": "number of particles",
+    "warnings": "what to look at (a particle deeper than half a spacing inside "
+    "the cone)",
 }
 
 
@@ -396,6 +403,9 @@ def build(
         factor, spread = steady_factor(curve, values["steady_from"])
         ref = teh_houlsby_nc(values["rigidity_index"])
         pen = [r.extra.get("cone_penetration", 0.0) for r in sim_.records]
+        notes = penetration_warnings(
+            "cone-penetration", max(pen, default=0.0), g["h"], dt
+        )
         return {
             "cone_factor": factor,
             "cone_factor_range": spread,
@@ -404,6 +414,7 @@ def build(
             "max_body_penetration": max(pen, default=0.0),
             "curve": curve,
             "n_particles": int(particles.n),
+            "warnings": notes,
         }
 
     return SceneRun(sim, {"t_end": g["w"] / values["speed"]}, metrics)

@@ -25,6 +25,7 @@ compares the three curves.
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -53,7 +54,13 @@ from .methods import METHOD_METRICS, method_params, with_method
 from .params import POSITIVE
 from .scenery import Scenery, box, number
 
-__all__ = ["INTERFACES", "SCENE", "graded_axis", "interface_adhesion"]
+__all__ = [
+    "INTERFACES",
+    "SCENE",
+    "graded_axis",
+    "interface_adhesion",
+    "penetration_warnings",
+]
 
 #: Footing-soil interfaces.
 INTERFACES = ("smooth", "rough", "adhesion")
@@ -212,6 +219,27 @@ def interface_adhesion(values: dict[str, Any]) -> float:
     return values["alpha"] * values["su"]
 
 
+def penetration_warnings(
+    scene: str, deepest: float, spacing: float, dt_now: float
+) -> list[str]:
+    """A warning when a particle got deeper than half a spacing inside the body.
+
+    The particle is put back on the outline after the step, so the run goes
+    on, but the load of that step is off; a smaller step (the body moving less
+    per step) keeps the soil out.  Returns the messages, each also issued as
+    a ``UserWarning``.
+    """
+    if deepest <= 0.5 * spacing:
+        return []
+    msg = (
+        f"{scene}: a particle got {deepest / spacing:.2f} spacings inside the body "
+        f"(more than half a spacing) before it was put back; the loads of that step "
+        f"are off: lower dt (now {dt_now:.4g} s) or refine the spacing"
+    )
+    warnings.warn(msg, stacklevel=3)
+    return [msg]
+
+
 def _penetration(values: dict[str, Any]) -> float:
     w = values["penetration"]
     return values["width"] if w is None else w
@@ -338,6 +366,9 @@ def build(
         ref = prandtl_nc(0.0)
         pen = [r.extra.get("footing_penetration", 0.0) for r in sim_.records]
         heave = float(sim_.particles.u[surface, 1].max()) / B
+        notes = penetration_warnings(
+            "footing-penetration", max(pen, default=0.0), values["spacing"], dt
+        )
         return {
             "bearing_factor": factor,
             "bearing_factor_range": spread,
@@ -346,6 +377,7 @@ def build(
             "final_bearing_factor": curve[-1][1] if curve else None,
             "max_body_penetration": max(pen, default=0.0),
             "max_heave": heave,
+            "warnings": notes,
             "curve": curve,
             "n_particles": int(particles.n),
         }
