@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_npfem as npfem
+from skfem_npfem.baseline.reporting import save_png
 
 D = 0.0357
 
@@ -135,7 +136,7 @@ def picture(rows: dict[str, dict], path: Path) -> None:
     b.set_ylabel("|N_c / N_c(finest) - 1|")
     b.set_title("speed against accuracy (I_r = 100)")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_png(fig, path, dpi=110)
     plt.close(fig)
 
 
@@ -186,7 +187,7 @@ def plastic_zone(out: Path, spacing: float = D / 8, redo: bool = False) -> None:
         f"cone-penetration at D/{D / spacing:.0f}, pushed 2 D (I_r = 100, smooth)"
     )
     fig.tight_layout()
-    fig.savefig(out / "cone_penetration_zone.png", dpi=100)
+    save_png(fig, out / "cone_penetration_zone.png", dpi=100)
     plt.close(fig)
 
 

@@ -40,6 +40,7 @@ from pathlib import Path
 
 from _common import VALIDATION, WORK, replace_rows
 
+from skfem_npfem.baseline.reporting import save_png
 from skfem_npfem.errors import ParameterError, SolverError
 from skfem_npfem.scenes import get_scene
 
@@ -173,7 +174,7 @@ def plot(rows: list[dict], path: Path) -> None:
         ax.set_ylim(0, None)
         ax.legend(fontsize=7, loc="lower right")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_png(fig, path, dpi=110)
     plt.close(fig)
 
 
