@@ -63,7 +63,7 @@ from time import perf_counter
 
 import numpy as np
 
-from ..bodies import oriented_boundary
+from ..bodies import CLIP_DEPTH, oriented_boundary
 from ..boundary import node_contacts
 from ..errors import ParameterError
 from ..mesh.sources import MeshSource
@@ -300,8 +300,10 @@ class FemRemap:
         active, local_t = mesh_source(state.x)
         dropped = 0
         if model.bodies:
+            # P2: no sliver, its mid-edge node would start inside the body.
+            sliver = CLIP_DEPTH if self.element == "p1" else 0.0
             active, local_t, dropped = without_body_elements(
-                model, state.x, active, local_t, t_start
+                model, state.x, active, local_t, t_start, sliver
             )
         cells = np.ascontiguousarray(active[local_t].T)
         ta = perf_counter()

@@ -12,6 +12,7 @@
 """
 
 from .body import (
+    CLIP_DEPTH,
     RigidBody,
     body_loads,
     check_clear,
@@ -36,6 +37,7 @@ from .plane import RigidPlane
 from .revolution import BodyOfRevolution
 
 __all__ = [
+    "CLIP_DEPTH",
     "BodyOfRevolution",
     "RigidBody",
     "RigidPlane",

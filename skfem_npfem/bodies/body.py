@@ -46,6 +46,7 @@ from ..boundary import Contacts
 from ..errors import ParameterError
 
 __all__ = [
+    "CLIP_DEPTH",
     "RigidBody",
     "body_loads",
     "check_clear",
@@ -65,7 +66,7 @@ _CORNER_MARGIN = 30.0
 
 #: Fraction of an element's mean edge by which a body may cut into a kept
 #: element (:func:`spanning_elements`).
-_CLIP_DEPTH = 0.3
+CLIP_DEPTH = 0.3
 
 
 @dataclass(frozen=True)
@@ -323,7 +324,11 @@ def _near(body, x: np.ndarray, t: float, reach: float | np.ndarray):
 
 
 def spanning_elements(
-    bodies: Sequence[RigidBody], x: np.ndarray, t: np.ndarray, time: float
+    bodies: Sequence[RigidBody],
+    x: np.ndarray,
+    t: np.ndarray,
+    time: float,
+    sliver: float = CLIP_DEPTH,
 ) -> np.ndarray:
     """Triangles (3, ne) of nodes ``x`` that span a body at ``time`` (ne,) bool.
 
@@ -331,18 +336,22 @@ def spanning_elements(
     the outline, a corner of the outline is inside it, or one of its edges
     crosses an edge of the outline (a triangle may have all three nodes
     outside a thin body and still cover it).  Each test allows a depth of
-    ``_CLIP_DEPTH`` times the element's mean edge: soil that flows round a
-    body's corner (the shoulder of a cone, a vertex of a polygon standing in
-    for a curved body) has a node on each face, and the straight edge that
-    joins them cuts the corner off.  Dropping that element would open a
+    ``sliver`` (default :data:`CLIP_DEPTH`) times the element's mean edge:
+    soil that flows round a body's corner (the shoulder of a cone, the edge
+    of a footing, a vertex of a polygon standing in for a curved body) has a
+    node on each face, and the straight edge that joins them cuts the corner
+    off.  Dropping that element would open a
     notch at the corner at every step; the soil round it then falls into the
     notch, several times as far as the body moved, and the load on the body
     collapses for a step (measured on the cone: single-step drops of the tip
     resistance to the initial stress, more of them the smaller the step).
-    The allowance is for an edge along the body only (both its ends within
-    that depth of the outline): the kept element covers a sliver of the body
-    no deeper than that fraction of its size, and a body inside an element,
-    or an element reaching across a thin body, is still dropped.
+    The allowance is for a corner only (an end of the crossed outline edge,
+    or a corner inside the element, within that depth of an element edge
+    that touches the body): the kept element covers a sliver of the body no
+    deeper than that fraction of its size, and a body inside an element, or
+    an element reaching across a thin body, is still dropped.  FEM-remap
+    with P2 elements passes ``sliver=0``: the mid-edge node of the edge that
+    cuts the corner would start inside the body.
     """
     ne = t.shape[1]
     drop = np.zeros(ne, bool)
@@ -356,42 +365,20 @@ def spanning_elements(
             continue
         p = xe[:, near]  # (3, k, 2)
         q = np.roll(p, -1, axis=0)
-        depth = _CLIP_DEPTH * np.linalg.norm(q - p, axis=-1).mean(axis=0)  # (k,)
+        depth = sliver * np.linalg.norm(q - p, axis=-1).mean(axis=0)  # (k,)
         probes = np.concatenate([p.mean(axis=0)[None], 0.5 * (p + q)])
         dist, _, _ = body.signed_distance(
             np.concatenate([probes, p]).reshape(-1, 2), time
         )
         dist = dist.reshape(7, -1)
         hit = np.any(dist[:4] < -depth, axis=0)
-        # Only an edge along the body may clip it: both its ends within the
-        # depth of the outline.
-        on = np.abs(dist[4:]) <= depth  # (3, k)
-        along = (on & np.roll(on, -1, axis=0))[:, :, None]  # (3, k, 1)
-        # A corner of the outline inside an element, unless it is within the
-        # depth of an edge along the body (a body inside an element with no
-        # edge crossing).
-        d0 = p[1] - p[0]
-        d1 = p[2] - p[0]
-        det = d0[:, 0] * d1[:, 1] - d0[:, 1] * d1[:, 0]  # (k,)
-        r = a[None, :, :] - p[0][:, None, :]  # (k, m, 2)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            l1 = (r[..., 0] * d1[:, None, 1] - r[..., 1] * d1[:, None, 0]) / det[
-                :, None
-            ]
-            l2 = (d0[:, None, 0] * r[..., 1] - d0[:, None, 1] * r[..., 0]) / det[
-                :, None
-            ]
-        tiny = 1e-9
-        within = (l1 > tiny) & (l2 > tiny) & (l1 + l2 < 1 - tiny)  # (k, m)
-        P, Q = p[:, :, None, :], q[:, :, None, :]  # (3, k, 1, 2)
-        clips = along & (_segment_distance(a[None, None], P, Q) <= depth[:, None])
-        hit |= np.any(within & ~np.any(clips, axis=0), axis=1)
         # Proper crossings of element edges (p, q) with outline edges (a, b),
-        # except where the element edge runs along the body and an end of the
-        # outline edge is within the depth of it (a clipped corner).  An end
-        # within the outline tolerance of the other line counts as on it (no
-        # crossing): nodes on a sloping face are collinear with it only up to
-        # rounding.
+        # except where an end of the outline edge is within the depth of the
+        # element edge (a clipped corner; an element edge across a thin body
+        # crosses edges whose ends are far).  An end within the outline
+        # tolerance of the other line counts as on it (no crossing): nodes on
+        # a sloping face are collinear with it only up to rounding.
+        P, Q = p[:, :, None, :], q[:, :, None, :]  # (3, k, 1, 2)
         b = np.roll(a, -1, axis=0)
         near_line = _ON_OUTLINE * body.size
 
@@ -407,8 +394,29 @@ def spanning_elements(
         t34 = near_line * np.linalg.norm(B - A, axis=-1)  # (1, 1, m)
         cross = _opposite(o1, o2, t12) & _opposite(o3, o4, t34)
         end = np.minimum(_segment_distance(A, P, Q), _segment_distance(B, P, Q))
-        clipped = along & (end <= depth[None, :, None])
-        hit |= np.any(cross & ~clipped, axis=(0, 2))
+        hit |= np.any(cross & (end > depth[None, :, None]), axis=(0, 2))
+        # A corner of the outline inside an element, unless it is within the
+        # depth of an edge that touches the body: one that crosses the outline,
+        # or a chord with both ends within the depth of it.  (A body inside an
+        # element touches none of its edges.)
+        on = np.abs(dist[4:]) <= depth  # (3, k)
+        touch = (on & np.roll(on, -1, axis=0)) | np.any(cross, axis=2)  # (3, k)
+        d0 = p[1] - p[0]
+        d1 = p[2] - p[0]
+        det = d0[:, 0] * d1[:, 1] - d0[:, 1] * d1[:, 0]  # (k,)
+        r = a[None, :, :] - p[0][:, None, :]  # (k, m, 2)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            l1 = (r[..., 0] * d1[:, None, 1] - r[..., 1] * d1[:, None, 0]) / det[
+                :, None
+            ]
+            l2 = (d0[:, None, 0] * r[..., 1] - d0[:, None, 1] * r[..., 0]) / det[
+                :, None
+            ]
+        tiny = 1e-9
+        within = (l1 > tiny) & (l2 > tiny) & (l1 + l2 < 1 - tiny)  # (k, m)
+        near_edge = _segment_distance(A, P, Q) <= depth[None, :, None]  # (3, k, m)
+        clipped = np.any(touch[:, :, None] & near_edge, axis=0)  # (k, m)
+        hit |= np.any(within & ~clipped, axis=1)
         drop[near[hit]] = True
     return drop
 

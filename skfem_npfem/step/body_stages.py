@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..bodies import (
+    CLIP_DEPTH,
     body_contacts,
     body_loads,
     boundary_faces,
@@ -42,7 +43,12 @@ __all__ = [
 
 
 def without_body_elements(
-    model: Model, x: np.ndarray, active: np.ndarray, local_t: np.ndarray, time: float
+    model: Model,
+    x: np.ndarray,
+    active: np.ndarray,
+    local_t: np.ndarray,
+    time: float,
+    sliver: float = CLIP_DEPTH,
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """Drop the elements that span a rigid body; renumber the remaining nodes.
 
@@ -61,6 +67,11 @@ def without_body_elements(
         in numbers local to ``active``.
     time : float
         Time at the start of the step, s (where the bodies are).
+    sliver : float
+        How deep (a fraction of an element's mean edge) an element may cut a
+        corner of a plane-strain or axisymmetric body and stay
+        (:func:`~skfem_npfem.bodies.spanning_elements`); 0 drops every element
+        that cuts into a body.
 
     Returns
     -------
@@ -70,8 +81,10 @@ def without_body_elements(
     dropped : int
         Number of elements dropped.
     """
-    spanning = spanning_tetrahedra if model.dim == 3 else spanning_elements
-    drop = spanning(model.bodies, x[active], local_t, time)
+    if model.dim == 3:
+        drop = spanning_tetrahedra(model.bodies, x[active], local_t, time)
+    else:
+        drop = spanning_elements(model.bodies, x[active], local_t, time, sliver)
     if not np.any(drop):
         return active, local_t, 0
     local_t = local_t[:, ~drop]
