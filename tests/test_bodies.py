@@ -96,6 +96,24 @@ def test_spanning_elements_thin_body_and_tributary():
     assert area[3] == pytest.approx(1.0)
 
 
+def test_spanning_elements_keep_a_sliver_at_a_corner_only():
+    # Nodes on the two faces at the corner (1, 1) of the unit square: the
+    # edge joining them cuts the corner 0.141 deep, under 0.3 of the
+    # element's mean edge (0.17); nodes 0.6 from the corner cut it 0.42 deep.
+    body = RigidBody([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    x = np.array([[0.8, 1.0], [1.0, 0.8], [1.5, 1.5], [0.4, 1.0], [1.0, 0.4]])
+    t = np.array([[0, 1, 2], [3, 4, 2]]).T
+    assert spanning_elements([body], x, t, 0.0).tolist() == [False, True]
+    assert spanning_elements([body], x, t, 0.0, sliver=0.0).tolist() == [True, True]
+    # an edge from a face node to a soil node off the body crosses the other
+    # face: the corner 0.014 from it (kept), or 0.42 (dropped: 0.3 of the
+    # element's mean edge is 0.33)
+    x = np.array([[0.8, 1.0], [1.5, 0.95], [1.5, 1.5], [0.2, 1.0], [1.5, 0.2]])
+    x = np.vstack([x, [1.1, 1.1]])
+    t = np.array([[0, 1, 2], [3, 4, 5]]).T
+    assert spanning_elements([body], x, t, 0.0).tolist() == [False, True]
+
+
 def test_particles_inside_a_body_at_the_start_are_refused():
     mesh = MeshTri.init_tensor(np.linspace(0, 1, 3), np.linspace(0, 1, 3))
     soil = npfem.LinearElastic(1e6, 0.3, 1.0)
