@@ -11,6 +11,7 @@ committed record.  The study modules are on ``sys.path`` (tests/conftest.py).
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import collapse_validation
@@ -90,3 +91,20 @@ def test_committed_figures_are_stored_with_a_palette(tmp_path):
     assert path.stat().st_size < 0.6 * len(true.getvalue())
     for png in (ROOT / "docs" / "validation").glob("*.png"):
         assert Image.open(png).mode == "P", png
+
+
+def test_penetration_pages_quote_their_records():
+    """The footing table quotes every run of its JSON; the cone table is made."""
+    folder = ROOT / "docs" / "validation"
+    page = (folder / "penetration_methods.md").read_text()
+    runs = json.loads((folder / "penetration_methods.json").read_text())["runs"]
+    assert len(runs) == 12
+    for r in runs:
+        assert f"| {r['bearing_factor']:.3f} |" in page, r["method"]
+        assert f"| {r['final_bearing_factor']:.2f} |" in page, r["method"]
+    cone = json.loads((folder / "cone_penetration.json").read_text())
+    table = (folder / "cone_penetration.inc").read_text()
+    for name, r in cone.items():
+        assert f"| {name} |" in table and f"| {r['N_c']:.2f} |" in table
+        # Teh & Houlsby's (1991) smooth-cone factor within 15 % in every case
+        assert abs(r["N_c"] / (1.25 + 1.84 * math.log(r["rigidity_index"])) - 1) < 0.15
