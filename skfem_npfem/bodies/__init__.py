@@ -1,8 +1,9 @@
 """Moving rigid bodies: a footing, a cone, a pipe pushed through the particles.
 
 * :mod:`.body` -- :class:`RigidBody` (a polygon moved at a prescribed
-  velocity), the elements a body spans, particles put back out of a body, the
-  loads a body takes;
+  velocity), particles put back out of a body, the loads a body takes;
+* :mod:`.spanning` -- the elements of a step's mesh that span a body (a
+  sliver at a corner allowed);
 * :mod:`.contact` -- contact with the particles' boundary, found every step
   (boundary nodes against faces, body corners against boundary edges);
 * 3D models: :class:`RigidPlane` (:mod:`.plane`, a moving half-space) and
@@ -12,12 +13,10 @@
 """
 
 from .body import (
-    CLIP_DEPTH,
     RigidBody,
     body_loads,
     check_clear,
     project_out_of_bodies,
-    spanning_elements,
 )
 from .contact import (
     body_contacts,
@@ -35,6 +34,7 @@ from .contact3d import (
 )
 from .plane import RigidPlane
 from .revolution import BodyOfRevolution
+from .spanning import CLIP_DEPTH, spanning_elements
 
 __all__ = [
     "CLIP_DEPTH",

@@ -6,9 +6,10 @@ a prescribed velocity: a footing, a cone with its shaft, a pipe section.  Every
 step of a model with bodies
 
 1. drops the elements of the step's mesh that span a body
-   (:func:`spanning_elements`: an element whose centroid or an edge midpoint is
-   inside, or whose edge crosses the outline, deeper than a sliver: an edge
-   that joins the soil on the two faces of a corner may cut the corner off);
+   (:func:`~skfem_npfem.bodies.spanning.spanning_elements`: an element whose
+   centroid or an edge midpoint is inside, or whose edge crosses the outline,
+   deeper than a sliver: an edge that joins the soil on the two faces of a
+   corner may cut the corner off);
 2. finds the contact candidates of the mesh's nodes against each body at its
    position at the start of the step (:func:`body_contacts`): the node's
    distance to the outline and the outward normal at the closest point; the
@@ -46,12 +47,10 @@ from ..boundary import Contacts
 from ..errors import ParameterError
 
 __all__ = [
-    "CLIP_DEPTH",
     "RigidBody",
     "body_loads",
     "check_clear",
     "project_out_of_bodies",
-    "spanning_elements",
 ]
 
 #: Relative tolerance (of a body's size) below which a point counts as on the outline.
@@ -63,10 +62,6 @@ _ON_CORNER = 1e-6
 #: Degrees by which a boundary edge's normal must lie inside a corner's
 #: normal cone for a corner row (:func:`corner_contacts`).
 _CORNER_MARGIN = 30.0
-
-#: Fraction of an element's mean edge by which a body may cut into a kept
-#: element (:func:`spanning_elements`).
-CLIP_DEPTH = 0.3
 
 
 @dataclass(frozen=True)
@@ -321,117 +316,6 @@ def _near(body, x: np.ndarray, t: float, reach: float | np.ndarray):
     lo, hi = body.bounds_at(t)
     r = np.asarray(reach)[..., None] if np.ndim(reach) else reach
     return np.flatnonzero(np.all((x > lo - r) & (x < hi + r), axis=1))
-
-
-def spanning_elements(
-    bodies: Sequence[RigidBody],
-    x: np.ndarray,
-    t: np.ndarray,
-    time: float,
-    sliver: float = CLIP_DEPTH,
-) -> np.ndarray:
-    """Triangles (3, ne) of nodes ``x`` that span a body at ``time`` (ne,) bool.
-
-    An element spans a body when its centroid or an edge midpoint is inside
-    the outline, a corner of the outline is inside it, or one of its edges
-    crosses an edge of the outline (a triangle may have all three nodes
-    outside a thin body and still cover it).  Each test allows a depth of
-    ``sliver`` (default :data:`CLIP_DEPTH`) times the element's mean edge:
-    soil that flows round a body's corner (the shoulder of a cone, the edge
-    of a footing, a vertex of a polygon standing in for a curved body) has a
-    node on each face, and the straight edge that joins them cuts the corner
-    off.  Dropping that element would open a
-    notch at the corner at every step; the soil round it then falls into the
-    notch, several times as far as the body moved, and the load on the body
-    collapses for a step (measured on the cone: single-step drops of the tip
-    resistance to the initial stress, more of them the smaller the step).
-    The allowance is for a corner only (an end of the crossed outline edge,
-    or a corner inside the element, within that depth of an element edge
-    that touches the body): the kept element covers a sliver of the body no
-    deeper than that fraction of its size, and a body inside an element, or
-    an element reaching across a thin body, is still dropped.  FEM-remap
-    with P2 elements passes ``sliver=0``: the mid-edge node of the edge that
-    cuts the corner would start inside the body.
-    """
-    ne = t.shape[1]
-    drop = np.zeros(ne, bool)
-    xe = x[t]  # (3, ne, 2)
-    lo, hi = xe.min(axis=0), xe.max(axis=0)
-    for body in bodies:
-        a = body.vertices_at(time)
-        blo, bhi = a.min(axis=0), a.max(axis=0)
-        near = np.flatnonzero(np.all((lo < bhi) & (hi > blo), axis=1))
-        if not near.size:
-            continue
-        p = xe[:, near]  # (3, k, 2)
-        q = np.roll(p, -1, axis=0)
-        depth = sliver * np.linalg.norm(q - p, axis=-1).mean(axis=0)  # (k,)
-        probes = np.concatenate([p.mean(axis=0)[None], 0.5 * (p + q)])
-        dist, _, _ = body.signed_distance(
-            np.concatenate([probes, p]).reshape(-1, 2), time
-        )
-        dist = dist.reshape(7, -1)
-        hit = np.any(dist[:4] < -depth, axis=0)
-        # Proper crossings of element edges (p, q) with outline edges (a, b),
-        # except where an end of the outline edge is within the depth of the
-        # element edge (a clipped corner; an element edge across a thin body
-        # crosses edges whose ends are far).  An end within the outline
-        # tolerance of the other line counts as on it (no crossing): nodes on
-        # a sloping face are collinear with it only up to rounding.
-        P, Q = p[:, :, None, :], q[:, :, None, :]  # (3, k, 1, 2)
-        b = np.roll(a, -1, axis=0)
-        near_line = _ON_OUTLINE * body.size
-
-        def orient(o, u, w):
-            return (u[..., 0] - o[..., 0]) * (w[..., 1] - o[..., 1]) - (
-                u[..., 1] - o[..., 1]
-            ) * (w[..., 0] - o[..., 0])
-
-        A, B = a[None, None], b[None, None]  # (1, 1, m, 2)
-        o1, o2 = orient(P, Q, A), orient(P, Q, B)
-        o3, o4 = orient(A, B, P), orient(A, B, Q)
-        t12 = near_line * np.linalg.norm(Q - P, axis=-1)  # (3, k, 1)
-        t34 = near_line * np.linalg.norm(B - A, axis=-1)  # (1, 1, m)
-        cross = _opposite(o1, o2, t12) & _opposite(o3, o4, t34)
-        end = np.minimum(_segment_distance(A, P, Q), _segment_distance(B, P, Q))
-        hit |= np.any(cross & (end > depth[None, :, None]), axis=(0, 2))
-        # A corner of the outline inside an element, unless it is within the
-        # depth of an edge that touches the body: one that crosses the outline,
-        # or a chord with both ends within the depth of it.  (A body inside an
-        # element touches none of its edges.)
-        on = np.abs(dist[4:]) <= depth  # (3, k)
-        touch = (on & np.roll(on, -1, axis=0)) | np.any(cross, axis=2)  # (3, k)
-        d0 = p[1] - p[0]
-        d1 = p[2] - p[0]
-        det = d0[:, 0] * d1[:, 1] - d0[:, 1] * d1[:, 0]  # (k,)
-        r = a[None, :, :] - p[0][:, None, :]  # (k, m, 2)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            l1 = (r[..., 0] * d1[:, None, 1] - r[..., 1] * d1[:, None, 0]) / det[
-                :, None
-            ]
-            l2 = (d0[:, None, 0] * r[..., 1] - d0[:, None, 1] * r[..., 0]) / det[
-                :, None
-            ]
-        tiny = 1e-9
-        within = (l1 > tiny) & (l2 > tiny) & (l1 + l2 < 1 - tiny)  # (k, m)
-        near_edge = _segment_distance(A, P, Q) <= depth[None, :, None]  # (3, k, m)
-        clipped = np.any(touch[:, :, None] & near_edge, axis=0)  # (k, m)
-        hit |= np.any(within & ~clipped, axis=1)
-        drop[near[hit]] = True
-    return drop
-
-
-def _segment_distance(x: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Distance of points ``x`` from the segments ``p q`` (broadcast, ``(..., 2)``)."""
-    d = q - p
-    s = np.sum((x - p) * d, axis=-1) / np.maximum(np.sum(d * d, axis=-1), 1e-300)
-    s = np.clip(s, 0.0, 1.0)
-    return np.linalg.norm(x - (p + s[..., None] * d), axis=-1)
-
-
-def _opposite(u: np.ndarray, w: np.ndarray, tol: np.ndarray) -> np.ndarray:
-    """``u`` and ``w`` of opposite signs, each farther than ``tol`` from zero."""
-    return ((u > tol) & (w < -tol)) | ((u < -tol) & (w > tol))
 
 
 def project_out_of_bodies(

@@ -45,6 +45,7 @@ import numpy as np
 from scipy.spatial import Delaunay, cKDTree
 
 from ..errors import ParameterError
+from .simplices import orientation, segment_distance
 
 __all__ = [
     "CrossSection",
@@ -98,12 +99,7 @@ def point_in_polygon(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
 
 def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Distance of every point (n, 2) to the nearest of the segments a-b (m, 2)."""
-    d = b - a
-    L2 = np.maximum(np.einsum("md,md->m", d, d), 1e-300)
-    rel = points[:, None, :] - a[None, :, :]
-    t = np.clip(np.einsum("nmd,md->nm", rel, d) / L2, 0.0, 1.0)
-    near = a[None] + t[..., None] * d[None]
-    return np.min(np.linalg.norm(points[:, None, :] - near, axis=2), axis=1)
+    return segment_distance(points[:, None, :], a[None], b[None]).min(axis=1)
 
 
 def _area(poly: np.ndarray) -> float:
@@ -116,17 +112,12 @@ def _proper_crossings(p: np.ndarray, q: np.ndarray, skip_adjacent: bool) -> bool
     a, b = p, np.roll(p, -1, axis=0)
     c, d = q, np.roll(q, -1, axis=0)
 
-    def orient(u, v, w):
-        return (v[..., 0] - u[..., 0]) * (w[..., 1] - u[..., 1]) - (
-            v[..., 1] - u[..., 1]
-        ) * (w[..., 0] - u[..., 0])
-
     A, B = a[:, None, :], b[:, None, :]
     C, D = c[None, :, :], d[None, :, :]
     scale = max(float(np.ptp(p)), float(np.ptp(q)), 1e-300) ** 2
     eps = 1e-12 * scale
-    o1, o2 = orient(A, B, C), orient(A, B, D)
-    o3, o4 = orient(C, D, A), orient(C, D, B)
+    o1, o2 = orientation(A, B, C), orientation(A, B, D)
+    o3, o4 = orientation(C, D, A), orientation(C, D, B)
     cross = (o1 * o2 < -eps * eps) & (o3 * o4 < -eps * eps)
     cross &= (np.abs(o1) > eps) & (np.abs(o2) > eps)
     cross &= (np.abs(o3) > eps) & (np.abs(o4) > eps)

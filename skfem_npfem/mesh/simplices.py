@@ -18,6 +18,34 @@ from scipy.sparse.csgraph import connected_components
 _REGULAR_VOLUME = {2: 3.0 * math.sqrt(3.0) / 4.0, 3: 8.0 * math.sqrt(3.0) / 27.0}
 
 
+def orientation(o: np.ndarray, u: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Twice the signed area of the triangles ``o u w`` (broadcast, ``(..., 2)``).
+
+    Positive when ``w`` lies to the left of the directed line ``o -> u``.
+
+    Examples
+    --------
+    >>> float(orientation(np.zeros(2), np.array([1.0, 0.0]), np.array([0.0, 1.0])))
+    1.0
+    """
+    left = (u[..., 0] - o[..., 0]) * (w[..., 1] - o[..., 1])
+    return left - (u[..., 1] - o[..., 1]) * (w[..., 0] - o[..., 0])
+
+
+def segment_distance(x: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Distance of points ``x`` from the segments ``p q`` (broadcast, ``(..., d)``).
+
+    Examples
+    --------
+    >>> float(segment_distance(np.array([2.0, 1.0]), np.zeros(2), np.array([1.0, 0.0])))
+    1.4142135623730951
+    """
+    d = q - p
+    s = np.sum((x - p) * d, axis=-1) / np.maximum(np.sum(d * d, axis=-1), 1e-300)
+    s = np.clip(s, 0.0, 1.0)
+    return np.linalg.norm(x - (p + s[..., None] * d), axis=-1)
+
+
 def _face_table(d: int) -> NDArray[np.intp]:
     """Local vertex indices of the ``d + 1`` faces of a simplex, outward ordered.
 
