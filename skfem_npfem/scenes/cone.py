@@ -450,15 +450,10 @@ def steady_factor(
 def cone_scenery(p: dict, folder: Path | None = None) -> Scenery:
     """Base, rollers, the axis, the cone and its shaft where they are."""
     s = Scenery(scene="cone-penetration")
-    values = {
-        "diameter": number(p, "diameter", 0.0357),
-        "spacing": number(p, "spacing"),
-        "penetration": number(p, "penetration"),
-        "depth": number(p, "depth"),
-        "below": number(p, "below", 8.0),
-        "domain_radius": number(p, "domain_radius", 30.0),
-    }
-    speed = number(p, "speed", 0.02)
+    default = {q.name: q.default for q in PARAMS}
+    names = ("diameter", "spacing", "penetration", "depth", "below", "domain_radius")
+    values = {k: number(p, k, default[k]) for k in names}
+    speed = number(p, "speed", default["speed"])
     if None in (values["diameter"], values["below"], values["domain_radius"], speed):
         return s
     g = _sizes(values)
