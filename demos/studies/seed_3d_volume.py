@@ -19,9 +19,10 @@ keeps at every step the volume budget of the particles:
 
 The run summaries and the budgets stay in ``--work``; a case whose summary is
 there is not run again.  ``--out`` (default ``docs/seed_column``) receives
-``volume_3d.json``: per case the overrides, R at rest and its maximum, R per
-step, the volume change, run-out, height, detached mass, steps, interior-point
-iterations, wall time and the budget at rest (docs/seed_column.md, "Where the
+``volume_3d.json`` (cases not run again are kept as they are): per case the
+overrides, R at rest and its maximum, R per step, the volume change, run-out,
+height, detached mass, steps, interior-point iterations, wall time and the
+budget at rest (docs/seed_column.md, "Where the
 3D volume goes" and "The 3D default to rest").
 
 Usage::
@@ -76,6 +77,10 @@ CASES: dict[str, dict[str, Any]] = {
     ),
     "r8-vertical-alpha-2.0-kappa-0.15": _r8(
         alpha=2.0, stabilisation_mode=VERT, volume_correction=0.15
+    ),
+    # sigma_v alone coupled (the cheaper factor), otherwise the default.
+    "r8-sigma-v-alpha-2.0-kappa-0.15": _r8(
+        alpha=2.0, stabilisation_mode="sigma_v", volume_correction=0.15
     ),
     # The scene's 3D default (alpha 2.0, vertical, beta 30, kappa 0.15).
     "r12-default": {**BASE, "spacing": R0 / 12, "output_every": 1},
@@ -217,6 +222,9 @@ def main(argv: list[str] | None = None) -> int:
         )
     args.out.mkdir(parents=True, exist_ok=True)
     path = args.out / "volume_3d.json"
+    # Cases run before, whose work folders are gone, stay as they were.
+    kept = json.loads(path.read_text())["cases"] if path.exists() else {}
+    records = {n: records.get(n, kept.get(n)) for n in CASES if n in {*records, *kept}}
     path.write_text(json.dumps({"cases": records}, indent=1, default=float) + "\n")
     print("wrote", path)
     return 0
