@@ -100,8 +100,11 @@ def test_footing_penetration_fem_remap_p2_near_prandtl_and_p1_locks():
     assert set(p2["solver"]["statuses"]) <= {"Solved", "AlmostSolved"}
     assert m2["relative_error"] == pytest.approx(0.0, abs=0.10)
     assert m2["max_body_penetration"] <= 0.5 * 0.1  # measured 6e-15
-    p1 = run_scene(SCENE, {**case, "element": "p1"})["metrics"]
+    assert not m2["warnings"]
+    with pytest.warns(UserWarning, match="P1 elements locks"):
+        p1 = run_scene(SCENE, {**case, "element": "p1"})["metrics"]
     assert p1["relative_error"] > 0.5
+    assert any("use element=p2" in w for w in p1["warnings"])
 
 
 def test_footing_penetration_keeps_particles_out_to_w_equal_b():

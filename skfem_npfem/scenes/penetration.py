@@ -166,6 +166,8 @@ METRICS = {
     "max_body_penetration": "deepest a particle got inside the footing before "
     "being put back on its outline, m (over the run)",
     "max_heave": "largest upward displacement of the soil surface / B",
+    "warnings": "what to look at: a particle deeper than half a spacing inside "
+    "the footing; method=fem-remap with P1 elements (they lock)",
     "curve": "list of [w/B, q/s_u] per step",
     "n_particles": "number of particles",
     **METHOD_METRICS,
@@ -235,6 +237,29 @@ def penetration_warnings(
         f"{scene}: a particle got {deepest / spacing:.2f} spacings inside the body "
         f"(more than half a spacing) before it was put back; the loads of that step "
         f"are off: lower dt (now {dt_now:.4g} s) or refine the spacing"
+    )
+    warnings.warn(msg, stacklevel=3)
+    return [msg]
+
+
+def locking_warnings(values: dict[str, Any]) -> list[str]:
+    """A warning when FEM-remap runs with P1 elements, which lock here.
+
+    Tresca flow is isochoric, and constant-strain triangles cannot deform at
+    constant volume in most patterns: the bearing factor comes out far too
+    high (docs/validation/penetration_methods.md: +117 % at B/10 and +63 % at
+    B/20 with E_u/s_u = 1000).  Returns the message, also issued as a
+    ``UserWarning``.
+    """
+    if values.get("method") != "fem-remap" or values.get("element") not in (
+        None,
+        "p1",
+    ):
+        return []
+    msg = (
+        "footing-penetration: method=fem-remap with P1 elements locks under "
+        "isochoric Tresca flow (the bearing factor comes out too high: +63 % at "
+        "B/20 with E_u/s_u = 1000); use element=p2, or method=npfem"
     )
     warnings.warn(msg, stacklevel=3)
     return [msg]
@@ -334,6 +359,7 @@ def build(
 ) -> SceneRun:
     """Build the footing-penetration simulation."""
     dt = check(values)
+    locking = locking_warnings(values)  # before the run, and in the metrics
     B, _, _, w = _geometry(values)
     su = values["su"]
     particles, spacing, _ = soil(values)
@@ -366,8 +392,11 @@ def build(
         ref = prandtl_nc(0.0)
         pen = [r.extra.get("footing_penetration", 0.0) for r in sim_.records]
         heave = float(sim_.particles.u[surface, 1].max()) / B
-        notes = penetration_warnings(
-            "footing-penetration", max(pen, default=0.0), values["spacing"], dt
+        notes = (
+            penetration_warnings(
+                "footing-penetration", max(pen, default=0.0), values["spacing"], dt
+            )
+            + locking
         )
         return {
             "bearing_factor": factor,
