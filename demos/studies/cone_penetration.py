@@ -2,10 +2,11 @@
 """The cone factor N_c: convergence, speed against accuracy, and its trend with I_r.
 
 Runs the ``cone-penetration`` scene (smooth cone, wished in place, pushed
-3 D) for each case below and tabulates the steady cone factor against Teh &
-Houlsby's (1991) ``1.25 + 1.84 ln I_r`` with the wall time of each run:
+5 D; the steady N_c is the median over the last diameter) for each case below
+and tabulates the steady cone factor against Teh & Houlsby's (1991)
+``1.25 + 1.84 ln I_r`` with the wall time of each run:
 
-* resolutions D/8, D/12, D/16 at I_r = 100 (the cone moves half a spacing a
+* resolutions D/8, D/12, D/16, D/20 at I_r = 100 (the cone moves half a spacing a
   step): the finest run is the convergence reference of the speed-accuracy
   curve;
 * the time step: D/12 with the cone moving a quarter of a spacing a step;
@@ -48,13 +49,14 @@ CASES: dict[str, dict] = {
     "d8": {"spacing": D / 8},
     "d12": {"spacing": D / 12},
     "d16": {"spacing": D / 16},
+    "d20": {"spacing": D / 20},
     "d12-dt": {"spacing": D / 12, "dt": 0.25 * (D / 12) / 0.02},
     "d12-ir30": {"spacing": D / 12, "rigidity_index": 30.0},
     "d12-ir300": {"spacing": D / 12, "rigidity_index": 300.0},
     "d8-r15": {"spacing": D / 8, "domain_radius": 15.0},
     "d8-r60": {"spacing": D / 8, "domain_radius": 60.0},
 }
-RESOLUTION = ("d8", "d12", "d16")
+RESOLUTION = ("d8", "d12", "d16", "d20")
 
 
 def same_model(row: dict) -> bool:
@@ -74,7 +76,9 @@ def run_case(name: str) -> dict:
         "D_over_h": round(D / overrides["spacing"], 3),
         "rigidity_index": overrides.get("rigidity_index", 100.0),
         "N_c": m["cone_factor"],
+        "N_c_mean": m["cone_factor_mean"],
         "N_c_range": m["cone_factor_range"],
+        "drops": m["cone_factor_drops"],
         "reference": m["cone_factor_reference"],
         "error": m["relative_error"],
         "max_body_penetration": m["max_body_penetration"],
@@ -88,18 +92,30 @@ def run_case(name: str) -> dict:
     }
 
 
+def per_diameter(curve: list[list[float]]) -> list[float]:
+    """Median N_c of the steps over each whole diameter of the push from w = D."""
+    c = np.asarray(curve, float)
+    edges = np.arange(1.0, np.floor(c[-1, 0] + 1e-9) + 1e-9)
+    return [
+        float(np.median(c[(c[:, 0] > a) & (c[:, 0] <= a + 1.0), 1])) for a in edges[:-1]
+    ]
+
+
 def markdown(rows: dict[str, dict]) -> str:
     """The table of every case, and the resolution errors against the finest.
 
-    ``last D/2`` is the mean N_c of the steps over the last half diameter of
-    the push; ``drops`` counts the steps past w = D whose N_c is under 0.8
-    times the steady value (a step where the soil round the cone gave way).
+    ``N_c`` is the scene's steady value (median over the last diameter);
+    ``per D`` the medians over each diameter of the push from w = D on (a
+    steady curve has equal ones); ``drops`` counts the last diameter's steps
+    whose N_c is under 0.8 times the steady value (a step where the soil round
+    the cone gave way).
     """
     finest = next((rows[c] for c in reversed(RESOLUTION) if c in rows), None)
     lines = [
-        "| case | D/h | I_r | particles | steps | N_c | range (last third) "
-        "| Teh & Houlsby | error | vs finest | last D/2 | drops | wall (s) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| case | D/h | I_r | particles | steps | N_c | range (last D) "
+        "| mean (last D) | per D from w = D | Teh & Houlsby | error | vs finest "
+        "| drops | wall (s) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name in CASES:
         if name not in rows:
@@ -109,14 +125,13 @@ def markdown(rows: dict[str, dict]) -> str:
         if finest and same_model(r):
             vs = f"{r['N_c'] / finest['N_c'] - 1:+.1%}"
         lo, hi = r["N_c_range"]
-        drops = sum(1 for w, q in r["curve"] if w > 1.0 and q < 0.8 * r["N_c"])
-        end = r["curve"][-1][0]
-        last = np.mean([q for w, q in r["curve"] if w > end - 0.5])
+        steps = " / ".join(f"{q:.2f}" for q in per_diameter(r["curve"]))
         lines.append(
             f"| {name} | {r['D_over_h']:g} | {r['rigidity_index']:g} "
             f"| {r['particles']} | {r['steps']} | {r['N_c']:.2f} "
-            f"| {lo:.2f}–{hi:.2f} | {r['reference']:.2f} | {r['error']:+.1%} "
-            f"| {vs} | {last:.2f} | {drops} | {r['wall_s']:.0f} |"
+            f"| {lo:.2f}–{hi:.2f} | {r['N_c_mean']:.2f} | {steps} "
+            f"| {r['reference']:.2f} | {r['error']:+.1%} "
+            f"| {vs} | {r['drops']} | {r['wall_s']:.0f} |"
         )
     return "\n".join(lines) + "\n"
 

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -58,7 +58,7 @@ from .penetration import (
 )
 from .scenery import Scenery, box, number
 
-__all__ = ["INTERFACES", "SCENE", "cone_body", "steady_factor"]
+__all__ = ["INTERFACES", "SCENE", "Steady", "cone_body", "steady_factor"]
 
 #: Cone-soil interfaces.
 INTERFACES = ("smooth", "rough", "adhesion")
@@ -122,7 +122,7 @@ PARAMS = [
         "penetration",
         None,
         "m",
-        "how far the cone is pushed from where it starts (default 3 D)",
+        "how far the cone is pushed from where it starts (default 5 D)",
         float,
         **_POSITIVE,
     ),
@@ -197,23 +197,26 @@ PARAMS = [
         hi=3.0,
     ),
     Param(
-        "steady_from",
-        2 / 3,
+        "steady_window",
+        1.0,
         "-",
-        "the steady state: the penetration from this fraction of it on (default "
-        "the last third)",
+        "the steady state: the last steady_window x D of the push (at most "
+        "the whole push)",
         float,
-        lo=0.0,
-        hi=0.95,
+        lo=0.05,
+        hi=100.0,
     ),
     *fidelity_params(0.0),
     *solver_params(),
 ]
 
 METRICS = {
-    "cone_factor": "steady N_c = (q_c - sigma_0)/s_u: the mean of the curve over "
-    "the penetration from steady_from x penetration on",
+    "cone_factor": "steady N_c = (q_c - sigma_0)/s_u: the median of the steps' "
+    "N_c over the last steady_window x D of the push",
     "cone_factor_range": "[min, max] of N_c over that window",
+    "cone_factor_mean": "mean of N_c over that window (trapezoidal)",
+    "cone_factor_drops": "steps of that window whose N_c is under 0.8 x "
+    "cone_factor (a step where the soil round the cone gave way)",
     "cone_factor_reference": "Teh & Houlsby (1991): 1.25 + 1.84 ln I_r",
     "relative_error": "cone_factor / reference - 1",
     "max_body_penetration": "deepest a particle got inside the cone "
@@ -229,7 +232,7 @@ def _sizes(values: dict[str, Any]) -> dict[str, float]:
     """Lengths of the set-up, m: D, spacing, push, tip depth, soil, radius."""
     D = values["diameter"]
     h = values["spacing"] if values["spacing"] is not None else D / 12
-    w = values["penetration"] if values["penetration"] is not None else 3 * D
+    w = values["penetration"] if values["penetration"] is not None else 5 * D
     depth = values["depth"] if values["depth"] is not None else 5 * D
     z_tip = values["below"] * D + w  # the tip's height at time 0
     return {
@@ -401,7 +404,8 @@ def build(
             for r in sim_.records
             if "cone_force_y" in r.extra
         ]
-        factor, spread = steady_factor(curve, values["steady_from"])
+        steady = steady_factor(curve, values["steady_window"])
+        factor = None if steady is None else steady.median
         ref = teh_houlsby_nc(values["rigidity_index"])
         pen = [r.extra.get("cone_penetration", 0.0) for r in sim_.records]
         notes = penetration_warnings(
@@ -409,7 +413,9 @@ def build(
         )
         return {
             "cone_factor": factor,
-            "cone_factor_range": spread,
+            "cone_factor_range": None if steady is None else steady.range,
+            "cone_factor_mean": None if steady is None else steady.mean,
+            "cone_factor_drops": None if steady is None else steady.drops,
             "cone_factor_reference": ref,
             "relative_error": None if factor is None else factor / ref - 1.0,
             "max_body_penetration": max(pen, default=0.0),
@@ -421,30 +427,46 @@ def build(
     return SceneRun(sim, {"t_end": g["w"] / values["speed"]}, metrics)
 
 
-def steady_factor(
-    curve: list[list[float]], start: float
-) -> tuple[float | None, list[float] | None]:
-    """Mean and range of the curve over its last part, from ``start`` x its end on.
+class Steady(NamedTuple):
+    """The steady part of a cone-factor curve (see :func:`steady_factor`)."""
 
-    The mean is that of the linear interpolant (trapezoidal, over the
-    window's length); None for an empty curve.
+    median: float
+    mean: float
+    range: list[float]
+    drops: int
+
+
+def steady_factor(curve: list[list[float]], window: float) -> Steady | None:
+    """The steady cone factor: the curve's last ``window`` (in units of w/D).
+
+    ``curve`` is a list of ``[w/D, N_c]`` per step.  The steady value is the
+    median of the steps' N_c in the window (a single step where the soil round
+    the cone gives way does not move it); the mean is that of the linear
+    interpolant over the window (trapezoidal); ``drops`` counts the window's
+    steps under 0.8 times the median.  None for an empty curve.
 
     Examples
     --------
-    >>> steady_factor([[1.0, 4.0], [2.0, 6.0], [3.0, 8.0], [4.0, 6.0]], 0.5)
-    (7.0, [6.0, 8.0])
+    >>> s = steady_factor([[1.0, 4.0], [2.0, 6.0], [3.0, 2.0], [4.0, 6.0]], 2.5)
+    >>> s.median, s.mean, s.range, s.drops
+    (6.0, 4.3, [2.0, 6.0], 1)
     """
     if not curve:
-        return None, None
+        return None
     c = np.asarray(curve, float)
-    lo, hi = start * c[-1, 0], c[-1, 0]
-    if hi <= lo or c.shape[0] < 2:
-        return float(c[-1, 1]), [float(c[-1, 1])] * 2
+    hi = c[-1, 0]
+    lo = max(hi - window, c[0, 0])
+    if hi <= lo:
+        q = float(c[-1, 1])
+        return Steady(q, q, [q, q], 0)
     inner = c[(c[:, 0] > lo) & (c[:, 0] < hi)]
     ws = np.concatenate([[lo], inner[:, 0], [hi]])
     qs = np.interp(ws, c[:, 0], c[:, 1])
     mean = float(np.sum(0.5 * (qs[1:] + qs[:-1]) * np.diff(ws)) / (hi - lo))
-    return mean, [float(qs.min()), float(qs.max())]
+    steps = c[(c[:, 0] > lo) & (c[:, 0] <= hi), 1]
+    median = float(np.median(steps))
+    drops = int(np.sum(steps < 0.8 * median))
+    return Steady(median, mean, [float(qs.min()), float(qs.max())], drops)
 
 
 def cone_scenery(p: dict, folder: Path | None = None) -> Scenery:
