@@ -59,6 +59,14 @@ CASES: dict[str, dict] = {
 RESOLUTION = ("d8", "d12", "d16", "d20")
 
 
+def lu2004_nc(rigidity_index: float) -> float:
+    """Lu et al.'s (2004) large-deformation fit for a smooth cone, isotropic stress.
+
+    ``3.4 + 1.6 ln I_r`` (quoted from memory: docs/references.md).
+    """
+    return 3.4 + 1.6 * np.log(rigidity_index)
+
+
 def same_model(row: dict) -> bool:
     """A case of the default model, refined in space or time only."""
     return set(row["overrides"]) <= {"spacing", "dt"}
@@ -149,9 +157,10 @@ def picture(rows: dict[str, dict], path: Path) -> None:
         a.plot(c[0], c[1], lw=1, label=f"{name} (N_c {r['N_c']:.2f})")
     for ir in sorted({r["rigidity_index"] for r in rows.values()}):
         a.axhline(npfem.laws.teh_houlsby_nc(ir), ls="--", lw=0.8, color="grey")
+        a.axhline(lu2004_nc(ir), ls=":", lw=0.8, color="grey")
     a.set_xlabel("w / D (push from the embedded start)")
     a.set_ylabel("N_c = (q_c - sigma_0) / s_u")
-    a.set_title("cone factor; dashed: Teh & Houlsby (1991)")
+    a.set_title("dashed: Teh & Houlsby (1991); dotted: Lu et al. (2004)", fontsize=9)
     a.legend(fontsize=7)
     finest = next((rows[c] for c in reversed(RESOLUTION) if c in rows), None)
     for name, r in rows.items():
