@@ -47,7 +47,8 @@ def test_cone_particles_start_on_the_cone_and_outside_it():
     # the face: its length D in six spacings; the shaft up to the surface
     assert np.count_nonzero(on & (z <= shoulder + 1e-12)) == 7
     assert np.count_nonzero(on & (z > shoulder)) >= 10
-    assert cone.vertices[0].tolist() == [0.0, pytest.approx(11 * D)]
+    # the tip starts 8 D (below) + 5 D (the default push) above the base
+    assert cone.vertices[0].tolist() == [0.0, pytest.approx(13 * D)]
 
 
 @pytest.mark.parametrize(
