@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
@@ -50,11 +50,13 @@ from .common import (
     solver_params,
 )
 from .params import POSITIVE
-from .penetration import (
-    _axis_count,
+from .penetration_common import (
+    Steady,
+    axis_count,
     graded_axis,
     interface_adhesion,
     penetration_warnings,
+    steady_factor,
 )
 from .scenery import Scenery, box, number
 
@@ -287,9 +289,9 @@ def check(values: dict[str, Any]) -> float:
             "spacing per step (lower speed or dt)",
         )
     lo, hi = _fine_window(g)
-    nr = _axis_count(1.5 * D, h, g["radius"], values["grading"])
-    nz = (hi - lo) / h + _axis_count(h, h, lo, values["grading"])
-    nz += _axis_count(h, h, g["top"] - hi, values["grading"])
+    nr = axis_count(1.5 * D, h, g["radius"], values["grading"])
+    nz = (hi - lo) / h + axis_count(h, h, lo, values["grading"])
+    nz += axis_count(h, h, g["top"] - hi, values["grading"])
     check_size(nr * nz, 2, values, advice="use a larger spacing or grading")
     return dt
 
@@ -425,48 +427,6 @@ def build(
         }
 
     return SceneRun(sim, {"t_end": g["w"] / values["speed"]}, metrics)
-
-
-class Steady(NamedTuple):
-    """The steady part of a cone-factor curve (see :func:`steady_factor`)."""
-
-    median: float
-    mean: float
-    range: list[float]
-    drops: int
-
-
-def steady_factor(curve: list[list[float]], window: float) -> Steady | None:
-    """The steady cone factor: the curve's last ``window`` (in units of w/D).
-
-    ``curve`` is a list of ``[w/D, N_c]`` per step.  The steady value is the
-    median of the steps' N_c in the window (a single step where the soil round
-    the cone gives way does not move it); the mean is that of the linear
-    interpolant over the window (trapezoidal); ``drops`` counts the window's
-    steps under 0.8 times the median.  None for an empty curve.
-
-    Examples
-    --------
-    >>> s = steady_factor([[1.0, 4.0], [2.0, 6.0], [3.0, 2.0], [4.0, 6.0]], 2.5)
-    >>> s.median, s.mean, s.range, s.drops
-    (6.0, 4.3, [2.0, 6.0], 1)
-    """
-    if not curve:
-        return None
-    c = np.asarray(curve, float)
-    hi = c[-1, 0]
-    lo = max(hi - window, c[0, 0])
-    if hi <= lo:
-        q = float(c[-1, 1])
-        return Steady(q, q, [q, q], 0)
-    inner = c[(c[:, 0] > lo) & (c[:, 0] < hi)]
-    ws = np.concatenate([[lo], inner[:, 0], [hi]])
-    qs = np.interp(ws, c[:, 0], c[:, 1])
-    mean = float(np.sum(0.5 * (qs[1:] + qs[:-1]) * np.diff(ws)) / (hi - lo))
-    steps = c[(c[:, 0] > lo) & (c[:, 0] <= hi), 1]
-    median = float(np.median(steps))
-    drops = int(np.sum(steps < 0.8 * median))
-    return Steady(median, mean, [float(qs.min()), float(qs.max())], drops)
 
 
 def cone_scenery(p: dict, folder: Path | None = None) -> Scenery:

@@ -24,8 +24,6 @@ compares the three curves.
 
 from __future__ import annotations
 
-import math
-import warnings
 from pathlib import Path
 from typing import Any
 
@@ -52,6 +50,13 @@ from .common import (
 )
 from .methods import METHOD_METRICS, method_params, with_method
 from .params import POSITIVE
+from .penetration_common import (
+    axis_count,
+    graded_axis,
+    interface_adhesion,
+    locking_warnings,
+    penetration_warnings,
+)
 from .scenery import Scenery, box, number
 
 __all__ = [
@@ -179,92 +184,6 @@ METRICS = {
 }
 
 
-def graded_axis(fine: float, h: float, length: float, ratio: float) -> np.ndarray:
-    """Coordinates ``0..length``: spacing ``h`` up to ``fine``, then growing.
-
-    Examples
-    --------
-    >>> graded_axis(1.0, 0.5, 3.0, 2.0).tolist()
-    [0.0, 0.5, 1.0, 2.0, 3.0]
-    """
-    n_fine = max(1, math.ceil(min(fine, length) / h - 1e-9))
-    xs = list(np.linspace(0.0, min(n_fine * h, length), n_fine + 1))
-    step = xs[-1] - xs[-2]
-    while xs[-1] < length - 1e-12:
-        step *= ratio
-        xs.append(min(xs[-1] + step, length))
-    if len(xs) > 3 and xs[-1] - xs[-2] < 0.3 * (xs[-2] - xs[-3]):
-        xs.pop(-2)
-    return np.array(xs)
-
-
-def _axis_count(fine: float, h: float, length: float, ratio: float) -> float:
-    """Number of :func:`graded_axis` coordinates, estimated without building them."""
-    n_fine = max(1, math.ceil(min(fine, length) / h - 1e-9))
-    rest = max(length - n_fine * h, 0.0)
-    if ratio == 1.0:
-        return n_fine + 1 + math.ceil(rest / h)
-    return (
-        n_fine
-        + 1
-        + math.ceil(math.log1p(rest * (ratio - 1) / (h * ratio)) / math.log(ratio))
-    )
-
-
-def interface_adhesion(values: dict[str, Any]) -> float:
-    """Interface strength (Pa) of the ``interface`` choice."""
-    choice = values["interface"]
-    if choice == "smooth":
-        return 0.0
-    if choice == "rough":
-        return values["su"]
-    return values["alpha"] * values["su"]
-
-
-def penetration_warnings(
-    scene: str, deepest: float, spacing: float, dt_now: float
-) -> list[str]:
-    """A warning when a particle got deeper than half a spacing inside the body.
-
-    The particle is put back on the outline after the step, so the run goes
-    on, but the load of that step is off; a smaller step (the body moving less
-    per step) keeps the soil out.  Returns the messages, each also issued as
-    a ``UserWarning``.
-    """
-    if deepest <= 0.5 * spacing:
-        return []
-    msg = (
-        f"{scene}: a particle got {deepest / spacing:.2f} spacings inside the body "
-        f"(more than half a spacing) before it was put back; the loads of that step "
-        f"are off: lower dt (now {dt_now:.4g} s) or refine the spacing"
-    )
-    warnings.warn(msg, stacklevel=3)
-    return [msg]
-
-
-def locking_warnings(values: dict[str, Any]) -> list[str]:
-    """A warning when FEM-remap runs with P1 elements, which lock here.
-
-    Tresca flow is isochoric, and constant-strain triangles cannot deform at
-    constant volume in most patterns: the bearing factor comes out far too
-    high (docs/validation/penetration_methods.md: +117 % at B/10 and +63 % at
-    B/20 with E_u/s_u = 1000).  Returns the message, also issued as a
-    ``UserWarning``.
-    """
-    if values.get("method") != "fem-remap" or values.get("element") not in (
-        None,
-        "p1",
-    ):
-        return []
-    msg = (
-        "footing-penetration: method=fem-remap with P1 elements locks under "
-        "isochoric Tresca flow (the bearing factor comes out too high: +63 % at "
-        "B/20 with E_u/s_u = 1000); use element=p2, or method=npfem"
-    )
-    warnings.warn(msg, stacklevel=3)
-    return [msg]
-
-
 def _penetration(values: dict[str, Any]) -> float:
     w = values["penetration"]
     return values["width"] if w is None else w
@@ -304,8 +223,8 @@ def check(values: dict[str, Any]) -> float:
             f"at most spacing/dt = {h / dt:g} m/s: the footing may move at most "
             "one spacing per step (lower speed or dt)",
         )
-    nx = _axis_count(B / 2 + B, h, half, values["grading"])
-    ny = _axis_count(w + B, h, depth, values["grading"])
+    nx = axis_count(B / 2 + B, h, half, values["grading"])
+    ny = axis_count(w + B, h, depth, values["grading"])
     check_size(nx * ny, 2, values, advice="use a larger spacing or grading")
     return dt
 

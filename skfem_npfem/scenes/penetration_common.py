@@ -1,0 +1,153 @@
+"""What the penetration scenes share: graded lattices, interfaces, reports.
+
+The footing (:mod:`~skfem_npfem.scenes.penetration`) and the cone
+(:mod:`~skfem_npfem.scenes.cone`) build their soil on a graded lattice, turn
+the ``interface`` choice into an adhesion, warn about what makes a run's
+loads doubtful, and the cone reads its steady factor off the curve.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from typing import Any, NamedTuple
+
+import numpy as np
+
+__all__ = [
+    "Steady",
+    "axis_count",
+    "graded_axis",
+    "interface_adhesion",
+    "locking_warnings",
+    "penetration_warnings",
+    "steady_factor",
+]
+
+
+def graded_axis(fine: float, h: float, length: float, ratio: float) -> np.ndarray:
+    """Coordinates ``0..length``: spacing ``h`` up to ``fine``, then growing.
+
+    Examples
+    --------
+    >>> graded_axis(1.0, 0.5, 3.0, 2.0).tolist()
+    [0.0, 0.5, 1.0, 2.0, 3.0]
+    """
+    n_fine = max(1, math.ceil(min(fine, length) / h - 1e-9))
+    xs = list(np.linspace(0.0, min(n_fine * h, length), n_fine + 1))
+    step = xs[-1] - xs[-2]
+    while xs[-1] < length - 1e-12:
+        step *= ratio
+        xs.append(min(xs[-1] + step, length))
+    if len(xs) > 3 and xs[-1] - xs[-2] < 0.3 * (xs[-2] - xs[-3]):
+        xs.pop(-2)
+    return np.array(xs)
+
+
+def axis_count(fine: float, h: float, length: float, ratio: float) -> float:
+    """Number of :func:`graded_axis` coordinates, estimated without building them."""
+    n_fine = max(1, math.ceil(min(fine, length) / h - 1e-9))
+    rest = max(length - n_fine * h, 0.0)
+    if ratio == 1.0:
+        return n_fine + 1 + math.ceil(rest / h)
+    return (
+        n_fine
+        + 1
+        + math.ceil(math.log1p(rest * (ratio - 1) / (h * ratio)) / math.log(ratio))
+    )
+
+
+def interface_adhesion(values: dict[str, Any]) -> float:
+    """Interface strength (Pa) of the ``interface`` choice."""
+    choice = values["interface"]
+    if choice == "smooth":
+        return 0.0
+    if choice == "rough":
+        return values["su"]
+    return values["alpha"] * values["su"]
+
+
+def penetration_warnings(
+    scene: str, deepest: float, spacing: float, dt_now: float
+) -> list[str]:
+    """A warning when a particle got deeper than half a spacing inside the body.
+
+    The particle is put back on the outline after the step, so the run goes
+    on, but the load of that step is off; a smaller step (the body moving less
+    per step) keeps the soil out.  Returns the messages, each also issued as
+    a ``UserWarning``.
+    """
+    if deepest <= 0.5 * spacing:
+        return []
+    msg = (
+        f"{scene}: a particle got {deepest / spacing:.2f} spacings inside the body "
+        f"(more than half a spacing) before it was put back; the loads of that step "
+        f"are off: lower dt (now {dt_now:.4g} s) or refine the spacing"
+    )
+    warnings.warn(msg, stacklevel=3)
+    return [msg]
+
+
+def locking_warnings(values: dict[str, Any]) -> list[str]:
+    """A warning when FEM-remap runs with P1 elements, which lock here.
+
+    Tresca flow is isochoric, and constant-strain triangles cannot deform at
+    constant volume in most patterns: the bearing factor comes out far too
+    high (docs/validation/penetration_methods.md: +117 % at B/10 and +63 % at
+    B/20 with E_u/s_u = 1000).  Returns the message, also issued as a
+    ``UserWarning``.
+    """
+    if values.get("method") != "fem-remap" or values.get("element") not in (
+        None,
+        "p1",
+    ):
+        return []
+    msg = (
+        "footing-penetration: method=fem-remap with P1 elements locks under "
+        "isochoric Tresca flow (the bearing factor comes out too high: +63 % at "
+        "B/20 with E_u/s_u = 1000); use element=p2, or method=npfem"
+    )
+    warnings.warn(msg, stacklevel=3)
+    return [msg]
+
+
+class Steady(NamedTuple):
+    """The steady part of a cone-factor curve (see :func:`steady_factor`)."""
+
+    median: float
+    mean: float
+    range: list[float]
+    drops: int
+
+
+def steady_factor(curve: list[list[float]], window: float) -> Steady | None:
+    """The steady cone factor: the curve's last ``window`` (in units of w/D).
+
+    ``curve`` is a list of ``[w/D, N_c]`` per step.  The steady value is the
+    median of the steps' N_c in the window (a single step where the soil round
+    the cone gives way does not move it); the mean is that of the linear
+    interpolant over the window (trapezoidal); ``drops`` counts the window's
+    steps under 0.8 times the median.  None for an empty curve.
+
+    Examples
+    --------
+    >>> s = steady_factor([[1.0, 4.0], [2.0, 6.0], [3.0, 2.0], [4.0, 6.0]], 2.5)
+    >>> s.median, s.mean, s.range, s.drops
+    (6.0, 4.3, [2.0, 6.0], 1)
+    """
+    if not curve:
+        return None
+    c = np.asarray(curve, float)
+    hi = c[-1, 0]
+    lo = max(hi - window, c[0, 0])
+    if hi <= lo:
+        q = float(c[-1, 1])
+        return Steady(q, q, [q, q], 0)
+    inner = c[(c[:, 0] > lo) & (c[:, 0] < hi)]
+    ws = np.concatenate([[lo], inner[:, 0], [hi]])
+    qs = np.interp(ws, c[:, 0], c[:, 1])
+    mean = float(np.sum(0.5 * (qs[1:] + qs[:-1]) * np.diff(ws)) / (hi - lo))
+    steps = c[(c[:, 0] > lo) & (c[:, 0] <= hi), 1]
+    median = float(np.median(steps))
+    drops = int(np.sum(steps < 0.8 * median))
+    return Steady(median, mean, [float(qs.min()), float(qs.max())], drops)
