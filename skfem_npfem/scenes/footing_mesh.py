@@ -20,6 +20,7 @@ from ..particles import Particles
 from .common import (
     check_size,
 )
+from .penetration_common import grow_axis, grown_count
 
 #: Default element size under the footing and block size / b (incremental).
 DEFAULT_SPACING, DEFAULT_DOMAIN = 0.125, 5.0
@@ -45,24 +46,13 @@ def graded_coordinates(b: float, h: float, length: float, ratio: float) -> np.nd
     """Coordinates 0..length: uniform ``h`` up to ``1.5 b``, then growing by ratio."""
     n_fine = max(2, round(1.5 * b / h))
     xs = list(np.linspace(0.0, n_fine * h, n_fine + 1))
-    step = h
-    while xs[-1] < length - 1e-12:
-        step *= ratio
-        xs.append(min(xs[-1] + step, length))
-    if len(xs) > 3 and xs[-1] - xs[-2] < 0.3 * (xs[-2] - xs[-3]):
-        xs.pop(-2)
-    return np.array(xs)
+    return grow_axis(xs, h, length, ratio)
 
 
 def graded_count(b: float, h: float, length: float, ratio: float) -> float:
     """Number of :func:`graded_coordinates` (estimated without building them)."""
     n_fine = max(2, round(1.5 * b / h))
-    rest = max(length - n_fine * h, 0.0)
-    if ratio == 1.0:
-        n_graded = rest / h
-    else:
-        n_graded = math.log1p(rest * (ratio - 1) / (h * ratio)) / math.log(ratio)
-    return n_fine + 1 + math.ceil(n_graded)
+    return n_fine + 1 + grown_count(max(length - n_fine * h, 0.0), h, ratio)
 
 
 def soil_mesh(values: dict[str, Any]) -> MeshTri:

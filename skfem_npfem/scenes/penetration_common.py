@@ -1,7 +1,8 @@
 """What the penetration scenes share: graded lattices, interfaces, reports.
 
 The footing (:mod:`~skfem_npfem.scenes.penetration`) and the cone
-(:mod:`~skfem_npfem.scenes.cone`) build their soil on a graded lattice, turn
+(:mod:`~skfem_npfem.scenes.cone`) build their soil on a graded lattice (its
+growth is the strip footing's too), turn
 the ``interface`` choice into an adhesion, warn about what makes a run's
 loads doubtful, and the cone reads its steady factor off the curve.
 """
@@ -18,6 +19,8 @@ __all__ = [
     "Steady",
     "axis_count",
     "graded_axis",
+    "grow_axis",
+    "grown_count",
     "interface_adhesion",
     "locking_warnings",
     "penetration_warnings",
@@ -35,7 +38,20 @@ def graded_axis(fine: float, h: float, length: float, ratio: float) -> np.ndarra
     """
     n_fine = max(1, math.ceil(min(fine, length) / h - 1e-9))
     xs = list(np.linspace(0.0, min(n_fine * h, length), n_fine + 1))
-    step = xs[-1] - xs[-2]
+    return grow_axis(xs, xs[-1] - xs[-2], length, ratio)
+
+
+def grow_axis(xs: list[float], step: float, length: float, ratio: float) -> np.ndarray:
+    """``xs`` continued to ``length`` by gaps growing from ``step`` by ``ratio``.
+
+    A last gap under 0.3 of the one before is merged into it.
+
+    Examples
+    --------
+    >>> grow_axis([0.0, 1.0], 1.0, 4.5, 2.0).tolist()
+    [0.0, 1.0, 3.0, 4.5]
+    """
+    xs = list(xs)
     while xs[-1] < length - 1e-12:
         step *= ratio
         xs.append(min(xs[-1] + step, length))
@@ -44,17 +60,17 @@ def graded_axis(fine: float, h: float, length: float, ratio: float) -> np.ndarra
     return np.array(xs)
 
 
+def grown_count(rest: float, h: float, ratio: float) -> int:
+    """Gaps :func:`grow_axis` adds over ``rest`` from a gap ``h`` (no merge)."""
+    if ratio == 1.0:
+        return math.ceil(rest / h)
+    return math.ceil(math.log1p(rest * (ratio - 1) / (h * ratio)) / math.log(ratio))
+
+
 def axis_count(fine: float, h: float, length: float, ratio: float) -> float:
     """Number of :func:`graded_axis` coordinates, estimated without building them."""
     n_fine = max(1, math.ceil(min(fine, length) / h - 1e-9))
-    rest = max(length - n_fine * h, 0.0)
-    if ratio == 1.0:
-        return n_fine + 1 + math.ceil(rest / h)
-    return (
-        n_fine
-        + 1
-        + math.ceil(math.log1p(rest * (ratio - 1) / (h * ratio)) / math.log(ratio))
-    )
+    return n_fine + 1 + grown_count(max(length - n_fine * h, 0.0), h, ratio)
 
 
 def interface_adhesion(values: dict[str, Any]) -> float:
