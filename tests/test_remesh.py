@@ -558,3 +558,61 @@ def test_near_lattice_3d_positions_that_break_qhull_triangulated_mode():
     assert lat.shape == x.shape and np.abs(x - lat).max() < 3.2e-5
     ref = alpha_shape(lat, h).volume
     assert abs(tri.volume / ref - 1) < 1e-3
+
+
+def _facet_counts(simplices: np.ndarray) -> Counter:
+    d = simplices.shape[1] - 1
+    return Counter(
+        tuple(sorted(np.delete(s, j))) for s in simplices for j in range(d + 1)
+    )
+
+
+def test_near_cubic_lattice_keeps_buried_slivers_conforming() -> None:
+    # A cubic lattice moved by 1e-4 h (a body one small step after release):
+    # its cubes split along different face diagonals with slivers (quality
+    # ~1e-4) between them.  Dropped (the default), the kept tetrahedra do not
+    # match across those faces: facets used by one kept tetrahedron that are
+    # not on the boundary.  Kept (keep_buried_slivers), every facet is shared
+    # by two tetrahedra except the boundary ones, the boundary is unchanged
+    # and the volume is the cube's to the size of the displacements.
+    n = 6
+    h = 1.0 / n
+    x0 = lattice(n, 3)
+    x = x0 + 1e-4 * h * np.random.default_rng(1).uniform(-1.0, 1.0, x0.shape)
+    dropped = alpha_shape(x, h)
+    kept = alpha_shape(x, h, keep_buried_slivers=True)
+    for tri in (dropped, kept):
+        check_invariants(tri)
+        np.testing.assert_array_equal(tri.boundary, on_box_surface(x, 0, 1, 2e-4 * h))
+        assert boundary_measure(tri) == pytest.approx(6.0, abs=1e-4)
+    bnd = {tuple(sorted(f)) for f in kept.boundary_facets}
+    once = {f for f, c in _facet_counts(kept.simplices).items() if c == 1}
+    assert once == bnd
+    assert max(_facet_counts(kept.simplices).values()) == 2
+    once_dropped = {f for f, c in _facet_counts(dropped.simplices).items() if c == 1}
+    assert len(once_dropped - {tuple(sorted(f)) for f in dropped.boundary_facets}) > 0
+    assert kept.simplices.shape[0] > dropped.simplices.shape[0]
+    assert kept.volume == pytest.approx(1.0, abs=6 * 1e-4 * h)
+    # a regular lattice has no slivers: both rules give the same mesh
+    np.testing.assert_array_equal(
+        alpha_shape(x0, h).simplices,
+        alpha_shape(x0, h, keep_buried_slivers=True).simplices,
+    )
+
+
+def test_keep_buried_slivers_drops_surface_slivers() -> None:
+    # The top face of a cubic lattice moved up and down by 1e-4 h: flat
+    # slivers form on it, open to the outside.  min_quality=0 meshes them
+    # (16 more tetrahedra); keep_buried_slivers leaves them out, as the
+    # default does, because they are not buried.
+    n = 4
+    h = 1.0 / n
+    x = lattice(n, 3)
+    top = np.flatnonzero(np.isclose(x[:, 2], 1.0))
+    x[top, 2] += 1e-4 * h * np.random.default_rng(0).uniform(-1.0, 1.0, top.size)
+    default = alpha_shape(x, h)
+    kept = alpha_shape(x, h, keep_buried_slivers=True)
+    every = alpha_shape(x, h, min_quality=0.0)
+    check_invariants(kept)
+    np.testing.assert_array_equal(kept.simplices, default.simplices)
+    assert every.simplices.shape[0] > kept.simplices.shape[0]

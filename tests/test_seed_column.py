@@ -130,7 +130,7 @@ def test_3d_volume_budget_of_a_short_run(tmp_path, monkeypatch):
 def test_3d_volume_record_is_consistent():
     # docs/seed_column/volume_3d.json: the mesh at rest over sum(m)/rho is the
     # run's volume change (the same record, rounded to 4 digits), and the
-    # r0/12 case ran with the scene's 3D default.
+    # r0/12 cases ran with the scene's 3D default and the one before.
     from skfem_npfem.scenes.collapse_runs import CYLINDER_FIDELITY
     from skfem_npfem.scenes.cylinder import GEOMETRY_ALPHA
 
@@ -141,9 +141,14 @@ def test_3d_volume_record_is_consistent():
         assert mesh == pytest.approx(1.0 + case["volume_change"], abs=1e-4)
         assert case["at_rest"]
     beta, mode, kappa = CYLINDER_FIDELITY["quarter-cylinder"]
-    assert cases["r12-default"]["settings"] == {
+    default = {
         "alpha": GEOMETRY_ALPHA["quarter-cylinder"],
         "stabilisation": beta,
         "stabilisation_mode": mode,
         "volume_correction": kappa,
+        "buried_slivers": "keep",
     }
+    assert cases["r12-slivers-beta-300"]["settings"] == default
+    # the default before: factor 30, buried slivers dropped
+    before = default | {"stabilisation": 30.0, "buried_slivers": "drop"}
+    assert cases["r12-default"]["settings"] == before

@@ -27,8 +27,10 @@ budget at rest (docs/seed_column.md, "Where the
 
 Usage::
 
-    python demos/studies/seed_3d_volume.py --cases r8-default,r8-alpha-2.0
+    python demos/studies/seed_3d_volume.py --cases r8-default-before,r8-alpha-2.0
     python demos/studies/seed_3d_volume.py            # every case (about 1 h)
+    python demos/studies/seed_3d_volume.py --cases r12-slivers-beta-300 \\
+        --picture r12-slivers-beta-300   # the 3D default, its sigma_v picture
 """
 
 from __future__ import annotations
@@ -53,11 +55,14 @@ ALPHAS = (1.3, 1.6, 2.0, 3.0)
 BASE = {"geometry": "quarter-cylinder", "accuracy": "fast", "dt": 4e-3, "threads": 1}
 #: The measured default before: alpha 1.3, beta 30, mode mean, kappa 0.
 BEFORE = {"alpha": 1.3, "stabilisation_mode": "mean", "volume_correction": 0.0}
+#: What every case before the sliver cases ran with (the 3D defaults of that
+#: time: beta 30, buried slivers dropped from the mesh).
+THEN = {"stabilisation": 30.0, "buried_slivers": "drop"}
 VERT = "vertical"
 
 
 def _r8(**o: Any) -> dict[str, Any]:
-    return {**BASE, "spacing": R0 / 8, **BEFORE, **o}
+    return {**BASE, "spacing": R0 / 8, **BEFORE, **THEN, **o}
 
 
 #: name -> scene overrides.
@@ -82,9 +87,25 @@ CASES: dict[str, dict[str, Any]] = {
     "r8-sigma-v-alpha-2.0-kappa-0.15": _r8(
         alpha=2.0, stabilisation_mode="sigma_v", volume_correction=0.15
     ),
-    # The scene's 3D default (alpha 2.0, vertical, beta 30, kappa 0.15).
-    "r12-default": {**BASE, "spacing": R0 / 12, "output_every": 1},
-}
+    # The scene's 3D default then (alpha 2.0, vertical, beta 30, kappa 0.15).
+    "r12-default": {**BASE, "spacing": R0 / 12, "output_every": 1, **THEN},
+    # The default with a larger factor (the axisymmetric default's beta).
+    "r8-beta-100": _r8(
+        alpha=2.0, stabilisation_mode=VERT, volume_correction=0.15,
+        stabilisation=100.0, threads=2,
+    ),
+    "r12-beta-100": {**BASE, "spacing": R0 / 12, "output_every": 1, **THEN,
+                     "stabilisation": 100.0, "threads": 2},
+    # Buried slivers meshed (the conforming 3D mesh), beta 30, 100 and 300
+    # (r12-slivers-beta-300: today's 3D default).
+    "r8-slivers": {**BASE, "spacing": R0 / 8, "output_every": 1,
+                   "stabilisation": 30.0},
+    "r8-slivers-beta-100": {**BASE, "spacing": R0 / 8, "output_every": 1,
+                            "stabilisation": 100.0},
+    "r12-slivers-beta-100": {**BASE, "spacing": R0 / 12, "output_every": 1,
+                             "stabilisation": 100.0},
+    "r12-slivers-beta-300": {**BASE, "spacing": R0 / 12, "output_every": 1},
+}  # fmt: skip
 
 
 def _cell_volumes(x: np.ndarray, simplices: np.ndarray) -> np.ndarray:
@@ -151,13 +172,14 @@ def run_case(name: str, work: Path) -> dict[str, Any]:
 
 
 def settings(params: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
-    """alpha, beta, mode and kappa of a case (the 3D defaults where not given)."""
+    """alpha, beta, mode, kappa and the sliver rule of a case (3D defaults)."""
     beta, mode, kappa = CYLINDER_FIDELITY["quarter-cylinder"]
     out = {
         "alpha": params["alpha"],
         "stabilisation": beta,
         "stabilisation_mode": mode,
         "volume_correction": kappa,
+        "buried_slivers": "keep",
     }
     out.update({k: v for k, v in overrides.items() if k in out})
     return out
@@ -202,6 +224,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--cases", default=",".join(CASES), help="comma-separated")
     ap.add_argument("--work", type=Path, default=WORK / "seed_3d_volume")
     ap.add_argument("--out", type=Path, default=OUT)
+    ap.add_argument(
+        "--picture",
+        default="",
+        help="a finished case whose vertical stress at t_bar = 0, 1, 2, 3 goes "
+        "to <out>/sigma_v_3d_<case>.png",
+    )
     args = ap.parse_args(argv)
     names = [c for c in args.cases.split(",") if c]
     bad = [c for c in names if c not in CASES]
@@ -224,9 +252,20 @@ def main(argv: list[str] | None = None) -> int:
     path = args.out / "volume_3d.json"
     # Cases run before, whose work folders are gone, stay as they were.
     kept = json.loads(path.read_text())["cases"] if path.exists() else {}
+    for n, rec in kept.items():  # records older than the sliver rule's setting
+        if n in CASES:
+            rule = CASES[n].get("buried_slivers", "keep")
+            rec["settings"].setdefault("buried_slivers", rule)
     records = {n: records.get(n, kept.get(n)) for n in CASES if n in {*records, *kept}}
     path.write_text(json.dumps({"cases": records}, indent=1, default=float) + "\n")
     print("wrote", path)
+    if args.picture:
+        from seed_defaults import snapshot_row
+
+        folder = args.work / args.picture
+        file = args.out / f"sigma_v_3d_{args.picture}.png"
+        tmp = args.work / "plots" / args.picture
+        print("wrote", snapshot_row(folder, "stress_zz", (0, 1, 2, 3), file, tmp))
     return 0
 
 

@@ -53,6 +53,7 @@ from .simplices import (
     _FACES,
     _boundary_facets,
     _group_rows,
+    _open_slivers,
     _quality,
     _shared_face_pairs,
     _simplex_geometry,
@@ -62,6 +63,8 @@ __all__ = ["Triangulation", "alpha_shape", "check_triangulation", "p1_mesh"]
 
 #: Simplices with volume below ``VOLUME_TOL * h**d`` are treated as degenerate.
 VOLUME_TOL = 1e-12
+#: Default ``min_quality`` of :func:`alpha_shape`: simplices below it are slivers.
+SLIVER_QUALITY = 1e-3
 
 
 def p1_mesh(points: np.ndarray, t: np.ndarray) -> MeshTri | MeshTet:
@@ -195,10 +198,11 @@ def alpha_shape(
     h: float,
     alpha: float = 1.3,
     *,
-    min_quality: float = 1e-3,
+    min_quality: float = SLIVER_QUALITY,
     jitter: float = 1e-6,
     seed: int = 0,
     h_local: ArrayLike | None = None,
+    keep_buried_slivers: bool = False,
 ) -> Triangulation:
     """Triangulate particles and keep the simplices that pass the alpha test.
 
@@ -233,6 +237,17 @@ def alpha_shape(
         then kept if its circumradius is below ``alpha`` times the largest
         spacing of its vertices (``h`` still scales the tolerances and the
         jitter: pass the finest spacing).  None: ``h`` everywhere.
+    keep_buried_slivers : bool, default False
+        Mesh the slivers buried in the body instead of dropping them, and
+        count flat simplices (volume below the tolerance) whose facets pass
+        the alpha test as part of the body.  A nearly cubic 3D lattice (the
+        first steps of a body released from rest) triangulates into cubes
+        split along different face diagonals with flat slivers between them:
+        dropped, they leave the kept tetrahedra non-conforming across those
+        faces (and flat ones open internal surfaces); kept, the mesh is
+        closed.  A sliver contributes only its facet area vectors
+        ``|e| grad N`` to the smoothed strain, which stay bounded as its volume
+        vanishes.  Simplices below the volume tolerance are never meshed.
 
     Returns
     -------
@@ -304,8 +319,17 @@ def alpha_shape(
             )
         in_alpha = radius < alpha * hl[candidates].max(axis=1)
     good = quality >= min_quality
+    if keep_buried_slivers:
+        # Flat simplices whose facets pass the alpha test belong to the body
+        # (unmeshed): they close it where a sliver collapsed to a plane.
+        flat = ~np.isfinite(radius) & _small_facets(x, candidates, alpha, h, h_local)
+        good = good & ~flat
+        in_alpha = in_alpha | flat
     simplices_k = candidates[in_alpha]
     kept_k = good[in_alpha]
+    if keep_buried_slivers:
+        meshable = np.isfinite(radius[in_alpha])
+        kept_k = kept_k | (meshable & ~kept_k & ~_open_slivers(simplices_k, kept_k))
     boundary_facets = _boundary_facets(simplices_k, kept_k)
 
     simplices = simplices_k[kept_k]
@@ -335,6 +359,42 @@ def alpha_shape(
 
 # --------------------------------------------------------------------------- #
 # helpers
+def _small_facets(
+    x: NDArray[np.float64],
+    simplices: NDArray[np.intp],
+    alpha: float,
+    h: float,
+    h_local: ArrayLike | None,
+) -> NDArray[np.bool_]:
+    """Simplices whose every facet has a circumradius below ``alpha h``.
+
+    With ``h_local``: below ``alpha`` times the largest spacing of the
+    simplex's vertices (the alpha test of :func:`alpha_shape`).
+    """
+    n, d1 = simplices.shape
+    d = d1 - 1
+    if n == 0:
+        return np.zeros(0, dtype=bool)
+    faces = simplices[:, _FACES[d]]  # (n, d+1, d)
+    p = x[faces]  # (n, d+1, d, dim)
+    if d == 2:  # facets are edges: half their length
+        r = 0.5 * np.linalg.norm(p[:, :, 1] - p[:, :, 0], axis=-1)
+    else:  # triangles: R = abc / (4 area)
+        a = p[:, :, 1] - p[:, :, 0]
+        b = p[:, :, 2] - p[:, :, 0]
+        c = p[:, :, 2] - p[:, :, 1]
+        area2 = np.linalg.norm(np.cross(a, b), axis=-1)  # twice the area
+        num = (
+            np.linalg.norm(a, axis=-1)
+            * np.linalg.norm(b, axis=-1)
+            * np.linalg.norm(c, axis=-1)
+        )
+        r = np.full(area2.shape, np.inf)
+        np.divide(num, 2.0 * area2, out=r, where=area2 > 0.0)
+    if h_local is None:
+        return r.max(axis=1) < alpha * h
+    hl = np.asarray(h_local, dtype=float).reshape(-1)
+    return r.max(axis=1) < alpha * hl[simplices].max(axis=1)
 
 
 def _regular_triangulation(

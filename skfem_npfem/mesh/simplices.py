@@ -143,6 +143,48 @@ def _shared_face_pairs(
     return owner[order[pair]], owner[order[pair + 1]]
 
 
+def _open_slivers(
+    simplices: NDArray[np.intp], kept: NDArray[np.bool_]
+) -> NDArray[np.bool_]:
+    """Slivers (simplices not ``kept``) open to the outside of the complex.
+
+    Slivers connected through shared facets form one (zero-volume) region; it
+    is open if any of its slivers has a facet that no other simplex of the
+    complex has.  The other slivers are buried in the body.
+    """
+    ne, d1 = simplices.shape
+    d = d1 - 1
+    if ne == 0:
+        return np.zeros(0, dtype=bool)
+    faces = simplices[:, _FACES[d]].reshape(-1, d)
+    owner = np.repeat(np.arange(ne), d1)
+    inverse, count = _group_rows(faces)
+    return _open_region(inverse, owner, count[inverse] == 1, ~kept)
+
+
+def _open_region(
+    inverse: NDArray[np.intp],
+    owner: NDArray[np.intp],
+    exposed_face: NDArray[np.bool_],
+    sliver: NDArray[np.bool_],
+) -> NDArray[np.bool_]:
+    """The slivers whose region (slivers sharing facets) has an exposed facet."""
+    ne = sliver.size
+    exposed_sliver = np.zeros(ne, dtype=bool)
+    exposed_sliver[owner[exposed_face]] = True
+    exposed_sliver &= sliver
+    if sliver.any():
+        a, b = _shared_face_pairs(inverse, owner)
+        both = sliver[a] & sliver[b]
+        graph = sp.coo_matrix(
+            (np.ones(int(both.sum())), (a[both], b[both])), shape=(ne, ne)
+        )
+        _, label = connected_components(graph, directed=False)
+        open_region = np.bincount(label, weights=exposed_sliver) > 0
+        exposed_sliver = sliver & open_region[label]
+    return exposed_sliver
+
+
 def _boundary_facets(
     simplices: NDArray[np.intp], kept: NDArray[np.bool_]
 ) -> NDArray[np.intp]:
@@ -166,21 +208,7 @@ def _boundary_facets(
     owner_kept = kept[owner]
     n_kept = np.bincount(inverse, weights=owner_kept, minlength=ng)
     exposed_face = count[inverse] == 1
-    exposed_sliver = np.zeros(ne, dtype=bool)
-    exposed_sliver[owner[exposed_face]] = True
-    sliver = ~kept
-    exposed_sliver &= sliver
-    if sliver.any():
-        # Slivers connected through shared facets form one (zero-volume) region;
-        # it is open to the outside if any of its slivers is.
-        a, b = _shared_face_pairs(inverse, owner)
-        both = sliver[a] & sliver[b]
-        graph = sp.coo_matrix(
-            (np.ones(int(both.sum())), (a[both], b[both])), shape=(ne, ne)
-        )
-        _, label = connected_components(graph, directed=False)
-        open_region = np.bincount(label, weights=exposed_sliver) > 0
-        exposed_sliver = sliver & open_region[label]
+    exposed_sliver = _open_region(inverse, owner, exposed_face, ~kept)
     next_to_exposed_sliver = (
         np.bincount(inverse, weights=exposed_sliver[owner], minlength=ng) > 0
     )

@@ -204,6 +204,11 @@ class AlphaShapeMesher:
         the finest, :func:`~skfem_npfem.mesh.delaunay.alpha_shape`'s
         ``h_local``).  Particles keep their index, so the spacing travels with
         them.  None (default): ``h`` everywhere.
+    keep_buried_slivers : bool or None
+        Passed to :func:`~skfem_npfem.mesh.delaunay.alpha_shape`: mesh the
+        slivers buried in the body.  None (default): in 3D only, where a
+        nearly cubic lattice leaves the kept tetrahedra non-conforming
+        otherwise; a 2D lattice has no slivers.
 
     Attributes
     ----------
@@ -239,6 +244,7 @@ class AlphaShapeMesher:
         jitter: float = 1e-6,
         seed: int = 0,
         spacing: np.ndarray | None = None,
+        keep_buried_slivers: bool | None = None,
     ) -> None:
         for name, val in (("h", h), ("alpha", alpha), ("wall_distance", wall_distance)):
             if not (isinstance(val, int | float) and math.isfinite(val) and val > 0):
@@ -250,6 +256,7 @@ class AlphaShapeMesher:
         self.min_quality = min_quality
         self.jitter = jitter
         self.seed = seed
+        self.keep_buried_slivers = keep_buried_slivers
         self.spacing = None
         if spacing is not None:
             hl = np.asarray(spacing, dtype=float).reshape(-1)
@@ -276,6 +283,11 @@ class AlphaShapeMesher:
             min_quality=self.min_quality,
             jitter=self.jitter,
             seed=self.seed,
+            keep_buried_slivers=(
+                x.shape[1] == 3
+                if self.keep_buried_slivers is None
+                else bool(self.keep_buried_slivers)
+            ),
             **extra,
         )
 

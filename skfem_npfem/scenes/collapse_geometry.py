@@ -100,6 +100,18 @@ GEOMETRY_PARAMS = [
         **LENGTH,
     ),
     Param(
+        "buried_slivers",
+        "keep",
+        "-",
+        "3D (quarter-cylinder, box): keep = mesh the flat slivers buried in the "
+        "body, so that the tetrahedra stay conforming where a nearly cubic "
+        "lattice splits neighbouring cubes along different face diagonals; "
+        "drop = leave them out, as in 2D (the library's 3D rule before; "
+        "docs/theory.md)",
+        str,
+        ("keep", "drop"),
+    ),
+    Param(
         "strength_floor",
         1e-6,
         "-",
@@ -188,13 +200,15 @@ def used_parameters(
     }  # fmt: skip
     if geometry == "box":
         return common | {
-            "aspect", "half_width", "symmetric", "depth", "max_displacement"
+            "aspect", "half_width", "symmetric", "depth", "max_displacement",
+            "buried_slivers",
         }  # fmt: skip
     used = common | {"radius", "height"}
     if not {"radius", "height"} <= given:
         used.add("aspect")
     if geometry == "quarter-cylinder":
         used.add("max_displacement")  # (axisymmetric: h from ring volumes)
+        used.add("buried_slivers")
     return used
 
 
@@ -246,6 +260,8 @@ def _unused_reason(geometry: str, name: str) -> str:
         return "not with both radius and height (they fix the aspect ratio h0/r0)"
     if name == "max_displacement":
         return "not in axisymmetry (its spacing would come from ring volumes)"
+    if name == "buried_slivers":
+        return "3D geometries only (quarter-cylinder, box): 2D meshes have no slivers"
     if name == "method":
         return f"npfem: the other methods are not available for geometry={geometry}"
     if geometry == "plane-strain":

@@ -74,7 +74,7 @@ MASS_BASIS = {
 #: paper's bare method is ``--set stabilisation=0 --set volume_correction=0``.
 CYLINDER_FIDELITY = {
     "axisymmetric": (100.0, "full", COLLAPSE_VOLUME_CORRECTION),
-    "quarter-cylinder": (30.0, "vertical", 0.15),
+    "quarter-cylinder": (300.0, "vertical", 0.15),
 }
 
 
@@ -91,6 +91,8 @@ def column_setup(values: dict[str, Any]) -> ColumnSetup:
     """
     setup = _column_setup(values)
     geo = values["geometry"]
+    if geo != "axisymmetric":
+        setup.mesher.keep_buried_slivers = values["buried_slivers"] == "keep"
     if geo in CYLINDER_FIDELITY:
         beta, mode, kappa = CYLINDER_FIDELITY[geo]
         strain = values["rho"] * values["gravity"] * values["height"] / values["E"]
@@ -258,7 +260,7 @@ GEOMETRY_NOTES = {
     "spacing": "cylindrical: default r0/18; box: L0/22",
     "material": "3D: drucker-prager only; cylindrical and box default drucker-prager",
     "dt": "cylindrical: default 2 ms",
-    "stabilisation": "axisymmetric: default 100; quarter-cylinder: default 30; "
+    "stabilisation": "axisymmetric: default 100; quarter-cylinder: default 300; "
     "the paper's bare method: 0",
     "stabilisation_mode": "quarter-cylinder: default vertical",
     "volume_correction": "axisymmetric: default 0.05, quarter-cylinder: 0.15, "

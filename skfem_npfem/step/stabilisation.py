@@ -109,6 +109,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import ParameterError
+from ..mesh.delaunay import SLIVER_QUALITY
 from .program import Block, Program, Term
 
 __all__ = [
@@ -301,24 +302,55 @@ def element_residual(prog: Program) -> tuple[sp.csr_matrix, np.ndarray, np.ndarr
     h2 = (math.factorial(d) * area) ** (2.0 / d)
     w_e = data.stabilisation * h2 * vol / g_e
     w = np.repeat(w_e, d)
+    rows = np.ones(d * t.shape[1], dtype=bool)
+    if d == 3:
+        # Slivers meshed to close the body (alpha_shape's keep_buried_slivers)
+        # carry no volume, and their divergence is a normal derivative taken
+        # over four nearly coplanar points: their rows are left out.
+        rows = np.repeat(element_quality(grads, vol) >= SLIVER_QUALITY, d)
     mode = getattr(data, "stabilisation_mode", "full")
     if mode in ("vertical", "sigma_v"):
-        keep = np.flatnonzero(np.arange(d * t.shape[1]) % d == d - 1)
+        rows &= np.arange(d * t.shape[1]) % d == d - 1
+    if not rows.all():
+        keep = np.flatnonzero(rows)
         B, c, w = B.tocsr()[keep], c[keep], w[keep]
-        if mode == "sigma_v":  # the other columns of the row are lagged
-            cols = np.zeros(prog.ns)
-            cols[prog.comp.index(d - 1)] = 1.0
-            B = (B @ sp.diags(np.tile(cols, prog.n_points))).tocsr()
-            B.eliminate_zeros()
-        return B, c, w
-    if mode == "mean":
+    if mode == "sigma_v":  # the other columns of the row are lagged
+        cols = np.zeros(prog.ns)
+        cols[prog.comp.index(d - 1)] = 1.0
+        B = (B @ sp.diags(np.tile(cols, prog.n_points))).tocsr()
+        B.eliminate_zeros()
+    elif mode == "mean":
         # The residual of the isotropic increment p I: the sum of the normal
         # stresses' columns (div(p I) = grad p; the hoop terms cancel).
         base = prog.ns * np.arange(prog.n_points)
         B = B.tocsc()
         B = sum(B[:, base + k] for k in _normal_slots(prog.comp)).tocsr()
-        return B, c, w
     return B, c, w
+
+
+def element_quality(grads: np.ndarray, volumes: np.ndarray) -> np.ndarray:
+    """Tetrahedra's volume over that of the regular one with their circumradius.
+
+    The measure of :func:`~skfem_npfem.mesh.delaunay.alpha_shape`'s
+    ``min_quality`` (1 for a regular tetrahedron, 0 for a flat sliver),
+    from the P1 gradients: the edges from vertex 0 are the columns of the
+    inverse of the gradients of vertices 1-3, and the circumcentre relative
+    to vertex 0 is ``G^T |e|^2 / 2``.
+
+    Examples
+    --------
+    >>> from skfem import MeshTet
+    >>> from skfem_npfem.mesh.smoothing import p1_gradients
+    >>> g, v = p1_gradients(MeshTet())  # a cube in five: four corners, one regular
+    >>> element_quality(g, v).round(6).tolist()
+    [0.5, 0.5, 0.5, 1.0, 0.5]
+    """
+    G = np.asarray(grads, float)[:, 1:, :]  # (ne, 3, 3): rows grad N_1..N_3
+    edges = np.linalg.inv(G)  # columns: x_a - x_0
+    sq = np.einsum("ija,ija->ia", edges, edges)
+    centre = 0.5 * np.einsum("iaj,ia->ij", G, sq)
+    radius = np.linalg.norm(centre, axis=1)
+    return np.asarray(volumes, float) / (8.0 * math.sqrt(3.0) / 27.0 * radius**3)
 
 
 def residual_penalty(prog: Program) -> Term:
