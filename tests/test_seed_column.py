@@ -148,7 +148,7 @@ def test_3d_volume_record_is_consistent():
         "volume_correction": kappa,
         "buried_slivers": "keep",
     }
-    assert cases["r12-slivers-beta-300"]["settings"] == default
+    assert cases["r12-slivers-beta-1000"]["settings"] == default
     # the default before: factor 30, buried slivers dropped
     before = default | {"stabilisation": 30.0, "buried_slivers": "drop"}
     assert cases["r12-default"]["settings"] == before

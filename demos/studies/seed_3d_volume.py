@@ -29,8 +29,8 @@ Usage::
 
     python demos/studies/seed_3d_volume.py --cases r8-default-before,r8-alpha-2.0
     python demos/studies/seed_3d_volume.py            # every case (about 1 h)
-    python demos/studies/seed_3d_volume.py --cases r12-slivers-beta-300 \\
-        --picture r12-slivers-beta-300   # the 3D default, its sigma_v picture
+    python demos/studies/seed_3d_volume.py --cases r12-slivers-beta-1000 \\
+        --picture r12-slivers-beta-1000   # the 3D default, its sigma_v picture
 """
 
 from __future__ import annotations
@@ -96,15 +96,17 @@ CASES: dict[str, dict[str, Any]] = {
     ),
     "r12-beta-100": {**BASE, "spacing": R0 / 12, "output_every": 1, **THEN,
                      "stabilisation": 100.0, "threads": 2},
-    # Buried slivers meshed (the conforming 3D mesh), beta 30, 100 and 300
-    # (r12-slivers-beta-300: today's 3D default).
+    # Buried slivers meshed (the conforming 3D mesh), beta 30 to 1000
+    # (r12-slivers-beta-1000: today's 3D default).
     "r8-slivers": {**BASE, "spacing": R0 / 8, "output_every": 1,
                    "stabilisation": 30.0},
     "r8-slivers-beta-100": {**BASE, "spacing": R0 / 8, "output_every": 1,
                             "stabilisation": 100.0},
     "r12-slivers-beta-100": {**BASE, "spacing": R0 / 12, "output_every": 1,
                              "stabilisation": 100.0},
-    "r12-slivers-beta-300": {**BASE, "spacing": R0 / 12, "output_every": 1},
+    "r12-slivers-beta-300": {**BASE, "spacing": R0 / 12, "output_every": 1,
+                             "stabilisation": 300.0},
+    "r12-slivers-beta-1000": {**BASE, "spacing": R0 / 12, "output_every": 1},
 }  # fmt: skip
 
 

@@ -74,7 +74,7 @@ MASS_BASIS = {
 #: paper's bare method is ``--set stabilisation=0 --set volume_correction=0``.
 CYLINDER_FIDELITY = {
     "axisymmetric": (100.0, "full", COLLAPSE_VOLUME_CORRECTION),
-    "quarter-cylinder": (300.0, "vertical", 0.15),
+    "quarter-cylinder": (1000.0, "vertical", 0.15),
 }
 
 
@@ -260,7 +260,7 @@ GEOMETRY_NOTES = {
     "spacing": "cylindrical: default r0/18; box: L0/22",
     "material": "3D: drucker-prager only; cylindrical and box default drucker-prager",
     "dt": "cylindrical: default 2 ms",
-    "stabilisation": "axisymmetric: default 100; quarter-cylinder: default 300; "
+    "stabilisation": "axisymmetric: default 100; quarter-cylinder: default 1000; "
     "the paper's bare method: 0",
     "stabilisation_mode": "quarter-cylinder: default vertical",
     "volume_correction": "axisymmetric: default 0.05, quarter-cylinder: 0.15, "
