@@ -52,6 +52,7 @@ from ..errors import NpfemError, ParameterError
 from .simplices import (
     _FACES,
     _boundary_facets,
+    _facet_groups,
     _group_rows,
     _open_slivers,
     _quality,
@@ -327,10 +328,11 @@ def alpha_shape(
         in_alpha = in_alpha | flat
     simplices_k = candidates[in_alpha]
     kept_k = good[in_alpha]
-    if keep_buried_slivers:
-        meshable = np.isfinite(radius[in_alpha])
-        kept_k = kept_k | (meshable & ~kept_k & ~_open_slivers(simplices_k, kept_k))
-    boundary_facets = _boundary_facets(simplices_k, kept_k)
+    groups = _facet_groups(simplices_k) if simplices_k.shape[0] else None
+    if keep_buried_slivers and groups is not None:
+        buried = ~kept_k & ~_open_slivers(simplices_k, kept_k, groups)
+        kept_k = kept_k | (buried & np.isfinite(radius[in_alpha]))
+    boundary_facets = _boundary_facets(simplices_k, kept_k, groups)
 
     simplices = simplices_k[kept_k]
     active = np.zeros(n, dtype=bool)

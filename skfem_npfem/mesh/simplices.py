@@ -143,22 +143,30 @@ def _shared_face_pairs(
     return owner[order[pair]], owner[order[pair + 1]]
 
 
+def _facet_groups(
+    simplices: NDArray[np.intp],
+) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
+    """Facets of ``simplices`` with their owners, group ids and group sizes."""
+    ne, d1 = simplices.shape
+    faces = simplices[:, _FACES[d1 - 1]].reshape(-1, d1 - 1)
+    owner = np.repeat(np.arange(ne), d1)
+    inverse, count = _group_rows(faces)
+    return faces, owner, inverse, count
+
+
 def _open_slivers(
-    simplices: NDArray[np.intp], kept: NDArray[np.bool_]
+    simplices: NDArray[np.intp], kept: NDArray[np.bool_], groups: tuple | None = None
 ) -> NDArray[np.bool_]:
     """Slivers (simplices not ``kept``) open to the outside of the complex.
 
     Slivers connected through shared facets form one (zero-volume) region; it
     is open if any of its slivers has a facet that no other simplex of the
-    complex has.  The other slivers are buried in the body.
+    complex has.  The other slivers are buried in the body.  ``groups``:
+    :func:`_facet_groups` of ``simplices``, if already computed.
     """
-    ne, d1 = simplices.shape
-    d = d1 - 1
-    if ne == 0:
+    if simplices.shape[0] == 0:
         return np.zeros(0, dtype=bool)
-    faces = simplices[:, _FACES[d]].reshape(-1, d)
-    owner = np.repeat(np.arange(ne), d1)
-    inverse, count = _group_rows(faces)
+    _, owner, inverse, count = groups or _facet_groups(simplices)
     return _open_region(inverse, owner, count[inverse] == 1, ~kept)
 
 
@@ -186,7 +194,7 @@ def _open_region(
 
 
 def _boundary_facets(
-    simplices: NDArray[np.intp], kept: NDArray[np.bool_]
+    simplices: NDArray[np.intp], kept: NDArray[np.bool_], groups: tuple | None = None
 ) -> NDArray[np.intp]:
     """Outward-ordered boundary facets of the kept simplices.
 
@@ -196,14 +204,12 @@ def _boundary_facets(
     it, or if the other one is a sliver connected (through slivers sharing
     facets) to the boundary of the complex.  Slivers buried in the body therefore
     do not create an internal boundary, and the boundary stays closed.
+    ``groups``: :func:`_facet_groups` of ``simplices``, if already computed.
     """
     ne, d1 = simplices.shape
-    d = d1 - 1
     if ne == 0:
-        return np.empty((0, d), dtype=np.intp)
-    faces = simplices[:, _FACES[d]].reshape(-1, d)
-    owner = np.repeat(np.arange(ne), d1)
-    inverse, count = _group_rows(faces)
+        return np.empty((0, d1 - 1), dtype=np.intp)
+    faces, owner, inverse, count = groups or _facet_groups(simplices)
     ng = count.size
     owner_kept = kept[owner]
     n_kept = np.bincount(inverse, weights=owner_kept, minlength=ng)
