@@ -43,6 +43,7 @@ from .errors import (
     SolverError,
 )
 from .io import ResultWriter, read_pvd, read_step
+from .loads import surface_load
 from .materials import (
     DruckerPrager,
     LinearElastic,
@@ -111,6 +112,7 @@ __all__ += [
     "RigidPlane",
     "RigidWall",
     "floor",
+    "surface_load",
     "wall_x",
 ]
 #: One step.

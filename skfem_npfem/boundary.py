@@ -6,7 +6,8 @@ rigid walls that particles may touch and leave: the contact candidates of one
 step (:func:`wall_contacts` for particles, :func:`node_contacts` for any
 displacement nodes, handed to the cone program as :class:`Contacts`)
 and the projection of particles that ended behind a wall
-(:func:`project_to_walls`).
+(:func:`project_to_walls`).  A pressure on a flat surface enters as dead
+nodal loads instead (:func:`skfem_npfem.loads.surface_load`).
 """
 
 from __future__ import annotations

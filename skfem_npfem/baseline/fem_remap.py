@@ -248,6 +248,7 @@ class FemRemap:
             )
         if state.dim != model.dim:
             raise ParameterError("state", f"{state.dim}D", f"{model.dim}D positions")
+        model.refuse_loads("FEM-remap")
         nq = quadrature(model.dim, self.element)[1].size
         if state.gp_stress.shape[0] != nq * state.cells.shape[0]:
             raise ParameterError(

@@ -193,13 +193,14 @@ class SPFEM:
         Raises
         ------
         ParameterError
-            A static model, a model with rigid bodies, or a given
+            A static model, a model with rigid bodies or dead loads, or a given
             ``explicit_dt`` above :data:`MID_RUN_MARGIN` times the stable step
             of this step's mesh.
         """
         if model.mode != "dynamic":
             raise ParameterError("mode", model.mode, "dynamic: SPFEM is explicit")
         _refuse_bodies(model)
+        model.refuse_loads("SPFEM")
         if not (math.isfinite(dt) and dt > 0):
             raise ParameterError("dt", dt, "a finite time step > 0 (s)")
         t0 = perf_counter()

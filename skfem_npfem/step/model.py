@@ -96,6 +96,13 @@ class Model:
         masses ``rho V_i`` of those cells.  Needs cones with ``sigma_tt`` as a
         variable (Drucker-Prager, von Mises, AxisymmetricMohrCoulomb); particles
         on the axis should have ``u_r`` fixed.
+    loads : ndarray (N, dim) or None
+        Dead external forces on the particles (N), added to their weight in
+        every step while the particle is meshed: a surcharge on a surface,
+        say, as the tributary area of each surface particle times the
+        pressure (:func:`~skfem_npfem.loads.surface_load`).  Full-ring
+        forces (``2 pi r`` times the load per unit length) in axisymmetry.
+        N-PFEM only; None (default) applies none.
     """
 
     dim: int
@@ -115,6 +122,7 @@ class Model:
     axisymmetric: bool = False
     volume_correction: float = 0.0
     stabilisation_mode: str = "full"
+    loads: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.dim not in (2, 3):
@@ -178,6 +186,63 @@ class Model:
             raise ParameterError("axisymmetric", self.axisymmetric, "True or False")
         if self.axisymmetric:
             self._check_axisymmetric()
+        if self.loads is not None:
+            self._check_loads()
+
+    def _check_loads(self) -> None:
+        """Dead loads: a finite array with one column per dimension."""
+        try:
+            f = np.array(self.loads, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(
+                "loads", self.loads, "an array of shape (N, dim) of forces (N)"
+            ) from None
+        if f.ndim != 2 or f.shape[1] != self.dim:
+            raise ParameterError(
+                "loads",
+                f.shape,
+                f"an array of shape (N, {self.dim}), one row a particle",
+            )
+        if not np.all(np.isfinite(f)):
+            raise ParameterError("loads", "NaN or inf", "finite forces (N)")
+        self.loads = f
+
+    def refuse_loads(self, method: str) -> None:
+        """Raise :class:`ParameterError` if a method without dead loads got some."""
+        if self.loads is not None:
+            raise ParameterError(
+                "loads",
+                f"an array of shape {self.loads.shape}",
+                f"None with {method} (dead loads are applied by N-PFEM only)",
+            )
+
+    def external_force(
+        self, n: int, active: np.ndarray, mass: np.ndarray
+    ) -> np.ndarray:
+        """Weight of a step's nodes plus the dead loads of their particles, N.
+
+        ``n`` is the number of particles, ``active`` the indices of the
+        step's nodes among them and ``mass`` their masses.
+
+        Examples
+        --------
+        >>> from skfem_npfem.materials import LinearElastic
+        >>> m = Model(dim=2, materials=[LinearElastic(1e6, 0.3)], gravity=10.0,
+        ...           loads=np.array([[0.0, -5.0], [1.0, 0.0], [0.0, 0.0]]))
+        >>> m.external_force(3, np.array([0, 1]), np.array([2.0, 1.0]))
+        array([[  0., -25.],
+               [  1., -10.]])
+        """
+        force = mass[:, None] * self.gravity_vector[None, :]
+        if self.loads is None:
+            return force
+        if self.loads.shape[0] != n:
+            raise ParameterError(
+                "loads",
+                self.loads.shape,
+                f"one row per particle: shape ({n}, {self.dim})",
+            )
+        return force + self.loads[active]
 
     def _check_bodies(self) -> None:
         """Bodies of the model's dimension, with distinct names."""

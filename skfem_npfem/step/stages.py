@@ -153,7 +153,7 @@ def build_operators(
         materials=model.materials,
         material=p.material[active],
         sigma_n=p.stress[active],
-        force=mass[:, None] * model.gravity_vector[None, :],
+        force=model.external_force(p.x.shape[0], active, mass),
         fixed=p.fixed[active],
         du_prescribed=p.v_prescribed[active] * dt,
         contacts=contacts,
