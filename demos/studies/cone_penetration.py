@@ -44,19 +44,32 @@ from skfem_npfem.baseline.reporting import save_png
 
 D = 0.0357
 
+#: The set-up of the first cases: the soil's top on rollers (a closed
+#: container that the shaft's volume pressurises) and the tip 5 D deep.
+ROLLERS = {"surface": "rollers", "depth": 5 * D}
+
 #: Case name -> scene overrides (beyond the defaults).
 CASES: dict[str, dict] = {
-    "d8": {"spacing": D / 8},
-    "d12": {"spacing": D / 12},
-    "d16": {"spacing": D / 16},
-    "d20": {"spacing": D / 20},
-    "d12-dt": {"spacing": D / 12, "dt": 0.25 * (D / 12) / 0.02},
-    "d12-ir30": {"spacing": D / 12, "rigidity_index": 30.0},
-    "d12-ir300": {"spacing": D / 12, "rigidity_index": 300.0},
-    "d8-r15": {"spacing": D / 8, "domain_radius": 15.0},
-    "d8-r60": {"spacing": D / 8, "domain_radius": 60.0},
+    "d8": {"spacing": D / 8, **ROLLERS},
+    "d12": {"spacing": D / 12, **ROLLERS},
+    "d16": {"spacing": D / 16, **ROLLERS},
+    "d20": {"spacing": D / 20, **ROLLERS},
+    "d12-dt": {"spacing": D / 12, "dt": 0.25 * (D / 12) / 0.02, **ROLLERS},
+    "d12-ir30": {"spacing": D / 12, "rigidity_index": 30.0, **ROLLERS},
+    "d12-ir300": {"spacing": D / 12, "rigidity_index": 300.0, **ROLLERS},
+    "d8-r15": {"spacing": D / 8, "domain_radius": 15.0, **ROLLERS},
+    "d8-r60": {"spacing": D / 8, "domain_radius": 60.0, **ROLLERS},
+    # today's defaults: sigma_0 as a surcharge on a free top, the tip 10 D deep
+    "s8": {"spacing": D / 8},
+    "s12": {"spacing": D / 12},
+    "s16": {"spacing": D / 16},
+    "s12-depth15": {"spacing": D / 12, "depth": 15 * D},
+    "s12-ir30": {"spacing": D / 12, "rigidity_index": 30.0},
+    "s12-ir300": {"spacing": D / 12, "rigidity_index": 300.0},
 }
 RESOLUTION = ("d8", "d12", "d16", "d20")
+#: The same with today's defaults.
+RESOLUTION_NOW = ("s8", "s12", "s16")
 
 
 def lu2004_nc(rigidity_index: float) -> float:
@@ -67,9 +80,17 @@ def lu2004_nc(rigidity_index: float) -> float:
     return 3.4 + 1.6 * np.log(rigidity_index)
 
 
-def same_model(row: dict) -> bool:
-    """A case of the default model, refined in space or time only."""
-    return set(row["overrides"]) <= {"spacing", "dt"}
+def same_model(name: str) -> bool:
+    """A case of its set-up's model, refined in space or time only."""
+    return name in (*RESOLUTION, *RESOLUTION_NOW, "d12-dt")
+
+
+def finest(name: str, rows: dict[str, dict]) -> dict | None:
+    """The finest run of the set-up of case ``name`` (rollers or surcharge)."""
+    family = (
+        RESOLUTION if name in CASES and CASES[name].get("surface") else (RESOLUTION_NOW)
+    )
+    return next((rows[c] for c in reversed(family) if c in rows), None)
 
 
 def run_case(name: str) -> dict:
@@ -118,7 +139,6 @@ def markdown(rows: dict[str, dict]) -> str:
     whose N_c is under 0.8 times the steady value (a step where the soil round
     the cone gave way).
     """
-    finest = next((rows[c] for c in reversed(RESOLUTION) if c in rows), None)
     lines = [
         "| case | D/h | I_r | particles | steps | N_c | range (last D) "
         "| mean (last D) | per D from w = D | Teh & Houlsby | error | vs finest "
@@ -129,9 +149,9 @@ def markdown(rows: dict[str, dict]) -> str:
         if name not in rows:
             continue
         r = rows[name]
-        vs = "–"
-        if finest and same_model(r):
-            vs = f"{r['N_c'] / finest['N_c'] - 1:+.1%}"
+        vs, best = "–", finest(name, rows)
+        if best and same_model(name):
+            vs = f"{r['N_c'] / best['N_c'] - 1:+.1%}"
         lo, hi = r["N_c_range"]
         steps = " / ".join(f"{q:.2f}" for q in per_diameter(r["curve"]))
         lines.append(
@@ -154,28 +174,43 @@ def picture(rows: dict[str, dict], path: Path) -> None:
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
     for name, r in rows.items():
         c = list(zip(*r["curve"], strict=True)) if r["curve"] else ([], [])
-        a.plot(c[0], c[1], lw=1, label=f"{name} (N_c {r['N_c']:.2f})")
+        closed = bool(CASES.get(name, {}).get("surface"))
+        a.plot(
+            c[0],
+            c[1],
+            lw=0.7 if closed else 1.2,
+            ls=":" if closed else "-",
+            label=f"{name} (N_c {r['N_c']:.2f})",
+        )
     for ir in sorted({r["rigidity_index"] for r in rows.values()}):
         a.axhline(npfem.laws.teh_houlsby_nc(ir), ls="--", lw=0.8, color="grey")
         a.axhline(lu2004_nc(ir), ls=":", lw=0.8, color="grey")
     a.set_xlabel("w / D (push from the embedded start)")
     a.set_ylabel("N_c = (q_c - sigma_0) / s_u")
-    a.set_title("dashed: Teh & Houlsby (1991); dotted: Lu et al. (2004)", fontsize=9)
+    a.set_title(
+        "d*: rollers on top (dotted curves), s*: surcharge; grey dashed: Teh & "
+        "Houlsby (1991), grey dotted: Lu et al. (2004)",
+        fontsize=8,
+    )
     a.legend(fontsize=7)
-    finest = next((rows[c] for c in reversed(RESOLUTION) if c in rows), None)
     for name, r in rows.items():
-        if finest is None or r is finest:
+        best = finest(name, rows)
+        if best is None or r is best or not same_model(name):
             continue
-        if not same_model(r):
-            continue
-        err = abs(r["N_c"] / finest["N_c"] - 1)
-        b.loglog(r["wall_s"], max(err, 1e-3), "o")
+        err = abs(r["N_c"] / best["N_c"] - 1)
+        closed = bool(CASES[name].get("surface"))
+        b.loglog(
+            r["wall_s"],
+            max(err, 1e-3),
+            "s" if closed else "o",
+            mfc="none" if closed else None,
+        )
         b.annotate(name, (r["wall_s"], max(err, 1e-3)), fontsize=8)
     b.axhline(0.03, ls=":", color="grey")
     b.axvline(900, ls=":", color="grey")
     b.set_xlabel("wall time (s)")
     b.set_ylabel("|N_c / N_c(finest) - 1|")
-    b.set_title("speed against accuracy (I_r = 100)")
+    b.set_title("speed against accuracy (I_r = 100; squares: rollers on top)")
     fig.tight_layout()
     save_png(fig, path, dpi=110)
     plt.close(fig)

@@ -6,9 +6,11 @@ remeshing.  A rigid cone of diameter ``diameter`` (default the standard
 ("wished in place"), its tip ``depth`` below the soil's surface, and is
 pushed down at ``speed`` by ``penetration``.  The soil is a weightless
 Tresca material (``s_u``, shear modulus ``rigidity_index * s_u``) under an
-isotropic initial stress ``sigma_0``: the surface is held on rollers (as by
-the overburden of a deep test), the base is fixed, the far side on rollers,
-and the axis is a frictionless wall.  Particles start on the cone's face and
+isotropic initial stress ``sigma_0``: the surface carries ``sigma_0`` as a
+surcharge (the overburden of a deep test; ``surface=rollers`` holds it
+instead, which closes the soil in a container that the shaft's growing
+volume pressurises), the base is fixed, the far side on rollers, and the
+axis is a frictionless wall.  Particles start on the cone's face and
 shaft (an unsupported cavity would close plastically under ``sigma_0``) and
 on a graded lattice: ``spacing`` within ``1.5 D`` of the axis and over the
 tip's path (from ``2 D`` below its end to ``2 D`` above its start), growing
@@ -35,6 +37,7 @@ from ..bodies import RigidBody
 from ..boundary import wall_x
 from ..errors import ParameterError
 from ..laws import teh_houlsby_nc
+from ..loads import surface_load
 from ..mesh.axisymmetric import AxisymmetricMohrCoulomb
 from ..mesh.sources import AlphaShapeMesher
 from ..particles import Particles
@@ -64,6 +67,9 @@ __all__ = ["INTERFACES", "SCENE", "Steady", "cone_body", "steady_factor"]
 
 #: Cone-soil interfaces.
 INTERFACES = ("smooth", "rough", "adhesion")
+
+#: The soil's top surface.
+SURFACES = ("surcharge", "rollers")
 
 #: Apex angle of the standard cone, degrees.
 APEX = 60.0
@@ -103,6 +109,16 @@ PARAMS = [
         lo=0.0,
     ),
     Param(
+        "surface",
+        "surcharge",
+        "-",
+        "the soil's top: surcharge (sigma0 as a pressure on a free surface) or "
+        "rollers (held vertically: the soil is closed and the shaft's volume "
+        "raises its pressure as the cone goes down)",
+        str,
+        SURFACES,
+    ),
+    Param(
         "interface",
         "smooth",
         "-",
@@ -133,7 +149,8 @@ PARAMS = [
         None,
         "m",
         "depth of the cone's tip below the soil's surface at the start "
-        "(default 5 D; the cone starts embedded, wished in place)",
+        "(default 10 D, deep enough that the free surface under its surcharge "
+        "moves N_c by under 1 %; the cone starts embedded, wished in place)",
         float,
         **_POSITIVE,
     ),
@@ -235,7 +252,7 @@ def _sizes(values: dict[str, Any]) -> dict[str, float]:
     D = values["diameter"]
     h = values["spacing"] if values["spacing"] is not None else D / 12
     w = values["penetration"] if values["penetration"] is not None else 5 * D
-    depth = values["depth"] if values["depth"] is not None else 5 * D
+    depth = values["depth"] if values["depth"] is not None else 10 * D
     z_tip = values["below"] * D + w  # the tip's height at time 0
     return {
         "D": D,
@@ -367,7 +384,12 @@ def build(
     fixed = np.zeros_like(x, dtype=bool)
     fixed[np.isclose(x[:, 1], 0.0)] = True
     fixed[np.isclose(x[:, 0], g["radius"]), 0] = True
-    fixed[np.isclose(x[:, 1], g["top"]), 1] = True  # rollers hold sigma_0 on top
+    top = np.isclose(x[:, 1], g["top"])
+    if values["surface"] == "rollers":
+        fixed[top, 1] = True  # rollers hold sigma_0 on top
+        loads = None
+    else:  # sigma_0 on the top as a dead load: the soil is free to heave
+        loads = surface_load(x, top, s0, axisymmetric=True)
     stress = np.zeros((x.shape[0], 4))
     stress[:, :3] = -s0
     axis = wall_x(2, 0.0, facing=1)
@@ -383,6 +405,7 @@ def build(
         mode="static",
         walls=[axis],
         bodies=[cone],
+        loads=loads,
         solver=solver_from(values),
         **fidelity_from(values, 0.0),
     )
