@@ -7,7 +7,7 @@ the soil presses on it with sigma_0 over its projected area (the shaft's
 pressure is horizontal): a check of the start state independent of the
 discretisation.  Measured at I_r = 100 (docs/validation/cone_penetration.md):
 N_c (the median over the last diameter of a 5 D push) 10.14 at D/12 (+4.3 %),
-S16_NUMBERS.  A far-field check: with sigma_0 as a surcharge on the
+10.48 at D/16 (+7.8 %).  A far-field check: with sigma_0 as a surcharge on the
 soil's top, the pressure far from the cone stays sigma_0 (an infinite soil);
 rollers on top close the soil, and the shaft's volume raises it.
 """

@@ -14,6 +14,11 @@ and tabulates the steady cone factor against Teh & Houlsby's (1991)
 * the soil's radius (its outer wall a roller): 15 D and 60 D at D/8, against
   the default 30 D.
 
+Those ``d*`` cases are the former set-up (rollers on the soil's top, the tip
+5 D deep; pinned by ``ROLLERS``); the ``s*`` cases run today's defaults (sigma_0
+as a surcharge on a free top, the tip 10 D deep) at D/8, D/12 and D/16, with
+I_r = 30 and 300 and a start 15 D deep at D/12.
+
 Each case is a separate process-sized run; cases already in the JSON are
 kept unless ``--redo`` (so the study can be run in parts, e.g. two at once on
 two cores with ``--cases``).
@@ -188,8 +193,8 @@ def picture(rows: dict[str, dict], path: Path) -> None:
     a.set_xlabel("w / D (push from the embedded start)")
     a.set_ylabel("N_c = (q_c - sigma_0) / s_u")
     a.set_title(
-        "d*: rollers on top (dotted curves), s*: surcharge; grey dashed: Teh & "
-        "Houlsby (1991), grey dotted: Lu et al. (2004)",
+        "dotted: d* (rollers on top), solid: s* (surcharge);\n"
+        "grey: Teh & Houlsby 1991 (dashed), Lu et al. 2004 (dotted)",
         fontsize=8,
     )
     a.legend(fontsize=7)

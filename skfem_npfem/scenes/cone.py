@@ -167,8 +167,8 @@ PARAMS = [
         "domain_radius",
         30.0,
         "-",
-        "soil radius / D (its outer wall is a roller: at 15 D it raised N_c by "
-        "about 8 % at I_r = 100)",
+        "soil radius / D (its outer wall is a roller: with rollers on top too, "
+        "15 D raised N_c by about 8 % at I_r = 100)",
         float,
         lo=3.0,
         hi=100.0,
