@@ -96,7 +96,7 @@ class Model:
         masses ``rho V_i`` of those cells.  Needs cones with ``sigma_tt`` as a
         variable (Drucker-Prager, von Mises, AxisymmetricMohrCoulomb); particles
         on the axis should have ``u_r`` fixed.
-    loads : ndarray (N, dim) or None
+    loads : ndarray (N, d) or None
         Dead external forces on the particles (N), added to their weight in
         every step while the particle is meshed: a surcharge on a surface,
         say, as the tributary area of each surface particle times the
