@@ -99,8 +99,8 @@ class Model:
     loads : ndarray (N, d) or None
         Dead external forces on the particles (N), added to their weight in
         every step while the particle is meshed: a surcharge on a surface,
-        say, as the tributary area of each surface particle times the
-        pressure (:func:`~skfem_npfem.loads.surface_load`).  Full-ring
+        say, as the consistent nodal forces of the pressure
+        (:func:`~skfem_npfem.loads.surface_load`).  Full-ring
         forces (``2 pi r`` times the load per unit length) in axisymmetry.
         N-PFEM only; None (default) applies none.
     """
@@ -195,7 +195,7 @@ class Model:
             f = np.array(self.loads, dtype=float)
         except (TypeError, ValueError):
             raise ParameterError(
-                "loads", self.loads, "an array of shape (N, dim) of forces (N)"
+                "loads", self.loads, f"an array of shape (N, {self.dim}) of forces (N)"
             ) from None
         if f.ndim != 2 or f.shape[1] != self.dim:
             raise ParameterError(
