@@ -140,7 +140,8 @@ PARAMS = [
         "penetration",
         None,
         "m",
-        "how far the cone is pushed from where it starts (default 5 D)",
+        "how far the cone is pushed from where it starts (default 6 D: N_c is "
+        "steady from about 5 D on)",
         float,
         **_POSITIVE,
     ),
@@ -251,7 +252,7 @@ def _sizes(values: dict[str, Any]) -> dict[str, float]:
     """Lengths of the set-up, m: D, spacing, push, tip depth, soil, radius."""
     D = values["diameter"]
     h = values["spacing"] if values["spacing"] is not None else D / 12
-    w = values["penetration"] if values["penetration"] is not None else 5 * D
+    w = values["penetration"] if values["penetration"] is not None else 6 * D
     depth = values["depth"] if values["depth"] is not None else 10 * D
     z_tip = values["below"] * D + w  # the tip's height at time 0
     return {
