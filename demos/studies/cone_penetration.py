@@ -1,23 +1,30 @@
 #!/usr/bin/env python
 """The cone factor N_c: convergence, speed against accuracy, and its trend with I_r.
 
-Runs the ``cone-penetration`` scene (smooth cone, wished in place, pushed
-5 D; the steady N_c is the median over the last diameter) for each case below
-and tabulates the steady cone factor against Teh & Houlsby's (1991)
-``1.25 + 1.84 ln I_r`` with the wall time of each run:
+Runs the ``cone-penetration`` scene (smooth cone, wished in place; the steady
+N_c is the median over the last diameter of the push) for each case below and
+tabulates the steady cone factor against Teh & Houlsby's (1991)
+``1.25 + 1.84 ln I_r`` with the wall time of each run.
+
+The ``d*`` cases are the first set-up (rollers on the soil's top, the tip 5 D
+deep, a 5 D push; pinned by ``ROLLERS``):
 
 * resolutions D/8, D/12, D/16, D/20 at I_r = 100 (the cone moves half a spacing a
-  step): the finest run is the convergence reference of the speed-accuracy
-  curve;
+  step; D/20 is the set-up's convergence reference);
 * the time step: D/12 with the cone moving a quarter of a spacing a step;
 * the trend: I_r = 30 and 300 at D/12;
 * the soil's radius (its outer wall a roller): 15 D and 60 D at D/8, against
   the default 30 D.
 
-Those ``d*`` cases are the former set-up (rollers on the soil's top, the tip
-5 D deep; pinned by ``ROLLERS``); the ``s*`` cases run today's defaults (sigma_0
-as a surcharge on a free top, the tip 10 D deep) at D/8, D/12 and D/16, with
-I_r = 30 and 300 and a start 15 D deep at D/12.
+The ``s*`` cases have sigma_0 as a surcharge on a free top and the tip 10 D
+deep (today's set-up):
+
+* pushed 5 D (the default push before the longer runs): D/8, D/12, D/16,
+  I_r = 30 and 300, and a start 15 D deep at D/12;
+* pushed 8 D (``-w8``), to see where the curve levels off: D/12, D/16 (the
+  set-up's convergence reference), I_r = 300 and D/12 with the cone moving a
+  whole spacing a step (``-dt1``);
+* today's defaults, a 6 D push (``-w6``): D/12 at I_r = 30, 100 and 300.
 
 Each case is a separate process-sized run; cases already in the JSON are
 kept unless ``--redo`` (so the study can be run in parts, e.g. two at once on
@@ -26,7 +33,7 @@ two cores with ``--cases``).
 Usage (from the repository root)::
 
     python demos/studies/cone_penetration.py [--cases d8,d12,...] [--redo]
-        [--out docs/validation]
+        [--threads N] [--out docs/validation]
 
 Writes ``<out>/cone_penetration.json``, ``<out>/cone_penetration.inc`` (the
 table of docs/validation/cone_penetration.md) and
@@ -51,7 +58,9 @@ D = 0.0357
 
 #: The set-up of the first cases: the soil's top on rollers (a closed
 #: container that the shaft's volume pressurises) and the tip 5 D deep.
-ROLLERS = {"surface": "rollers", "depth": 5 * D}
+ROLLERS = {"surface": "rollers", "depth": 5 * D, "penetration": 5 * D}
+#: The push of the first surcharge cases (the default then).
+FIVE = {"penetration": 5 * D}
 
 #: Case name -> scene overrides (beyond the defaults).
 CASES: dict[str, dict] = {
@@ -64,17 +73,30 @@ CASES: dict[str, dict] = {
     "d12-ir300": {"spacing": D / 12, "rigidity_index": 300.0, **ROLLERS},
     "d8-r15": {"spacing": D / 8, "domain_radius": 15.0, **ROLLERS},
     "d8-r60": {"spacing": D / 8, "domain_radius": 60.0, **ROLLERS},
-    # today's defaults: sigma_0 as a surcharge on a free top, the tip 10 D deep
-    "s8": {"spacing": D / 8},
-    "s12": {"spacing": D / 12},
-    "s16": {"spacing": D / 16},
-    "s12-depth15": {"spacing": D / 12, "depth": 15 * D},
-    "s12-ir30": {"spacing": D / 12, "rigidity_index": 30.0},
-    "s12-ir300": {"spacing": D / 12, "rigidity_index": 300.0},
+    # the surcharge on a free top, the tip 10 D deep (today's set-up), pushed 5 D
+    # (the default push before the longer runs below showed N_c still rising)
+    "s8": {"spacing": D / 8, **FIVE},
+    "s12": {"spacing": D / 12, **FIVE},
+    "s16": {"spacing": D / 16, **FIVE},
+    "s12-depth15": {"spacing": D / 12, "depth": 15 * D, **FIVE},
+    "s12-ir30": {"spacing": D / 12, "rigidity_index": 30.0, **FIVE},
+    "s12-ir300": {"spacing": D / 12, "rigidity_index": 300.0, **FIVE},
+    # a longer push (8 D): where the curve levels off
+    "s12-w8": {"spacing": D / 12, "penetration": 8 * D},
+    "s16-w8": {"spacing": D / 16, "penetration": 8 * D},
+    "s12-ir300-w8": {"spacing": D / 12, "rigidity_index": 300.0, "penetration": 8 * D},
+    # today's defaults (a 6 D push)
+    "s12-w6": {"spacing": D / 12},
+    "s12-ir30-w6": {"spacing": D / 12, "rigidity_index": 30.0},
+    "s12-ir300-w6": {"spacing": D / 12, "rigidity_index": 300.0},
+    # the cone moving a whole spacing a step (the default moves half of one)
+    "s12-w8-dt1": {"spacing": D / 12, "penetration": 8 * D, "dt": (D / 12) / 0.02},
 }
 RESOLUTION = ("d8", "d12", "d16", "d20")
-#: The same with today's defaults.
-RESOLUTION_NOW = ("s8", "s12", "s16")
+#: The same model with today's set-up, refined in space, time or push length.
+RESOLUTION_NOW = ("s8", "s12", "s16", "s12-w6", "s12-w8", "s12-w8-dt1", "s16-w8")
+#: The convergence reference of each set-up: its finest (and longest) run.
+FINEST = {"rollers": "d20", "surcharge": "s16-w8"}
 
 
 def lu2004_nc(rigidity_index: float) -> float:
@@ -91,18 +113,19 @@ def same_model(name: str) -> bool:
 
 
 def finest(name: str, rows: dict[str, dict]) -> dict | None:
-    """The finest run of the set-up of case ``name`` (rollers or surcharge)."""
-    family = (
-        RESOLUTION if name in CASES and CASES[name].get("surface") else (RESOLUTION_NOW)
-    )
-    return next((rows[c] for c in reversed(family) if c in rows), None)
+    """The reference run of the set-up of case ``name`` (rollers or surcharge)."""
+    return rows.get(FINEST[CASES.get(name, {}).get("surface", "surcharge")])
 
 
-def run_case(name: str) -> dict:
-    """One run: the steady N_c, its window's range, the curve and the cost."""
+def run_case(name: str, threads: int = 0) -> dict:
+    """One run: the steady N_c, its window's range, the curve and the cost.
+
+    ``threads`` (0: the scene's automatic choice) is the linear solver's
+    thread count; it is not part of the case (it changes the wall time only).
+    """
     overrides = dict(CASES[name])
     t0 = time.perf_counter()
-    s = npfem.run_scene("cone-penetration", overrides)
+    s = npfem.run_scene("cone-penetration", {**overrides, "threads": threads})
     m = s["metrics"]
     return {
         "case": name,
@@ -123,6 +146,7 @@ def run_case(name: str) -> dict:
         "wall_s": time.perf_counter() - t0,
         "curve": [[round(w, 4), round(q, 4)] for w, q in m["curve"]],
         "cpu_count": os.cpu_count(),
+        "threads": threads,
     }
 
 
@@ -170,34 +194,34 @@ def markdown(rows: dict[str, dict]) -> str:
 
 
 def picture(rows: dict[str, dict], path: Path) -> None:
-    """Left: N_c against w/D per case; right: |error vs finest| against wall time."""
+    """Left: N_c against w/D (today's set-up, I_r = 100); right: error vs time.
+
+    The right panel has every case of a set-up's model (rollers or surcharge)
+    with its |N_c / N_c(reference) - 1| against its wall time.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
-    for name, r in rows.items():
+    for name in RESOLUTION_NOW:
+        if name not in rows:
+            continue
+        r = rows[name]
         c = list(zip(*r["curve"], strict=True)) if r["curve"] else ([], [])
-        closed = bool(CASES.get(name, {}).get("surface"))
-        a.plot(
-            c[0],
-            c[1],
-            lw=0.7 if closed else 1.2,
-            ls=":" if closed else "-",
-            label=f"{name} (N_c {r['N_c']:.2f})",
-        )
-    for ir in sorted({r["rigidity_index"] for r in rows.values()}):
-        a.axhline(npfem.laws.teh_houlsby_nc(ir), ls="--", lw=0.8, color="grey")
-        a.axhline(lu2004_nc(ir), ls=":", lw=0.8, color="grey")
+        a.plot(c[0], c[1], lw=1.0, label=f"{name} (N_c {r['N_c']:.2f})")
+    a.axhline(npfem.laws.teh_houlsby_nc(100.0), ls="--", lw=0.8, color="grey")
+    a.axhline(lu2004_nc(100.0), ls=":", lw=0.8, color="grey")
     a.set_xlabel("w / D (push from the embedded start)")
     a.set_ylabel("N_c = (q_c - sigma_0) / s_u")
+    a.set_ylim(6, 12)
     a.set_title(
-        "dotted: d* (rollers on top), solid: s* (surcharge);\n"
+        "today's set-up, I_r = 100 (the other cases: the table);\n"
         "grey: Teh & Houlsby 1991 (dashed), Lu et al. 2004 (dotted)",
         fontsize=8,
     )
-    a.legend(fontsize=7)
+    a.legend(fontsize=7, loc="lower right")
     for name, r in rows.items():
         best = finest(name, rows)
         if best is None or r is best or not same_model(name):
@@ -278,6 +302,13 @@ def main() -> None:
     ap.add_argument("--out", default="docs/validation")
     ap.add_argument("--redo", action="store_true")
     ap.add_argument(
+        "--threads",
+        type=int,
+        default=0,
+        help="linear-solver threads of each run (0: automatic; 1: a core per run "
+        "when two run side by side)",
+    )
+    ap.add_argument(
         "--zone", action="store_true", help="also draw the plastic zone (a D/8 run)"
     )
     args = ap.parse_args()
@@ -290,7 +321,7 @@ def main() -> None:
         rows = json.loads(path.read_text()) if path.exists() else {}
         if name in rows and not args.redo:
             continue
-        row = run_case(name)
+        row = run_case(name, args.threads)
         print(
             f"{name}: N_c {row['N_c']:.3f} ({row['error']:+.1%}), "
             f"{row['wall_s']:.0f} s",
