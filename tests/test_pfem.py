@@ -149,6 +149,45 @@ def test_simulation_writes_mesh_cells_and_flags(tmp_path):
         assert m.point_data["free_surface"].sum() > 0
 
 
+def test_the_step_a_stop_rule_ends_on_is_written(tmp_path):
+    # "Write every k-th step (the last step is always written)": also when the
+    # run ends on a stop rule between two output steps (a deposit at rest), so
+    # the last frame in ParaView is the final state, at the run's final time.
+    from skfem_npfem.io import ResultWriter, read_pvd
+
+    dt = 5e-3
+    p, model, mesher = resting_block(spacing=0.05)
+    sim = Simulation(
+        p, model, mesher, dt, writer=ResultWriter(tmp_path), output_every=3
+    )
+    sim.run(steps=10, stop=lambda s: s.step >= 4)
+    times = [t for t, _ in read_pvd(tmp_path / "result.pvd")]
+    assert sim.step == 4
+    np.testing.assert_allclose(times, [0.0, 3 * dt, 4 * dt], rtol=1e-12, atol=0)
+    assert times[-1] == pytest.approx(sim.time, rel=1e-12)
+
+
+def test_every_callback_sees_the_step_another_one_stops_on(tmp_path):
+    # A callback returning True stops the run after this step; the callbacks
+    # after it still see the step (scene recorders keep their history whole),
+    # and that step is written.
+    from skfem_npfem.io import ResultWriter, read_pvd
+
+    p, model, mesher = resting_block(spacing=0.05)
+    sim = Simulation(
+        p, model, mesher, 5e-3, writer=ResultWriter(tmp_path), output_every=5
+    )
+    seen: list[int] = []
+    sim.callbacks = [
+        lambda s, q, r: s.step == 2,
+        lambda s, q, r: seen.append(s.step) or False,
+    ]
+    sim.run(steps=6)
+    assert sim.step == 2
+    assert seen == [1, 2]
+    assert len(read_pvd(tmp_path / "result.pvd")) == 2  # steps 0 and 2
+
+
 def test_ballistic_grain_feels_floor_friction():
     wall = floor(2, friction_angle=30.0)
     mu, g, dt = wall.mu, 9.81, 1e-3

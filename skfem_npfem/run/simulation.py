@@ -354,11 +354,15 @@ class Simulation:
             t_end is not None and self.time >= t_end * (1 - 1e-12)
         )
         t_out = time.perf_counter()
-        if self.writer is not None and (self.step % self.output_every == 0 or last):
+        # Every callback sees every step (a list, not a short-circuiting any()),
+        # and the stop decision comes before the output: the step a stop rule
+        # ends on (a deposit at rest) is the last one written, as for the others.
+        stops = [bool(cb(self, new, result)) for cb in self.callbacks]
+        stop_now = any(stops) or (stop is not None and bool(stop(self)))
+        if self.writer is not None and (
+            self.step % self.output_every == 0 or last or stop_now
+        ):
             self.write_output(result.cells, result.active)
-        stop_now = any(bool(cb(self, new, result)) for cb in self.callbacks)
-        if stop is not None and stop(self):
-            stop_now = True
         if self.checkpoint_every and (
             self.step % self.checkpoint_every == 0 or stop_now or last
         ):
