@@ -89,6 +89,30 @@ def test_failure_past_the_floor_keeps_every_finished_step(tmp_path, monkeypatch)
         )
 
 
+def test_a_failed_run_writes_its_last_finished_step(tmp_path, monkeypatch):
+    # Output every 5 steps and a failure at step 4: the last finished step (3,
+    # t = 0.015 s) is written as well, so ParaView shows where the run stopped,
+    # and it matches the checkpoint of that step particle for particle.
+    original = step_module.solve_step
+
+    def broken(data, options=None, step=None):
+        if step >= 4:
+            raise SolverError("NumericalError", step, 3, "injected")
+        return original(data, options, step)
+
+    monkeypatch.setattr(step_module, "solve_step", broken)
+    out = tmp_path / "run"
+    srun = _build(out=out, output_every=5, checkpoint_every=100)
+    with pytest.raises(SolverError, match="results up to step 3 are on disk"):
+        srun.simulation.run(**srun.run_kwargs)
+    entries = npio.read_pvd(out / "result.pvd")
+    assert [round(t, 6) for t, _ in entries] == [0.0, 0.015]
+    last = npio.read_step(entries[-1][1])
+    state, _ = npio.load_checkpoint(npio.latest_checkpoint(out))
+    np.testing.assert_array_equal(last.points[:, :2], state["x"])
+    assert last.cells_dict["triangle"].shape[0] > 0
+
+
 def test_killed_mid_write_then_resume_reproduces_the_run(tmp_path, monkeypatch):
     # The process dies while step 7's VTU is being written (simulated by an
     # interrupt inside the atomic rename). The folder stays readable (no partial

@@ -378,6 +378,7 @@ class Simulation:
             except SolverError as err:
                 if not self.adaptive or dt / 2 < self.dt_min:
                     saved = self.save_checkpoint()
+                    self._write_last_finished_step()
                     # Keep the solver's own advice (e.g. "use displacement
                     # control" for a static overload) and add the loop's context.
                     advice = str(err).split("; ", 1)[1] if "; " in str(err) else ""
@@ -411,6 +412,23 @@ class Simulation:
                 if retries:  # do not grow straight after a failure
                     self.dt = min(self.dt, dt)
             return new, result
+
+    def _write_last_finished_step(self) -> None:
+        """Write the last finished step if the output schedule skipped it.
+
+        A run a solver failure stops is left with its final state in
+        ParaView too, on the mesh the failed step was built on; a remesh
+        that fails as well leaves the written steps as they are.
+        """
+        if self.writer is None or any(
+            s == self.step for s, _, _ in self.writer.entries
+        ):
+            return
+        try:
+            active, local_t = self.mesh_source(self.particles.x)
+        except ParameterError:
+            return
+        self.write_output(active[local_t].T, active)
 
     def _displacement_control(self, new: Particles, rec: StepRecord, dt: float):
         """Set the next step from the largest displacement of this one."""
