@@ -28,6 +28,7 @@ import skfem_npfem as npfem
 import skfem_npfem.io as npio
 from skfem_npfem import RunInterrupted
 from skfem_npfem.run.control import Progress
+from skfem_npfem.run.rest import AtRest
 
 pytestmark = pytest.mark.skipif(
     sys.platform == "win32", reason="POSIX signals and pseudo-terminals"
@@ -266,6 +267,34 @@ def test_progress_without_a_terminal_prints_lines(monkeypatch):
         sim.run(t_end=0.05)
     lines = buf.getvalue().splitlines()
     assert [ln[:10] for ln in lines] == ["step     1", "step    10"]
+
+
+def test_progress_says_why_a_run_ended_early():
+    # A run that ends on its stop rule before t_end: the last line names the
+    # rule (an AtRest run says "at rest") instead of a share and a time left
+    # that no longer apply (a run that reaches t_end ends on 100 %: above).
+    class Rule:
+        label = "three steps"
+
+        def __call__(self, sim):
+            return sim.step >= 3
+
+    for stop, reason in [
+        (Rule(), "three steps"),
+        (lambda s: s.step >= 3, "stop rule met"),
+    ]:
+        buf = io.StringIO()
+        with redirect_stderr(buf):
+            sim = _sim(None, t_end=0.05)
+            sim.progress, sim.progress_interval = True, 3600.0
+            sim.run(t_end=0.05, stop=stop)
+        lines = buf.getvalue().splitlines()
+        assert sim.step == 3 and sim.stopped_by == reason
+        assert lines[-1].startswith("step     3  t=0.015 s")
+        assert "Solved (" in lines[-1] or "AlmostSolved (" in lines[-1]
+        assert f" it)  stopped: {reason}  wall " in lines[-1]
+        assert "eta" not in lines[-1] and "%" not in lines[-1]
+    assert AtRest.label == "at rest"
 
 
 def test_progress_estimate_of_the_time_left():

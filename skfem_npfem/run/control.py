@@ -89,31 +89,50 @@ class Progress:
             return math.nan
         return min(max(done, 0.0), 1.0)
 
-    def text(self, rec: Any, t: float, start_step: int, start_time: float) -> str:
+    def text(
+        self,
+        rec: Any,
+        t: float,
+        start_step: int,
+        start_time: float,
+        stopped: str | None = None,
+    ) -> str:
         """One report: step, t, dt, status, iterations, done, wall and ETA.
 
         The share done counts the whole run (a resumed run continues from the
         share it was resumed at); the estimate of the time left extrapolates
         the progress made since this call of ``run`` started (never < 0).
+        ``stopped``: the run ends at this step, before its step count or end
+        time, for this reason (``"at rest"``); the report says so instead of
+        the share and the time left.
         """
+        wall = time.perf_counter() - self.start
+        head = (
+            f"step {rec.step:5d}  t={t:.4g} s  dt={rec.dt:.3g}  "
+            f"{rec.status} ({rec.iterations} it)  "
+        )
+        if stopped is not None:
+            return head + f"stopped: {stopped}  wall {wall:7.1f} s"
         done = self.share(rec.step, t)
         begun = self.share(start_step, start_time)
-        wall = time.perf_counter() - self.start
         made = done - begun
         left = max(wall * (1 - done) / made, 0.0) if made > 0 else math.nan
         share = f"{100 * done:5.1f}%" if math.isfinite(done) else "   ? %"
         eta = f"{left:7.1f} s" if math.isfinite(left) else "      ?  "
-        return (
-            f"step {rec.step:5d}  t={t:.4g} s  dt={rec.dt:.3g}  "
-            f"{rec.status} ({rec.iterations} it)  {share}  "
-            f"wall {wall:7.1f} s  eta {eta}"
-        )
+        return head + f"{share}  wall {wall:7.1f} s  eta {eta}"
 
-    def update(self, rec: Any, t: float, start_step: int, start_time: float) -> None:
+    def update(
+        self,
+        rec: Any,
+        t: float,
+        start_step: int,
+        start_time: float,
+        stopped: str | None = None,
+    ) -> None:
         """Report the step just finished (rate-limited off a terminal)."""
         if not self.enabled:
             return
-        msg = self.text(rec, t, start_step, start_time)
+        msg = self.text(rec, t, start_step, start_time, stopped)
         if self.tty:
             pad = max(0, _open_line["width"] - len(msg))
             print("\r" + msg + " " * pad, end="", file=sys.stderr, flush=True)

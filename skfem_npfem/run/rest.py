@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 from ..errors import ParameterError
 
@@ -55,6 +55,8 @@ class AtRest:
     fraction: float = 1e-3
     min_time: float = 0.0
     reference: str = "max_kinetic"
+    #: How the progress report names this reason to stop.
+    label: ClassVar[str] = "at rest"
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.fraction) and 0 < self.fraction < 1):

@@ -159,6 +159,10 @@ class Simulation:
         self.records: list[StepRecord] = []
         self._successes = 0
         self.last_record: StepRecord | None = None
+        #: Why the last run ended before its step count or end time: the stop
+        #: rule's ``label`` (:class:`AtRest`: ``"at rest"``), ``"stop rule
+        #: met"``, ``"callback"``; None otherwise.
+        self.stopped_by: str | None = None
         #: Mass and energies of the initial state (see :func:`energies`).
         self.initial = energies(particles, model.gravity)
         if model.bodies:
@@ -304,7 +308,9 @@ class Simulation:
                 last = self._step_once(dt, n_target, t_end, stop, guard)
             except AbandonStep:
                 self._interrupted(guard.signum, abandoned=True)
-            progress.update(self.records[-1], self.time, *first)
+            progress.update(
+                self.records[-1], self.time, *first, stopped=self.stopped_by
+            )
             if last:
                 break
             if guard.signum is not None:
@@ -358,7 +364,13 @@ class Simulation:
         # and the stop decision comes before the output: the step a stop rule
         # ends on (a deposit at rest) is the last one written, as for the others.
         stops = [bool(cb(self, new, result)) for cb in self.callbacks]
-        stop_now = any(stops) or (stop is not None and bool(stop(self)))
+        by_rule = stop is not None and bool(stop(self))
+        stop_now = any(stops) or by_rule
+        self.stopped_by = None
+        if stop_now and not last:  # ended before its step count or end time
+            self.stopped_by = (
+                getattr(stop, "label", "stop rule met") if by_rule else "callback"
+            )
         if self.writer is not None and (
             self.step % self.output_every == 0 or last or stop_now
         ):
