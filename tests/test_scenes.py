@@ -211,6 +211,24 @@ def test_lengths_are_limited_like_the_other_lengths():
         assert param.check(lo) == lo and param.check(1e4) == 1e4
 
 
+def test_a_text_parameter_is_not_described_as_a_number():
+    # The slope's cross-section file was listed as "a finite number in
+    # (-inf, inf)" by `skfem-npfem scenes` and in docs/scenes.md.
+    from skfem_npfem.scenes import SCENES
+
+    texts = [
+        (name, p)
+        for name, scene in SCENES.items()
+        for p in scene.params
+        if p.kind is str and p.choices is None
+    ]
+    assert texts  # the slope's geometry at least
+    for name, p in texts:
+        assert "number" not in p.allowed(), (name, p.name, p.allowed())
+    geometry = {p.name: p for p in get_scene("slope").params}["geometry"]
+    assert geometry.allowed() == "a text (the path of a JSON cross-section file)"
+
+
 def test_parameter_help_says_what_each_scene_does():
     names = ("elastic-column", "strip-footing", "column-collapse")
     params = {s: {p.name: p for p in get_scene(s).params} for s in names}

@@ -72,6 +72,8 @@ class Param:
             return "one of " + ", ".join(map(str, self.choices))
         if self.kind is bool:
             return "true or false"
+        if self.kind is str:
+            return "a text"
         what = "an integer" if self.kind is int else "a finite number"
         lo, hi, lo_open, hi_open, zero = self.bounds()
         left = "(" if lo_open or math.isinf(lo) else "["

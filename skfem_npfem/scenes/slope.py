@@ -96,6 +96,7 @@ PARAMS = [
         "cross-section file (JSON regions and materials) instead of the "
         "parametric slope",
         str,
+        note="the path of a JSON cross-section file",
     ),
     Param("spacing", None, "m", "particle spacing (default H/10)", float, **POSITIVE),
     Param("material", "mohr-coulomb", "-", "yield criterion", str, MATERIALS),
