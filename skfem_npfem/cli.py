@@ -61,9 +61,14 @@ def format_value(value: object) -> str:
     ('0.2002', 'null', 'true')
     >>> format_value(2.4675063972e-05), format_value(1035)
     ('2.468e-05', '1035')
+    >>> format_value({"setup": 0.0158615570035181, "solve": 0.5013162620016374})
+    '{setup: 0.01586, solve: 0.5013}'
     """
     if value is None or (isinstance(value, float) and value != value):
         return "null"
+    if isinstance(value, dict):  # e.g. the wall time of each stage
+        inner = ", ".join(f"{k}: {format_value(v)}" for k, v in value.items())
+        return "{" + inner + "}"
     if isinstance(value, bool):
         return str(value).lower()
     if isinstance(value, float):
