@@ -138,6 +138,17 @@ def test_bad_input_exits_2_with_one_line_error(argv, name, capsys):
     assert "Traceback" not in err
 
 
+def test_the_footing_says_it_stopped_on_its_plateau(tmp_path, capsys):
+    # The default strip footing ends on its load plateau (a few steps, 1 s):
+    # the progress report's last line names that reason, as the summary does.
+    summary = tmp_path / "s.json"
+    assert main(["run", "strip-footing", "--summary", str(summary)]) == 0
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    steps = json.loads(summary.read_text())["solver"]["steps"]
+    assert json.loads(summary.read_text())["metrics"]["stopped_by"] == "plateau"
+    assert last.startswith(f"step {steps:5d}  ") and "stopped: plateau  wall" in last
+
+
 def test_debug_reraises():
     with pytest.raises(ParameterError) as info:
         main(["run", "elastic-column", "--set", "nu=0.7", "--quiet", "--debug"])

@@ -359,8 +359,11 @@ def build(
 
     def finished(sim_: Simulation) -> bool:
         # Also checked before the first step of a resumed run, so resuming a
-        # finished run takes no further step.
-        return rule.stop_reason(load_curve(sim_)) is not None
+        # finished run takes no further step.  The reason names the stop in
+        # the progress report ("stopped: plateau").
+        reason = rule.stop_reason(load_curve(sim_))
+        finished.label = (reason or "").replace("_", " ")
+        return reason is not None
 
     ref = prandtl_nc(phi) if gamma == 0 and c > 0 else None
     if values["analysis"] == "limit":
