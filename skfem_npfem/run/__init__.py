@@ -1,7 +1,7 @@
 """The time loop.
 
 :class:`Simulation` (output, checkpoints, resume, progress) and run control
-(signals, progress lines).
+(signals, progress lines), and the solver statistics of a run.
 """
 
 from .rest import AtRest

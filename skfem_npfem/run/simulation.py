@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import math
 import signal
-import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -33,6 +32,7 @@ from ..step.model import Model
 from ..step.stages import Step, StepRecord, advance
 from .control import INTERVAL, AbandonStep, Progress, SignalGuard
 from .rest import AtRest
+from .statistics import peak_memory_mb, run_statistics
 
 __all__ = ["AtRest", "Simulation", "peak_memory_mb"]
 
@@ -470,47 +470,10 @@ class Simulation:
         return advance(*args, step=self.step + 1, volume_state=state)
 
     def summary(self) -> dict[str, Any]:
-        """Solver statistics of the run (steps, iterations, time per phase)."""
-        recs = self.records
-        phases: dict[str, float] = {}
-        for r in recs:
-            for k, v in r.timings.items():
-                phases[k] = phases.get(k, 0.0) + v
-        its = [r.iterations for r in recs]
-        keys = sorted({k for r in recs for k in r.timings})
-        median = {
-            k: float(np.median([r.timings.get(k, 0.0) for r in recs])) for k in keys
-        }
-        step_times = [sum(r.timings.values()) for r in recs]
-        return {
-            "steps": len(recs),
-            "time": self.time,
-            "ipm_iterations_total": int(sum(its)),
-            "ipm_iterations_max": int(max(its, default=0)),
-            "ipm_iterations_mean": float(np.mean(its)) if its else 0.0,
-            "statuses": sorted({r.status for r in recs}),
-            "retries": int(sum(r.retries for r in recs)),
-            "wall_time": phases,
-            "step_time_median": float(np.median(step_times)) if recs else 0.0,
-            "step_time_median_by_phase": median,
-            "n_particles": int(self.particles.n),
-            "mass_change": (
-                float(recs[-1].mass / self.initial["mass"] - 1.0) if recs else 0.0
-            ),
-            "volume_change": float(recs[-1].volume_change) if recs else 0.0,
-            "max_kinetic_energy": float(
-                max((r.kinetic_energy for r in recs), default=0.0)
-            ),
-            "linear_solvers": sorted({r.linear_solver for r in recs} - {""}),
-            "peak_memory_mb": peak_memory_mb(),
-        }
+        """Solver statistics of the run (steps, iterations, time per phase).
 
-
-def peak_memory_mb() -> float:
-    """Peak resident memory of this process so far, MiB (0 where unknown)."""
-    try:
-        import resource
-    except ImportError:  # pragma: no cover - not on Windows
-        return 0.0
-    kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    return float(kib) / (1024.0 if sys.platform != "darwin" else 1024.0**2)
+        :func:`~skfem_npfem.run.statistics.run_statistics` of its records.
+        """
+        return run_statistics(
+            self.records, self.time, self.particles.n, self.initial["mass"]
+        )
