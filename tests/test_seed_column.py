@@ -82,6 +82,56 @@ def test_an_interrupted_case_is_continued_not_reported(quick):
     assert after["metrics"] == before["metrics"]
 
 
+def test_partial_reports_an_interrupted_run_where_it_stands(quick, tmp_path):
+    # --partial: a case cut off by Ctrl-C is reported to the step it reached,
+    # not run or continued.  Reference: its t_bar is the steps times dt over
+    # sqrt(h0/g) of the seed case (2 steps of 2 ms, h0 = 7.8 cm).
+    import math
+    import shutil
+
+    demo, out, _ = quick
+    work = tmp_path / "work"
+    shutil.copytree(out / "axi-12", work / "axi-12")
+    summary = work / "axi-12" / "summary.json"
+    before = json.loads(summary.read_text())
+    hist = before["history"][:2]
+    # The checkpoint written on stopping holds where the particles are: here
+    # the last written step's particles stretched 1.5x radially, so that the
+    # profile shows which of the two it was built from.
+    from skfem_npfem.io import read_pvd
+    from skfem_npfem.io.checkpoints import save_checkpoint
+
+    x = demo.load_step(read_pvd(work / "axi-12" / "result.pvd")[-1][1])[0]
+    x = x * [1.5, 1.0]
+    ckpt = save_checkpoint(work / "axi-12" / "stopped.npz", {"x": x}, {})
+    cut = {
+        **before,
+        "interrupted": True,
+        "history": hist,
+        "solver": {**before["solver"], "time": hist[-1]["time"]},
+        "checkpoint": str(ckpt),
+    }
+    summary.write_text(json.dumps(cut))
+    argv = ["--quick", "--partial", "--cases", "axi-12", "--work", str(work)]
+    assert demo.main([*argv, "--out", str(tmp_path), "--no-pictures"]) == 0
+    assert json.loads(summary.read_text()) == cut  # not continued
+    res = json.loads((tmp_path / "seed_column.json").read_text())["cases"]["axi-12"]
+    t_bar = 2 * 2e-3 / math.sqrt(0.078 / 9.81)
+    assert res["partial"] and res["steps"] == 2
+    assert res["t_bar_end"] == pytest.approx(t_bar, rel=1e-12)
+    assert res["label"].endswith(f"(cut off at t_bar = {t_bar:.2f})")
+    # It never got to t_bar = 3: no run-out or wall time there.
+    assert res["normalised_runout_t3"] is None and res["wall_time_t3_s"] is None
+    assert res["profile"] == demo.deposit_profile(x, res["spacing"])
+    row = [
+        r for r in (tmp_path / "tables.md").read_text().splitlines() if "cut off" in r
+    ]
+    assert row and " | - | " in row[0]
+    # A case with no summary yet is refused with the reason, not run.
+    argv = ["--quick", "--partial", "--cases", "axi-18", "--work", str(work)]
+    assert demo.main([*argv, "--out", str(tmp_path), "--no-pictures"]) == 2
+
+
 def test_keep_adds_a_case_to_the_results_of_an_earlier_study(quick):
     # --keep: the cases of the existing seed_column.json stay (same order,
     # same numbers); the case run now replaces its own entry.

@@ -50,6 +50,14 @@ Usage (from the repository root)::
 
 ``--quick`` runs every case at a tiny resolution for a few steps (the test of
 the default run).  ``--threads`` is passed to the linear solver.
+
+``--partial`` reports cases as their work folders stand, without running or
+continuing them: a run interrupted with Ctrl-C or ``kill -INT`` (its
+``summary.json`` says ``"interrupted": true``) is reported to the step it
+reached, its label says where it was cut off, the run-out "at t_bar = 3" is
+left blank if it did not get there, its profile is the particles of its last
+checkpoint, and its picture leaves the times it did not reach blank.  The same
+command without ``--partial`` continues the run from that checkpoint.
 """
 
 from __future__ import annotations
@@ -270,9 +278,32 @@ def at_time(history: list[dict], t: float) -> dict:
     return history[int(np.argmin(np.abs(times - t)))]
 
 
-def analyse(name: str, summ: dict, work: Path) -> dict:
-    """The study's numbers of one finished case."""
+def stored_summary(name: str, work: Path) -> dict:
+    """The summary a case's work folder holds (finished or interrupted)."""
+    path = work / name / "summary.json"
+    if not path.exists():
+        raise FileNotFoundError(
+            f"{name}: no {path}; --partial reports a run that has written its "
+            "summary (a finished run, or one interrupted with Ctrl-C or kill -INT)"
+        )
+    return json.loads(path.read_text())
+
+
+def last_positions(summ: dict, folder: Path) -> np.ndarray:
+    """Particle positions where the run stands: the checkpoint an interrupted
+    run wrote on stopping, else the last written step."""
     from skfem_npfem.io import read_pvd
+    from skfem_npfem.io.checkpoints import load_checkpoint
+
+    ckpt = summ.get("checkpoint") if summ.get("interrupted") else None
+    if ckpt and Path(ckpt).exists():
+        arrays, _ = load_checkpoint(ckpt)
+        return np.asarray(arrays["x"])
+    return load_step(read_pvd(folder / "result.pvd")[-1][1])[0]
+
+
+def analyse(name: str, summ: dict, work: Path) -> dict:
+    """The study's numbers of one finished (or, marked so, interrupted) case."""
 
     p, m, hist = summ["parameters"], summ["metrics"], summ["history"]
     solver = summ["solver"]
@@ -287,7 +318,11 @@ def analyse(name: str, summ: dict, work: Path) -> dict:
     step_s = [sum(h["timings"].values()) for h in hist]
     t3 = at_time(hist, 3.0 * T_SCALE)
     i3 = hist.index(t3)
-    last, _, _ = load_step(read_pvd(work / name / "result.pvd")[-1][1])
+    partial = bool(summ.get("interrupted"))
+    t_bar_end = solver["time"] / T_SCALE
+    # A run cut off before t_bar = 3 has no run-out there (its last step is not).
+    reached_t3 = not partial or t3["time"] >= 3.0 * T_SCALE - 0.5 * t3["dt"]
+    last = last_positions(summ, work / name)
     rough = [h.get("stress_roughness") for h in hist]
     rough = [v for v in rough if v is not None and math.isfinite(v)]
     rough_end = m.get("stress_roughness")
@@ -295,19 +330,23 @@ def analyse(name: str, summ: dict, work: Path) -> dict:
         rough = vtu_roughness(work / name)
         rough_end = rough[-1] if rough else None
         rough = [v for v in rough if math.isfinite(v)]
+    label = LABELS.get(name, name)
+    if partial:
+        label += f" (cut off at t_bar = {t_bar_end:.2f})"
     return {
-        "label": LABELS.get(name, name),
+        "label": label,
+        "partial": partial,
         "geometry": geo,
         "spacing": p["spacing"],
         "n_particles": m["n_particles"],
         "steps": len(hist),
         "time_end": solver["time"],
-        "t_bar_end": solver["time"] / T_SCALE,
+        "t_bar_end": t_bar_end,
         "at_rest": m["at_rest"],
         "runout": m[key],
         "normalised_runout": m["normalised_runout"],
-        "normalised_runout_t3": t3[key] / r0 - 1.0,
-        "t_bar_t3": t3["time"] / T_SCALE,
+        "normalised_runout_t3": t3[key] / r0 - 1.0 if reached_t3 else None,
+        "t_bar_t3": t3["time"] / T_SCALE if reached_t3 else None,
         "final_height": m["final_height"],
         "height_ratio": m["height_ratio"],
         "reference_runout_lube2004": lube2004_runout(h0 / r0),
@@ -320,7 +359,7 @@ def analyse(name: str, summ: dict, work: Path) -> dict:
             for k in sorted({k for h in hist for k in h["timings"]})
         },
         "wall_time_s": float(sum(step_s)),
-        "wall_time_t3_s": float(sum(step_s[: i3 + 1])),
+        "wall_time_t3_s": float(sum(step_s[: i3 + 1])) if reached_t3 else None,
         "step_time_median_s": float(np.median(step_s)),
         "step_time_mean_s": float(np.mean(step_s)),
         "ipm_iterations_total": solver["ipm_iterations_total"],
@@ -407,6 +446,15 @@ def render_panels(
         times = np.array([t for t, _ in entries])
         for j, tb in enumerate(SNAPSHOTS):
             k = int(np.argmin(np.abs(times - tb * T_SCALE)))
+            ax = axes[i, j]
+            if results[name].get("partial") and times[k] < (tb - 0.25) * T_SCALE:
+                ax.set_axis_off()  # a run cut off before this time
+                if i == 0:
+                    ax.set_title(f"t/sqrt(h0/g) = {tb:.2f}")
+                ax.text(0.5, 0.5, f"not reached\n(cut off at t_bar = "
+                        f"{results[name]['t_bar_end']:.2f})", ha="center",
+                        va="center", fontsize=8, transform=ax.transAxes)  # fmt: skip
+                continue
             points, cells, stress = load_step(entries[k][1])
             sv = stress[:, points.shape[1] - 1]
             mesh = _section_mesh(pv, points, cells, sv)
@@ -421,7 +469,6 @@ def render_panels(
             pl.camera.parallel_scale = 0.046
             img = pl.screenshot(return_img=True)
             pl.close()
-            ax = axes[i, j]
             ax.imshow(img)
             ax.set_xticks([])
             ax.set_yticks([])
@@ -472,6 +519,11 @@ def _on(res: dict) -> str:
     return f"{on['date']}, {on['cpu']}, {on['load']}" if on else "-"
 
 
+def _num(value: float | None, fmt: str = ".3f") -> str:
+    """A table cell: the number, or '-' where a cut-off run has none."""
+    return "-" if value is None else format(value, fmt)
+
+
 def tables(results: dict) -> str:
     """The Markdown tables of docs/seed_column.md (a page of their own, too)."""
     lines = [
@@ -485,7 +537,7 @@ def tables(results: dict) -> str:
         lines.append(
             f"| {res['label']} | {res['n_particles']} | {res['steps']} | "
             f"{res['t_bar_end']:.2f} | {res['at_rest']} | "
-            f"{res['normalised_runout']:.3f} | {res['normalised_runout_t3']:.3f} | "
+            f"{res['normalised_runout']:.3f} | {_num(res['normalised_runout_t3'])} | "
             f"{res['final_height']:.3f} | {res['height_ratio']:.3f} | "
             f"{100 * res['volume_change']:+.1f} % |"
         )
@@ -504,7 +556,7 @@ def tables(results: dict) -> str:
         sr, srm = res["stress_roughness"], res["stress_roughness_max"]
         lines.append(
             f"| {res['label']} | {res['wall_time_s']:.0f} | "
-            f"{res['wall_time_t3_s']:.0f} | {res['step_time_median_s']:.3g} | "
+            f"{_num(res['wall_time_t3_s'], '.0f')} | {res['step_time_median_s']:.3g} | "
             f"{res['ipm_iterations_mean']:.1f}, {res['ipm_iterations_max']} | "
             f"{res['peak_memory_mb']:.0f} | "
             f"{'-' if sr is None else f'{sr:.3f}'}, "
@@ -555,6 +607,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true", help="tiny smoke run")
     ap.add_argument("--threads", type=int, default=0)
     ap.add_argument("--no-pictures", action="store_true")
+    ap.add_argument(
+        "--partial",
+        action="store_true",
+        help="report the cases as their work folders stand, without running or "
+        "continuing them (an interrupted run to the step it reached)",
+    )
     args = ap.parse_args(argv)
     names = [c.strip() for c in args.cases.split(",") if c.strip()]
     unknown = [c for c in names if c not in CASES]
@@ -566,7 +624,14 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     ran = {}
     for name in names:
-        summ = run_case(name, work, args.quick, args.threads)
+        if args.partial:
+            try:
+                summ = stored_summary(name, work)
+            except FileNotFoundError as err:
+                print(f"error: {err}")
+                return 2
+        else:
+            summ = run_case(name, work, args.quick, args.threads)
         ran[name] = analyse(name, summ, work)
     results = dict(ran)
     previous = out / "seed_column.json"
