@@ -213,6 +213,13 @@ def test_second_signal_abandons_the_step_in_progress(tmp_path, second, sigint_ha
     assert err.checkpoint == tmp_path / f"checkpoint_{finished:06d}.npz"
     _, meta = npio.load_checkpoint(err.checkpoint)
     assert meta["step"] == finished and err.exit_code == 130
+    # The last finished step is in the result series although the output
+    # schedule (every 5th step) skips it: the state the run stopped in.
+    assert sim.output_every == 5
+    step, time_, name = sim.writer.entries[-1]
+    assert step == finished and time_ == pytest.approx(sim.time, rel=1e-12)
+    written = npio.read_step(tmp_path / name)
+    np.testing.assert_array_equal(written.points[:, :2], sim.particles.x)
     # The handlers found before the run are put back after it.
     assert {sig: signal.getsignal(sig) for sig in before} == before
 

@@ -317,10 +317,16 @@ class Simulation:
                 self._interrupted(guard.signum)
 
     def _interrupted(self, signum: int | None, abandoned: bool = False) -> None:
-        """Checkpoint the last finished step and raise RunInterrupted."""
+        """Checkpoint and write the last finished step; raise RunInterrupted.
+
+        The step is written to the result series even off the output schedule,
+        so the state a run stopped in can be opened in ParaView; a resumed run
+        keeps it and continues the schedule.
+        """
         path = self._last_checkpoint.get(self.step)
         if path is None:
             path = self.save_checkpoint()
+        self._write_last_finished_step()
         raise RunInterrupted(
             signal.SIGINT if signum is None else signum,
             self.step,
@@ -428,9 +434,10 @@ class Simulation:
     def _write_last_finished_step(self) -> None:
         """Write the last finished step if the output schedule skipped it.
 
-        A run a solver failure stops is left with its final state in
-        ParaView too, on the mesh the failed step was built on; a remesh
-        that fails as well leaves the written steps as they are.
+        A run a solver failure or a signal stops is left with its final state
+        in ParaView too, on the mesh the next step would be built on (for a
+        failure: the failed one); a remesh that fails as well leaves the
+        written steps as they are.
         """
         if self.writer is None or any(
             s == self.step for s, _, _ in self.writer.entries
