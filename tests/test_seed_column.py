@@ -122,6 +122,9 @@ def test_partial_reports_an_interrupted_run_where_it_stands(quick, tmp_path):
     assert res["label"].endswith(f"(cut off at t_bar = {t_bar:.2f})")
     # It never got to t_bar = 3: no run-out or wall time there.
     assert res["normalised_runout_t3"] is None and res["wall_time_t3_s"] is None
+    # Of the picture's times t_bar = 0, 1, 2, 3 it reached only the first.
+    assert t_bar < 1.0 - 0.5 * 2e-3 / math.sqrt(0.078 / 9.81)
+    assert res["snapshots_reached"] == [True, False, False, False]
     assert res["profile"] == demo.deposit_profile(x, res["spacing"])
     row = [
         r for r in (tmp_path / "tables.md").read_text().splitlines() if "cut off" in r

@@ -221,7 +221,7 @@ def run_case(name: str, work: Path, quick: bool, threads: int) -> dict:
     folder = work / name
     summary = folder / "summary.json"
     if summary.exists():
-        done = json.loads(summary.read_text())
+        done = stored_summary(name, work)
         # An interrupted run (Ctrl-C, kill -INT) writes its summary too, with
         # "interrupted": true; it is continued from its checkpoints, not used.
         if not done.get("interrupted"):
@@ -239,7 +239,7 @@ def run_case(name: str, work: Path, quick: bool, threads: int) -> dict:
     if proc.returncode != 0:
         raise RuntimeError(f"{name} failed:\n{proc.stderr.strip()}")
     print(f"{name}: done in {time.perf_counter() - t0:.0f} s", flush=True)
-    return json.loads(summary.read_text())
+    return stored_summary(name, work)
 
 
 # ------------------------------------------------------------- analysis ----
@@ -287,6 +287,12 @@ def at_time(history: list[dict], t: float) -> dict:
     return history[int(np.argmin(np.abs(times - t)))]
 
 
+def reached(t_bar: float, time_end: float, dt: float, partial: bool) -> bool:
+    """Whether a run got to ``t_bar`` (to within half its last step): a
+    finished run did, a run cut off (``partial``) only if it ran that far."""
+    return not partial or time_end >= t_bar * T_SCALE - 0.5 * dt
+
+
 def stored_summary(name: str, work: Path) -> dict:
     """The summary a case's work folder holds (finished or interrupted)."""
     path = work / name / "summary.json"
@@ -330,7 +336,8 @@ def analyse(name: str, summ: dict, work: Path) -> dict:
     partial = bool(summ.get("interrupted"))
     t_bar_end = solver["time"] / T_SCALE
     # A run cut off before t_bar = 3 has no run-out there (its last step is not).
-    reached_t3 = not partial or t3["time"] >= 3.0 * T_SCALE - 0.5 * t3["dt"]
+    shown = [reached(tb, solver["time"], hist[-1]["dt"], partial) for tb in SNAPSHOTS]
+    reached_t3 = reached(3.0, solver["time"], hist[-1]["dt"], partial)
     last = last_positions(summ, work / name)
     rough = [h.get("stress_roughness") for h in hist]
     rough = [v for v in rough if v is not None and math.isfinite(v)]
@@ -345,6 +352,7 @@ def analyse(name: str, summ: dict, work: Path) -> dict:
     return {
         "label": label,
         "partial": partial,
+        "snapshots_reached": shown,
         "geometry": geo,
         "spacing": p["spacing"],
         "n_particles": m["n_particles"],
@@ -456,7 +464,8 @@ def render_panels(
         for j, tb in enumerate(SNAPSHOTS):
             k = int(np.argmin(np.abs(times - tb * T_SCALE)))
             ax = axes[i, j]
-            if results[name].get("partial") and times[k] < (tb - 0.25) * T_SCALE:
+            shown = results[name].get("snapshots_reached", [True] * len(SNAPSHOTS))
+            if not shown[j]:
                 ax.set_axis_off()  # a run cut off before this time
                 if i == 0:
                     ax.set_title(f"t/sqrt(h0/g) = {tb:.2f}")
