@@ -36,6 +36,36 @@ _CLK_TCK = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
 
 
 # --------------------------------------------------------------------------------
+# Which step a seed-column benchmark measures
+# --------------------------------------------------------------------------------
+#: ``--method`` of the seed-column benchmarks: ``bare`` is the reference
+#: paper's bare method, which their committed results measured; ``default`` is
+#: the geometry's defaults of today (stabilised and volume-keeping).
+METHODS = ("bare", "default")
+
+
+def add_method_argument(ap) -> None:
+    """Add ``--method {bare,default}`` to a benchmark's argument parser."""
+    ap.add_argument(
+        "--method",
+        choices=METHODS,
+        default="bare",
+        help="bare (default): the paper's bare method, as the committed results "
+        "were measured (no stabilisation or volume correction, alpha 1.3, in 3D "
+        "buried slivers dropped); default: the geometry's defaults of today",
+    )
+
+
+def method_overrides(geometry: str, method: str) -> dict:
+    """``column-collapse`` overrides that select ``method`` for ``geometry``."""
+    from skfem_npfem.scenes.collapse_runs import bare_method
+
+    if method not in METHODS:
+        raise ValueError(f"method {method!r}: expected one of {METHODS}")
+    return bare_method(geometry) if method == "bare" else {}
+
+
+# --------------------------------------------------------------------------------
 # Machine load
 # --------------------------------------------------------------------------------
 def cpu_busy_s() -> float:

@@ -21,6 +21,10 @@ Variants (``--variants``, comma separated):
 * ``fast``: ``floor`` with ``accuracy=fast`` (IPM tolerance 1e-6);
 * ``fastnocnr``: both.
 
+Every variant steps the reference paper's bare method (``--method bare``,
+pinned whatever the scene's defaults); ``--method default`` steps the
+geometry's stabilised, volume-keeping defaults instead.
+
 Usage::
 
     python benchmarks/cylinder_speed.py --divisions 18 --steps 12 \\
@@ -55,12 +59,13 @@ R0 = SEED["radius"]
 T_SCALE = math.sqrt(SEED["height"] / SEED["gravity"])
 
 
-def build(geometry: str, divisions: float, variant: str):
+def build(geometry: str, divisions: float, variant: str, method: str = "bare"):
     """A Simulation of the seed column with a variant's solver settings."""
     over = {
         "geometry": geometry,
         "spacing": R0 / divisions,
         "rest_fraction": 0.0,
+        **harness.method_overrides(geometry, method),
         **VARIANTS[variant],
     }
     return build_geometry(get_scene("column-collapse").resolve(over)).simulation
@@ -108,7 +113,7 @@ def summarise(steps: list[dict]) -> dict:
 
 def run(args) -> dict:
     names = [v.strip() for v in args.variants.split(",") if v.strip()]
-    sims = {v: build(args.geometry, args.divisions, v) for v in names}
+    sims = {v: build(args.geometry, args.divisions, v, args.method) for v in names}
     steps: dict[str, list[dict]] = {v: [] for v in names}
     for k in range(args.steps):
         for v in names:
@@ -135,6 +140,7 @@ def run(args) -> dict:
     return {
         "name": args.name,
         "geometry": args.geometry,
+        "method": args.method,
         "divisions": args.divisions,
         "n_particles": int(ref.n),
         "t_end": sims[names[0]].time,
@@ -149,7 +155,8 @@ def markdown(rep: dict) -> str:
         f"# {rep['name']}: the seed column, {rep['geometry']}, spacing r0/"
         f"{rep['divisions']:g} ({rep['n_particles']} particles), "
         f"{next(iter(rep['variants'].values()))['summary']['steps']} steps "
-        f"(t/sqrt(h0/g) = {rep['t_bar_end']:.2f})",
+        f"(t/sqrt(h0/g) = {rep['t_bar_end']:.2f}), "
+        f"{rep.get('method', 'bare')} method",
         "",
         harness.code_line(rep["machine"]["code"]),
         "",
@@ -183,6 +190,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--steps", type=int, default=12)
     ap.add_argument("--variants", default="base,floor")
     ap.add_argument("--name", default=None)
+    harness.add_method_argument(ap)
     ap.add_argument("--render", default=None, help="rewrite FILE.md from FILE.json")
     args = ap.parse_args(argv)
     if args.render:

@@ -35,6 +35,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+import _harness as harness
 import numpy as np
 
 from skfem_npfem.io import write_json
@@ -127,9 +128,14 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     r0 = 0.039
     cases = {
         "plane_strain": {"spacing": 0.2 / 48},
+        # Pinned to the settings its committed results were measured with:
+        # the paper's bare method apart from the stabilisation set here, and
+        # the full element residual (the one mode there was) for beta = 30.
         "quarter_cylinder": {
             "geometry": "quarter-cylinder",
             "spacing": r0 / args.divisions,
+            **harness.method_overrides("quarter-cylinder", "bare"),
+            "stabilisation_mode": "full",
         },
     }
     start = time.perf_counter()

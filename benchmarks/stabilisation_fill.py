@@ -61,10 +61,22 @@ R0 = 0.039
 
 
 def case_params(case: str, divisions: float) -> dict[str, Any]:
-    """Scene parameters of a case (plane strain: 48 particles across L0)."""
+    """Scene parameters of a case (plane strain: 48 particles across L0).
+
+    The quarter cylinder is pinned to the settings its committed results were
+    measured with (the paper's bare method apart from the stabilisation this
+    benchmark sets, and the full element residual, the one mode there was),
+    not to the geometry's defaults of today.
+    """
     if case == "plane_strain":
         return {"spacing": 0.2 / 48}
-    return {"geometry": "quarter-cylinder", "spacing": R0 / divisions}
+    geo = "quarter-cylinder"
+    return {
+        "geometry": geo,
+        "spacing": R0 / divisions,
+        **harness.method_overrides(geo, "bare"),
+        "stabilisation_mode": "full",
+    }
 
 
 def node_edges(P30: sp.spmatrix, n: int, ns: int) -> np.ndarray:

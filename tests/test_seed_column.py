@@ -205,3 +205,28 @@ def test_3d_volume_record_is_consistent():
     # the default before: factor 30, buried slivers dropped
     before = default | {"stabilisation": 30.0, "buried_slivers": "drop"}
     assert cases["r12-default"]["settings"] == before
+
+
+@pytest.mark.parametrize("geometry", ["axisymmetric", "quarter-cylinder"])
+def test_bare_method_switches_the_cylindrical_defaults_off(geometry):
+    # The overrides that studies and benchmarks pin to repeat what they
+    # measured before the cylindrical defaults: the built run has no
+    # stabilisation, no volume correction, the alpha factor 1.3 and (3D) drops
+    # the buried slivers -- while the same scene without them has the
+    # defaults of CYLINDER_FIDELITY.
+    from skfem_npfem.scenes import get_scene
+    from skfem_npfem.scenes.collapse_runs import CYLINDER_FIDELITY, bare_method
+
+    scene = get_scene("column-collapse")
+    base = {"geometry": geometry, "spacing": 0.039 / 4}
+    bare = scene.build(scene.resolve(base | bare_method(geometry)), out=None)
+    default = scene.build(scene.resolve(base), out=None)
+    b, d = bare.simulation, default.simulation
+    assert (b.model.stabilisation, b.model.volume_correction) == (0.0, 0.0)
+    assert b.mesh_source.alpha == 1.3 and not b.mesh_source.keep_buried_slivers
+    beta, mode, kappa = CYLINDER_FIDELITY[geometry]
+    assert (d.model.stabilisation, d.model.stabilisation_mode) == (beta, mode)
+    assert d.model.volume_correction == kappa
+    if geometry == "quarter-cylinder":  # (a 2D mesh has no buried slivers)
+        assert d.mesh_source.keep_buried_slivers is True
+    assert bare_method("plane-strain") == {} == bare_method("box")

@@ -76,6 +76,7 @@ from _common import ROOT
 
 from skfem_npfem.baseline.reporting import save_png
 from skfem_npfem.laws import lube2004_runout
+from skfem_npfem.scenes.collapse_runs import bare_method
 
 R0, H0, G, RHO = 0.039, 0.078, 9.81, 1800.0
 T_SCALE = math.sqrt(H0 / G)
@@ -83,14 +84,11 @@ SNAPSHOTS = (0.0, 1.0, 2.0, 3.0)
 #: First line of tables.md (docs/seed_column.md includes the file after it).
 TABLES_TITLE = "Seed-column study: tables"
 
-#: The reference paper's bare method, as the cylindrical geometries ran it
-#: before they defaulted to the stabilisation and the volume correction
-#: (``CYLINDER_FIDELITY`` in :mod:`skfem_npfem.scenes.collapse_runs`): no
-#: stabilisation, no volume correction, the alpha factor 1.3.  The cases
-#: measured then pin it, so that they reproduce their committed rows; a
-#: ``-stab`` case pins the full residual, the stabilisation mode of that time,
-#: and the 3D ones the alpha shape's rule of that time for buried slivers.
-PAPER = {"stabilisation": 0.0, "volume_correction": 0.0, "alpha": 1.3}
+#: The cases measured with the paper's bare method pin it
+#: (:func:`skfem_npfem.scenes.collapse_runs.bare_method`: no stabilisation, no
+#: volume correction, the alpha factor 1.3, in 3D the buried slivers dropped),
+#: so that they reproduce their committed rows; a ``-stab`` case pins the
+#: full residual, the stabilisation mode of that time.
 FULL = {"stabilisation_mode": "full"}
 
 #: Cases measured with the paper's bare method (scene overrides; the
@@ -150,9 +148,6 @@ _PAPER_CASES: dict[str, dict] = {
 #: current defaults of their geometry (stabilisation, its mode, volume
 #: correction and alpha factor from ``CYLINDER_FIDELITY``; buried slivers
 #: meshed).
-#: The 3D meshes of that time dropped the buried slivers (theory, "Other
-#: guards"): the 3D cases measured then pin that too.
-THEN_3D = {"buried_slivers": "drop"}
 
 
 def as_measured(case: dict) -> dict:
@@ -160,8 +155,9 @@ def as_measured(case: dict) -> dict:
     settings pinned (plane strain keeps its own, given in the case)."""
     if case["geometry"] == "plane-strain":
         return case
-    pinned = {**PAPER, **FULL, **case}
-    return pinned | (THEN_3D if case["geometry"] == "quarter-cylinder" else {})
+    bare = bare_method(case["geometry"])
+    slivers = {k: bare.pop(k) for k in ("buried_slivers",) if k in bare}
+    return {**bare, **FULL, **case} | slivers
 
 
 CASES: dict[str, dict] = {

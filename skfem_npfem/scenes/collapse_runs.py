@@ -55,7 +55,13 @@ from .cylinder import ColumnSetup, cylinder_column, mass_quantile, radial_front
 from .methods import with_method
 from .scenery import Scenery, box, number, time_label
 
-__all__ = ["COLUMN_COLLAPSE", "build_geometry", "lube2004_runout", "with_geometries"]
+__all__ = [
+    "COLUMN_COLLAPSE",
+    "bare_method",
+    "build_geometry",
+    "lube2004_runout",
+    "with_geometries",
+]
 
 #: What the masses and volumes of each geometry are of (summary ``mass_basis``).
 MASS_BASIS = {
@@ -76,6 +82,37 @@ CYLINDER_FIDELITY = {
     "axisymmetric": (100.0, "full", COLLAPSE_VOLUME_CORRECTION),
     "quarter-cylinder": (1000.0, "vertical", 0.15),
 }
+
+
+def bare_method(geometry: str) -> dict[str, Any]:
+    """Scene overrides that run a column with the reference paper's bare method.
+
+    The cylindrical geometries ran it before they defaulted to
+    :data:`CYLINDER_FIDELITY`: no stabilisation, no volume correction, the
+    alpha factor 1.3, and in 3D the buried slivers dropped by the alpha shape.
+    Studies and benchmarks measured then pin these, so that a rerun repeats
+    their committed numbers.  Plane strain has its own defaults: empty.
+
+    Parameters
+    ----------
+    geometry : str
+        ``"plane-strain"``, ``"axisymmetric"``, ``"quarter-cylinder"`` or ``"box"``.
+
+    Returns
+    -------
+    dict
+        ``--set`` overrides of the ``column-collapse`` scene.
+    """
+    if geometry not in CYLINDER_FIDELITY:
+        return {}
+    bare: dict[str, Any] = {
+        "stabilisation": 0.0,
+        "volume_correction": 0.0,
+        "alpha": 1.3,
+    }
+    if geometry == "quarter-cylinder":
+        bare["buried_slivers"] = "drop"
+    return bare
 
 
 def column_setup(values: dict[str, Any]) -> ColumnSetup:
