@@ -209,7 +209,7 @@ def test_axisymmetric_seed_collapse_smoke():
     assert np.all(sim.particles.x[sim.particles.fixed[:, 0], 0] == 0.0)
 
 
-def test_symmetry_planes_benchmark_counts_the_plane_rows(tmp_path):
+def test_symmetry_planes_benchmark_counts_the_plane_rows(tmp_path, monkeypatch):
     # benchmarks/symmetry_planes.py at r0/4, one step from the same state: the
     # symmetry planes as prescribed normal dofs remove exactly one contact row
     # per particle on a plane (all are candidates at rest; 2 x 45, enumerated
@@ -220,6 +220,7 @@ def test_symmetry_planes_benchmark_counts_the_plane_rows(tmp_path):
     # plane that the full cylinder cannot have.  Both steps are solved and the
     # JSON has the ratio.
     path = Path(__file__).resolve().parents[1] / "benchmarks" / "symmetry_planes.py"
+    monkeypatch.syspath_prepend(str(path.parent))  # its sibling _harness
     spec = importlib.util.spec_from_file_location("symmetry_planes", path)
     bench = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench)
