@@ -314,3 +314,34 @@ def test_progress_estimate_of_the_time_left():
     eta = float(text.split("eta")[1].split()[0])
     assert eta == pytest.approx(4.0, abs=0.05)
     assert np.isfinite(eta)
+
+
+def test_a_resumed_run_reports_the_peak_memory_of_the_whole_run(tmp_path):
+    # Peak memory is a process's; a run stopped and continued in another
+    # process reports the larger of the two (the checkpoint carries the first).
+    from skfem_npfem.io.checkpoints import save_checkpoint
+    from skfem_npfem.run.statistics import peak_memory_mb
+
+    sim = _sim(tmp_path / "a")
+    sim.run(steps=2)
+    arrays, meta = npio.load_checkpoint(sim.save_checkpoint())
+    assert 0.0 < meta["peak_memory_mb"] <= peak_memory_mb()
+    # As if the first process had peaked far above this one.
+    big = save_checkpoint(tmp_path / "big.npz", arrays, {**meta, "peak_memory_mb": 1e9})
+    resumed = _sim(tmp_path / "b")
+    resumed.restore(big)
+    resumed.run(steps=1)
+    assert resumed.summary()["peak_memory_mb"] == 1e9
+    _, again = npio.load_checkpoint(resumed.save_checkpoint())
+    assert again["peak_memory_mb"] == 1e9  # and a third process would see it
+    # A checkpoint without the record (older files): the process's own peak.
+    old = save_checkpoint(
+        tmp_path / "old.npz",
+        arrays,
+        {k: v for k, v in meta.items() if k != "peak_memory_mb"},
+    )
+    fresh = _sim(tmp_path / "c")
+    fresh.restore(old)
+    assert fresh.summary()["peak_memory_mb"] == pytest.approx(
+        peak_memory_mb(), rel=0.05
+    )

@@ -151,6 +151,9 @@ class Simulation:
         #: Seconds between progress lines when stderr is not a terminal.
         self.progress_interval = INTERVAL
         self._last_checkpoint: dict[int, Path] = {}
+        #: Peak memory of the processes that ran the steps before a restored
+        #: checkpoint, MiB (0 for a run started here).
+        self._peak_memory_before = 0.0
         self.meta = dict(meta or {})
         self.extra_point_data = extra_point_data
         self.stepper = stepper
@@ -227,6 +230,7 @@ class Simulation:
             "successes": self._successes,
             "initial": self.initial,
             "records": [r.as_dict() for r in self.records],
+            "peak_memory_mb": max(self._peak_memory_before, peak_memory_mb()),
         }
         path = write_checkpoint(self.checkpoint_dir, self.step, self.particles, state)
         self._last_checkpoint = {self.step: path}
@@ -249,6 +253,7 @@ class Simulation:
         self.initial = dict(meta.get("initial", self.initial))
         self.records = [StepRecord.from_dict(r) for r in meta.get("records", [])]
         self.last_record = self.records[-1] if self.records else None
+        self._peak_memory_before = float(meta.get("peak_memory_mb", 0.0))
         return meta
 
     # -- loop -----------------------------------------------------------------
@@ -480,7 +485,12 @@ class Simulation:
         """Solver statistics of the run (steps, iterations, time per phase).
 
         :func:`~skfem_npfem.run.statistics.run_statistics` of its records.
+        ``peak_memory_mb`` is the run's, not only this process's: a run
+        continued from a checkpoint reports the larger of its own peak and the
+        one the checkpoint recorded of the processes before.
         """
-        return run_statistics(
+        stats = run_statistics(
             self.records, self.time, self.particles.n, self.initial["mass"]
         )
+        stats["peak_memory_mb"] = max(stats["peak_memory_mb"], self._peak_memory_before)
+        return stats
