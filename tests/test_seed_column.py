@@ -230,3 +230,31 @@ def test_bare_method_switches_the_cylindrical_defaults_off(geometry):
     if geometry == "quarter-cylinder":  # (a 2D mesh has no buried slivers)
         assert d.mesh_source.keep_buried_slivers is True
     assert bare_method("plane-strain") == {} == bare_method("box")
+
+
+def test_measured_on_is_read_before_each_piece_of_a_run(quick, tmp_path):
+    # The study's "measured on" column: every case folder records the CPU
+    # and the load of other processes as its run starts (before the run adds
+    # its own), and a run continued from its checkpoint adds a record; the
+    # table joins them (any shared piece makes the run shared).
+    import os
+
+    demo, out, rep = quick
+    for name, res in rep["cases"].items():
+        pieces = json.loads((out / name / "measured_on.json").read_text())
+        # (tests above continue some cases: a piece more each)
+        assert res["measured_on"] == pieces[0]
+    busy = demo.cores_busy(0.2)
+    assert busy is None or 0.0 <= busy <= os.cpu_count() + 1e-9
+    folder = tmp_path / "case"
+    demo.note_start(folder, continued=False)
+    first = json.loads((folder / "measured_on.json").read_text())
+    other = {"date": "2000-01-01", "cpu": "another CPU", "load": "shared"}
+    (folder / "measured_on.json").write_text(json.dumps([*first, other]))
+    joined = demo.stored_measured_on(folder)
+    assert joined["date"] == first[0]["date"] and joined["load"] == "shared"
+    assert joined["cpu"] == f"{first[0]['cpu']} and another CPU"
+    demo.note_start(folder, continued=True)  # a third piece
+    assert len(json.loads((folder / "measured_on.json").read_text())) == 3
+    demo.note_start(folder, continued=False)  # a fresh run starts over
+    assert len(json.loads((folder / "measured_on.json").read_text())) == 1

@@ -230,6 +230,7 @@ def run_case(name: str, work: Path, quick: bool, threads: int) -> dict:
     if resume:
         argv.append("--resume")
     print(f"{name}: {'resuming' if resume else 'running'}", flush=True)
+    note_start(folder, continued=resume)
     t0 = time.perf_counter()
     proc = subprocess.run(argv, capture_output=True, text=True, cwd=ROOT)
     if proc.returncode != 0:
@@ -385,7 +386,35 @@ def analyse(name: str, summ: dict, work: Path) -> dict:
         "profile": deposit_profile(last, p["spacing"]),
         "r0": r0,
         "h0": h0,
-        "measured_on": measured_on(),
+        "measured_on": stored_measured_on(work / name),
+    }
+
+
+def note_start(folder: Path, continued: bool) -> None:
+    """Record the date, CPU and load as a run (or a continuation) starts.
+
+    The load is read before the run's own process adds to it; each piece of a
+    run continued from its checkpoint adds its own record.
+    """
+    path = folder / "measured_on.json"
+    pieces = json.loads(path.read_text()) if continued and path.exists() else []
+    folder.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps([*pieces, measured_on()]))
+
+
+def stored_measured_on(folder: Path) -> dict:
+    """Where and how loaded a case's run was measured: its pieces' records
+    (:func:`note_start`), else (a folder older than them) the moment now."""
+    path = folder / "measured_on.json"
+    if not path.exists():
+        return measured_on()
+    pieces = json.loads(path.read_text())
+    cpus = list(dict.fromkeys(p["cpu"] for p in pieces))
+    busy = [p["load"] for p in pieces if p["load"] != "idle"]
+    return {
+        "date": pieces[0]["date"],
+        "cpu": " and ".join(cpus),
+        "load": busy[0] if busy else "idle",
     }
 
 
@@ -403,12 +432,34 @@ def measured_on() -> dict:
                 break
     except OSError:
         pass
-    load = os.getloadavg()[0] / (os.cpu_count() or 1)
+    busy = cores_busy()
+    load = busy if busy is not None else os.getloadavg()[0]
     return {
         "date": datetime.date.today().isoformat(),
         "cpu": f"{cpu}, {os.cpu_count()} cores",
-        "load": "idle" if load < 0.6 else "shared",
+        "load": "idle" if load / (os.cpu_count() or 1) < 0.25 else "shared",
     }
+
+
+def cores_busy(window: float = 0.5) -> float | None:
+    """Cores in use over the next ``window`` seconds (``/proc/stat``; None
+    elsewhere).  Called while no run of the study is going, it is the load of
+    other processes, which the load average would mix with the last run's."""
+
+    def busy_total() -> tuple[float, float]:
+        ticks = [float(v) for v in Path("/proc/stat").read_text().split()[1:9]]
+        idle = ticks[3] + ticks[4]  # idle and iowait
+        return sum(ticks) - idle, sum(ticks)
+
+    try:
+        b0, t0 = busy_total()
+        time.sleep(window)
+        b1, t1 = busy_total()
+    except (OSError, ValueError):
+        return None
+    import os
+
+    return (b1 - b0) / max(t1 - t0, 1e-9) * (os.cpu_count() or 1)
 
 
 # ------------------------------------------------------------- pictures ----
@@ -559,7 +610,11 @@ def tables(results: dict) -> str:
     lines += ["", f"Lube et al. (2004): (r_inf - r0)/r0 = {ref:.3f} at a = 2.", ""]
     lines += [
         "Wall times compare only between runs measured on the same CPU under the "
-        "same load (last column); compare IPM iterations otherwise.",
+        "same load (last column); compare IPM iterations otherwise. The load is "
+        "that of other processes as the run (and each continuation of it) "
+        "started: idle below a quarter of the cores (rows measured before the "
+        "study recorded it: the load average when the study read the run, with "
+        "notes added by hand).",
         "",
         "| case | wall time (s) | to t_bar = 3 (s) | s/step (median) | IPM it. "
         "(mean, max) | peak memory (MB) | stress roughness (end, max) | statuses "
