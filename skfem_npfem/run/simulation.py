@@ -489,8 +489,10 @@ class Simulation:
         continued from a checkpoint reports the larger of its own peak and the
         one the checkpoint recorded of the processes before.
         """
-        stats = run_statistics(
-            self.records, self.time, self.particles.n, self.initial["mass"]
+        return run_statistics(
+            self.records,
+            self.time,
+            self.particles.n,
+            self.initial["mass"],
+            self._peak_memory_before,
         )
-        stats["peak_memory_mb"] = max(stats["peak_memory_mb"], self._peak_memory_before)
-        return stats

@@ -19,7 +19,11 @@ __all__ = ["peak_memory_mb", "run_statistics"]
 
 
 def run_statistics(
-    records: Sequence[StepRecord], time: float, n_particles: int, initial_mass: float
+    records: Sequence[StepRecord],
+    time: float,
+    n_particles: int,
+    initial_mass: float,
+    peak_memory_before: float = 0.0,
 ) -> dict[str, Any]:
     """Solver statistics of the steps ``records`` of a run at ``time``.
 
@@ -33,6 +37,10 @@ def run_statistics(
         Number of particles.
     initial_mass : float
         Mass at the start, kg: the reference of ``mass_change``.
+    peak_memory_before : float, default 0
+        Peak memory of the processes that ran the steps before this one (a run
+        continued from a checkpoint), MiB: ``peak_memory_mb`` is the larger of
+        it and this process's peak.
 
     Returns
     -------
@@ -73,7 +81,7 @@ def run_statistics(
         "volume_change": float(recs[-1].volume_change) if recs else 0.0,
         "max_kinetic_energy": float(max((r.kinetic_energy for r in recs), default=0.0)),
         "linear_solvers": sorted({r.linear_solver for r in recs} - {""}),
-        "peak_memory_mb": peak_memory_mb(),
+        "peak_memory_mb": max(peak_memory_mb(), peak_memory_before),
     }
 
 
