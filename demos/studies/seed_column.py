@@ -72,7 +72,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _common import ROOT
+from _common import ROOT, benchmark
 
 from skfem_npfem.baseline.reporting import save_png
 from skfem_npfem.laws import lube2004_runout
@@ -334,7 +334,7 @@ def analyse(name: str, summ: dict, work: Path) -> dict:
     t_bar_end = solver["time"] / T_SCALE
     # A run cut off before t_bar = 3 has no run-out there (its last step is not).
     shown = [reached(tb, solver["time"], hist[-1]["dt"], partial) for tb in SNAPSHOTS]
-    reached_t3 = reached(3.0, solver["time"], hist[-1]["dt"], partial)
+    reached_t3 = shown[SNAPSHOTS.index(3.0)]
     last = last_positions(summ, work / name)
     rough = [h.get("stress_roughness") for h in hist]
     rough = [v for v in rough if v is not None and math.isfinite(v)]
@@ -442,24 +442,15 @@ def measured_on() -> dict:
 
 
 def cores_busy(window: float = 0.5) -> float | None:
-    """Cores in use over the next ``window`` seconds (``/proc/stat``; None
-    elsewhere).  Called while no run of the study is going, it is the load of
-    other processes, which the load average would mix with the last run's."""
-
-    def busy_total() -> tuple[float, float]:
-        ticks = [float(v) for v in Path("/proc/stat").read_text().split()[1:9]]
-        idle = ticks[3] + ticks[4]  # idle and iowait
-        return sum(ticks) - idle, sum(ticks)
-
-    try:
-        b0, t0 = busy_total()
-        time.sleep(window)
-        b1, t1 = busy_total()
-    except (OSError, ValueError):
-        return None
-    import os
-
-    return (b1 - b0) / max(t1 - t0, 1e-9) * (os.cpu_count() or 1)
+    """Cores in use over the next ``window`` seconds (the benchmarks' harness
+    reads ``/proc/stat``; None without it).  Called while no run of the study
+    is going, it is the load of other processes, which the load average would
+    mix with the last run's."""
+    harness = benchmark("_harness")
+    b0, t0 = harness.cpu_busy_s(), time.perf_counter()
+    time.sleep(window)
+    busy = (harness.cpu_busy_s() - b0) / (time.perf_counter() - t0)
+    return None if math.isnan(busy) else busy
 
 
 # ------------------------------------------------------------- pictures ----
