@@ -37,10 +37,27 @@ def test_collapse_tiny_case_conserves_mass_and_runs_out_in_the_band(tmp_path):
     assert row["lajeunesse"]["value"] == pytest.approx(1.8)
 
 
+def assert_same_numbers(got, want, rel: float) -> None:
+    """``got`` has ``want``'s structure, its floats within ``rel`` of ``want``'s."""
+    if isinstance(want, dict):
+        assert sorted(got) == sorted(want)
+        for key in want:
+            assert_same_numbers(got[key], want[key], rel)
+    elif isinstance(want, list):
+        assert len(got) == len(want)
+        for g, w in zip(got, want, strict=True):
+            assert_same_numbers(g, w, rel)
+    elif isinstance(want, float):
+        assert got == pytest.approx(want, rel=rel, abs=1e-300)
+    else:
+        assert got == want
+
+
 def test_collapse_fits_reproduce_the_committed_record():
     record = json.loads((VALIDATION / "collapse_validation.json").read_text())
     fits = collapse_validation.fits(record["sweep"])
-    assert fits == record["fits"]
+    # Refitted with this machine's BLAS: equal to the record to round-off.
+    assert_same_numbers(fits, record["fits"], rel=1e-12)
     small = fits["small_a"]
     # The small-a slope through the origin, by hand from the committed rows.
     rows = [r for r in record["sweep"] if r["aspect"] in small["aspects"]]
