@@ -20,7 +20,6 @@ import re
 from pathlib import Path
 
 import skfem_npfem
-from skfem_npfem._deprecated import RENAMED
 
 #: Names documented on the index only (no autodoc entry of their own).
 SKIP = {"__version__"}
@@ -129,14 +128,6 @@ def pages() -> dict[str, str]:
         "{py:func}`~skfem_npfem.advance`); materials; boundaries; one step; "
         "sweeps; post-processing ({py:meth}`~skfem_npfem.Step.to_skfem` gives "
         "a step back as a scikit-fem mesh with P1 fields); errors.",
-        "",
-        "Renamed step types (the old names still work for one release, with a "
-        "`DeprecationWarning`): "
-        + ", ".join(
-            f"`{old}` is {{py:class}}`~skfem_npfem.{new}`"
-            for old, new in RENAMED.items()
-        )
-        + ".",
         "",
     ]
     for title, names in groups():
