@@ -9,7 +9,7 @@ Each group becomes one page of ``api/`` that documents its names with autodoc
 under the flat ``skfem_npfem`` namespace (``skfem_npfem.Particles``, as users
 import them); a name in ``__all__`` outside every group lands on "Other".  A
 name added to ``__all__`` therefore appears without editing the docs, and
-``tests/test_docs_build.py`` checks that every name is in the built inventory.
+``tests/docs/test_docs_build.py`` checks that every name is in the built inventory.
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from skfem_npfem.cli import scenes_markdown
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_scenes_markdown_is_current():

@@ -20,7 +20,7 @@ import pytest
 
 import skfem_npfem
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 pytestmark = pytest.mark.docs
 

@@ -24,7 +24,7 @@ from skfem import (
 
 import skfem_npfem as npfem
 
-DEMO = Path(__file__).resolve().parents[1] / "demos" / "skfem_round_trip.py"
+DEMO = Path(__file__).resolve().parents[2] / "demos" / "skfem_round_trip.py"
 SOIL = npfem.LinearElastic(E=1e7, nu=0.3, rho=2000.0)
 
 
