@@ -26,7 +26,7 @@ def test_ci_runs_the_readme_test_command():
         ln for ln in readme.splitlines() if re.match(r"^python3 -m venv .*\.\[test", ln)
     ]
     assert len(lines) == 1
-    assert lines[0].rstrip().endswith("&& pytest")
+    assert lines[0].rstrip().endswith("&& pytest && pytest -m docs")
     assert "README.md" in (ROOT / ".ci" / "run").read_text()
 
 
