@@ -45,7 +45,7 @@ extensions = [
     "sphinx.ext.mathjax",
     # MathJax 3 served from the site itself (_static/mathjax/), not from a
     # CDN: formulas render offline and the built pages load nothing from
-    # another host (tests/test_docs_build.py checks it).
+    # another host (tests/docs/test_docs_build.py checks it).
     "sphinx-mathjax-offline",
     "npfem_docs",
 ]
@@ -67,7 +67,7 @@ myst_heading_anchors = 3
 myst_dmath_double_inline = True
 
 # MyST-NB: the tutorials are MyST notebooks, executed on every build (they are
-# part of the test suite through tests/test_docs_build.py); an error fails the
+# part of the test suite through tests/docs/test_docs_build.py); an error fails the
 # build.
 nb_execution_mode = "force"
 nb_execution_timeout = 300

@@ -24,14 +24,8 @@ names by what a user does (the API reference follows it).
 
 from __future__ import annotations
 
-from . import _compat
-
 __version__ = "0.1.0"
 
-from ._deprecated import RENAMED as _RENAMED
-from ._deprecated import renamed as _renamed
-
-# isort: split
 from .baseline.roughness import stress_roughness
 from .bodies import BodyOfRevolution, RigidBody, RigidPlane
 from .boundary import Contacts, RigidWall, floor, wall_x
@@ -146,43 +140,3 @@ __all__ += [
     "RunInterrupted",
     "SolverError",
 ]
-
-
-# The flat modules of earlier releases, now in subpackages: ``import
-# skfem_npfem.conic`` and the like keep working (with a DeprecationWarning)
-# for one release.
-_MOVED = {
-    "pfem": "mesh.sources",
-    "remesh": "mesh.delaunay",
-    "surface": "mesh.surface",
-    "smoothing": "mesh.smoothing",
-    "axisymmetric": "mesh.axisymmetric",
-    "model": "step.model",
-    "program": "step.program",
-    "families": "step.families",
-    "stabilisation": "step.stabilisation",
-    "volume": "step.volume",
-    "conic": "step.conic",
-    "solver": "step.solver",
-    "backends": "step.backends",
-    "kinematics": "step.kinematics",
-    "simulation": "run.simulation",
-    "runcontrol": "run.control",
-    "plot": "viz.plot",
-    "figures": "viz.figures",
-    "render": "viz.render",
-    "scenery": "viz.scenery",
-}
-_compat.install_aliases(__name__, _MOVED)
-
-
-def __getattr__(name: str) -> object:
-    """Old names of the step types, with a ``DeprecationWarning``.
-
-    ``StepData`` is :class:`ConeInput`, ``StepSolution`` :class:`ConeSolution`
-    and ``StepResult`` :class:`Step` (the same classes: ``isinstance`` keeps
-    working); they go in the next release.
-    """
-    return _renamed(
-        __name__, name, {old: globals()[new] for old, new in _RENAMED.items()}
-    )

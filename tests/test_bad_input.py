@@ -10,14 +10,13 @@ no traceback unless ``--debug`` is given.
 
 from __future__ import annotations
 
-import io
 import math
 import tempfile
-from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import check_cli_error, run_cli
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from skfem import MeshTri
@@ -62,25 +61,6 @@ def check_parameter_error(err: BaseException, name: str, value=None) -> str:
     if value is not None:
         assert repr(value) in msg or str(value) in msg, (value, msg)
     return msg
-
-
-def run_cli(argv: list[str]) -> tuple[int, str]:
-    """``main(argv)`` with captured stdout/stderr; returns (exit code, stderr)."""
-    err, out = io.StringIO(), io.StringIO()
-    with redirect_stderr(err), redirect_stdout(out):
-        code = main(argv)
-    return code, err.getvalue()
-
-
-def check_cli_error(code: int, err: str, *needles: str) -> str:
-    assert code == 2, (code, err)
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert lines[0].startswith("error: "), err
-    assert "Traceback" not in err
-    for needle in needles:
-        assert needle in lines[0], (needle, lines[0])
-    return lines[0]
 
 
 finite = st.floats(allow_nan=False, allow_infinity=False, width=64)

@@ -9,7 +9,7 @@ Each group becomes one page of ``api/`` that documents its names with autodoc
 under the flat ``skfem_npfem`` namespace (``skfem_npfem.Particles``, as users
 import them); a name in ``__all__`` outside every group lands on "Other".  A
 name added to ``__all__`` therefore appears without editing the docs, and
-``tests/test_docs_build.py`` checks that every name is in the built inventory.
+``tests/docs/test_docs_build.py`` checks that every name is in the built inventory.
 """
 
 from __future__ import annotations
@@ -20,7 +20,6 @@ import re
 from pathlib import Path
 
 import skfem_npfem
-from skfem_npfem._deprecated import RENAMED
 
 #: Names documented on the index only (no autodoc entry of their own).
 SKIP = {"__version__"}
@@ -129,14 +128,6 @@ def pages() -> dict[str, str]:
         "{py:func}`~skfem_npfem.advance`); materials; boundaries; one step; "
         "sweeps; post-processing ({py:meth}`~skfem_npfem.Step.to_skfem` gives "
         "a step back as a scikit-fem mesh with P1 fields); errors.",
-        "",
-        "Renamed step types (the old names still work for one release, with a "
-        "`DeprecationWarning`): "
-        + ", ".join(
-            f"`{old}` is {{py:class}}`~skfem_npfem.{new}`"
-            for old, new in RENAMED.items()
-        )
-        + ".",
         "",
     ]
     for title, names in groups():

@@ -451,7 +451,7 @@ def pages(src: Path, warn: Callable[[str], None] = print) -> dict[str, str]:
         "",
         "**Examples** are short scripts of `demos/`, one thing each, that run in "
         "seconds: the docs build runs them and shows their output and figures "
-        "(`tests/test_gallery.py` checks the number each one verifies). "
+        "(`tests/docs/test_gallery.py` checks the number each one verifies). "
         "**Studies** (`demos/studies/`) and **benchmarks** take minutes to hours; "
         "they are listed with the figures and results they committed, and the "
         "build runs none of them.",

@@ -1129,7 +1129,7 @@ def vv_summary() -> str:
             1.0,
             1.0,
             tol,
-            "`tests/test_scenes.py`",
+            "`tests/scenes/test_scenes.py`",
             when,
             error=c["sigma_v_rel_l2"],
         )
@@ -1142,7 +1142,7 @@ def vv_summary() -> str:
                 c["settlement_exact"],
                 c["settlement"],
                 0.005,
-                "`tests/test_scenes.py`",
+                "`tests/scenes/test_scenes.py`",
                 when,
             )
         )
@@ -1154,7 +1154,7 @@ def vv_summary() -> str:
             per["period_exact"],
             per["period"],
             0.03,
-            "`tests/test_scenes.py`",
+            "`tests/scenes/test_scenes.py`",
             when,
         )
     )
@@ -1175,7 +1175,7 @@ def vv_summary() -> str:
                 f["reference"],
                 f["bearing_factor"],
                 tol,
-                "`tests/test_scenes.py`",
+                "`tests/scenes/test_scenes.py`",
                 when,
             )
         )
@@ -1201,7 +1201,7 @@ def vv_summary() -> str:
                 r["bearing_factor"],
                 tol,
                 (
-                    "`tests/test_footing.py`"
+                    "`tests/scenes/test_footing.py`"
                     if tol
                     else "`demos/studies/footing_plateau.py`"
                 ),

@@ -33,7 +33,7 @@ Stable step: ``dt_stable = min_i V_i^(1/d) / c_p,i`` with the smoothing-cell
 size ``V_i^(1/d)`` and the P-wave speed ``c_p = sqrt(M / rho_i)`` (``M`` the
 constrained modulus, ``rho_i = m_i / V_i``).  Checked against the exact limit
 ``2 / omega_max`` of the nodally integrated stiffness
-(``tests/test_baseline_spfem.py``): the exact limit was 1.3-2.6 times larger
+(``tests/baseline/test_spfem.py``): the exact limit was 1.3-2.6 times larger
 on lattice, jittered, random-Delaunay and alpha-shape meshes in 2D and 3D.
 The substep is ``explicit_dt`` if given, else :data:`SAFETY` times the stable
 step of each step's mesh.  A given ``explicit_dt`` above the stable step is

@@ -58,7 +58,7 @@ BARY_TOL = 1e-10
 #: 1e-8 a boundary vertex whose patch held a sliver extrapolated its nearly
 #: collinear Gauss points, the transfer amplified that value step after step
 #: and FEM-remap P1 blew up in the a = 2 column collapse (stresses 1e6 rho g H
-#: at t = 0.6 s, ``tests/test_baseline_fem.py``); a well-posed fit of a linear
+#: at t = 0.6 s, ``tests/baseline/test_fem.py``); a well-posed fit of a linear
 #: field is still exact.
 WELL_POSED = 1e-3
 

@@ -63,7 +63,7 @@ MAX_STEPS = 1_000_000
 
 #: Magnitudes a nonzero value of these parameters must have, by name (the same
 #: in every scene): the ranges the scenes were run at (both ends of each are run
-#: by tests/test_reliability_ranges.py).  Outside them the arithmetic leaves
+#: by tests/run/test_reliability_ranges.py).  Outside them the arithmetic leaves
 #: double precision (``dt**2`` underflows at 1e-162 s, a compliance of 1e300
 #: overflows) or the solver can no longer resolve the load (a tolerance of
 #: 1e-8 relative to the largest stress).  Zero stays governed by the parameter

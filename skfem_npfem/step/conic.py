@@ -46,7 +46,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from .._deprecated import renamed
 from ..errors import ParameterError, SolverError
 from .families import OBJECTIVE_TERMS, ROW_FAMILIES
 from .program import Assembled, ConeInput, Program, assemble
@@ -72,8 +71,7 @@ class ConeSolution:
 
     Arrays on the program's nodes and stress points, not yet on the particles
     (stresses not yet rotated); :func:`~skfem_npfem.advance` turns it into new
-    particles and keeps it as ``step.solution``.  Formerly ``StepSolution``
-    (that name still works, with a deprecation warning).
+    particles and keeps it as ``step.solution``.
 
     Attributes
     ----------
@@ -414,8 +412,3 @@ def displacement_scale(prog: Program, F_star: float, h: float) -> float:
     if data.dynamic and prog.mt.size:
         k_in = float(np.mean(prog.mt)) / data.dt**2
     return F_star / (k_el + k_in)
-
-
-def __getattr__(name: str) -> object:
-    """Old names (``StepSolution``), with a ``DeprecationWarning``."""
-    return renamed(__name__, name, {"StepSolution": ConeSolution})

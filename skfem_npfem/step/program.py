@@ -53,7 +53,6 @@ import clarabel
 import numpy as np
 import scipy.sparse as sp
 
-from .._deprecated import renamed
 from ..boundary import Contacts
 from ..materials import ConeRows, Material
 
@@ -101,7 +100,6 @@ class ConeInput:
 
     What :func:`~skfem_npfem.solve_step` solves; :func:`~skfem_npfem.advance`
     builds it from the particles (fill it by hand only to study one program).
-    Formerly ``StepData`` (that name still works, with a deprecation warning).
 
     Attributes
     ----------
@@ -384,8 +382,3 @@ def _rank(block: Block) -> int:
         return 1
     kinds = {clarabel.ZeroConeT: 0, clarabel.NonnegativeConeT: 1}
     return kinds.get(type(block.cones[0]), 2)
-
-
-def __getattr__(name: str) -> object:
-    """Old names (``StepData``), with a ``DeprecationWarning``."""
-    return renamed(__name__, name, {"StepData": ConeInput})

@@ -145,8 +145,6 @@ class Step:
     :class:`~skfem_npfem.Simulation` hands it to the callbacks and the writer
     and keeps only :attr:`record`.  :meth:`to_skfem` gives the step's mesh as
     a scikit-fem mesh with the particle fields as P1 degrees of freedom.
-    Formerly ``StepResult`` (that name still works, with a deprecation
-    warning).
 
     Attributes
     ----------

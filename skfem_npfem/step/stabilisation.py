@@ -36,7 +36,7 @@ implicit ``a_n+1`` the step cost about 1.3x more in our trials), and the lag
 is ``O(dt)`` in a transient and nothing at rest.  Quasi-static steps have no
 inertia: their residual is exact.
 
-Properties (tests/test_stabilisation.py):
+Properties (tests/step/test_stabilisation.py):
 
 * **Consistent.**  ``R`` is the residual of the equation being solved, so the
   penalty is zero for the exact solution; a linear stress field in
@@ -97,7 +97,7 @@ within a step: for the exact solution the penalty is that of the lagged
 increments, ``O(dt)`` in a transient and zero at rest.  In a single elastic
 step from a state out of balance they drive the lagged residual into the
 implicit quantity (the pressure gradient has to absorb the deviatoric
-imbalance), and the full residual can grow (tests/test_stabilisation.py).
+imbalance), and the full residual can grow (tests/step/test_stabilisation.py).
 """
 
 from __future__ import annotations

@@ -31,7 +31,6 @@ from time import perf_counter
 import numpy as np
 from skfem import Mesh
 
-from .._deprecated import renamed
 from ..boundary import Contacts, project_to_walls, wall_contacts
 from ..errors import ParameterError
 from ..mesh.axisymmetric import axisymmetric_integration
@@ -400,8 +399,3 @@ def advance(
             ops.dropped,
         )
     return new, Step(rec, sol, ops.active, ops.local_t, ops.operator, new)
-
-
-def __getattr__(name: str) -> object:
-    """Old names (``StepResult``), with a ``DeprecationWarning``."""
-    return renamed(__name__, name, {"StepResult": Step})

@@ -57,7 +57,7 @@ cones do not change, the step stays one cone program, and nothing is mapped
 between meshes: ``V_ref`` is a sum of particle masses and the filter's state
 is one number per material.
 
-Properties (tests/test_volume_correction.py):
+Properties (tests/step/test_volume_correction.py):
 
 * **No deficit, no change.**  With ``V = V_ref`` the term is zero, and the
   step is the uncorrected one bit for bit.

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_the_readme_test_command_installs_the_sweep_extra():
@@ -559,7 +559,7 @@ def test_a_metric_named_like_a_parameter_is_renamed_and_documented():
     )
     assert row["metric.explicit_dt"] == 2.5e-5 and row["runout"] == 0.5
     assert np.isnan(row["explicit_dt"]) and row["warnings"] == "a+b"
-    doc = (Path(__file__).resolve().parents[1] / "docs" / "sweep.md").read_text()
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "sweep.md").read_text()
     line = next(r for r in doc.splitlines() if r.startswith("| scene metrics |"))
     assert "`metric.<name>`" in line and "`metric.explicit_dt`" in line
     assert "joined by `+`" in line

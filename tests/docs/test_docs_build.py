@@ -6,7 +6,8 @@ fails the build).  The numbers the tutorials print are then read back from the
 built pages and checked against their closed-form references, the API inventory
 is checked against ``skfem_npfem.__all__``, and the gallery against ``demos/``.
 Needs the ``docs`` extra (installed by the README's test command); skipped
-without it.
+without it.  Marked ``docs``, which a plain ``pytest`` leaves out: run with
+``pytest -m docs``.
 """
 
 import html
@@ -20,7 +21,7 @@ import pytest
 
 import skfem_npfem
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 pytestmark = pytest.mark.docs
 

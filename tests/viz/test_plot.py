@@ -342,7 +342,7 @@ def test_no_opengl_gives_clear_error(tmp_path):
     )
     env = {**os.environ, "VTK_DEFAULT_OPENGL_WINDOW": "vtkOSMesaRenderWindow"}
     env["PYTHONPATH"] = os.pathsep.join(
-        [str(Path(__file__).resolve().parents[1]), env.get("PYTHONPATH", "")]
+        [str(Path(__file__).resolve().parents[2]), env.get("PYTHONPATH", "")]
     )
     proc = subprocess.run(
         [sys.executable, "-c", script],

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 #: The text files scanned, by suffix.
 SUFFIXES = {".py", ".md", ".inc", ".toml", ".txt", ".cfg", ".json", ".yml", ".yaml"}

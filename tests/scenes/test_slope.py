@@ -15,12 +15,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_bad_input import check_cli_error, run_cli
+from helpers import check_cli_error, run_cli
 
 import skfem_npfem as npfem
 from skfem_npfem.mesh.regions import Region, check_regions, fill_regions
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "docs" / "examples" / "two_layer_slope.json"
 
 #: Griffiths & Lane (1999), example 1: Bishop & Morgenstern's chart value.

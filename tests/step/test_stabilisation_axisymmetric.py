@@ -5,8 +5,8 @@ References: the divergence of a body of revolution (hoop terms
 geostatic (K0) state of an axisymmetric column, an exact solution of the step;
 Lamé's thick-walled cylinder (equilibrium without body force), whose
 element residual must vanish under refinement; and the equal-order
-checkerboard of the nodal mean stress at nu = 0.4999 that tests/test_axisymmetric.py
-measures (28 % without stabilisation).
+checkerboard of the nodal mean stress at nu = 0.4999 that
+tests/mesh/test_axisymmetric.py measures (28 % without stabilisation).
 """
 
 from __future__ import annotations
@@ -15,9 +15,8 @@ import math
 
 import numpy as np
 import pytest
+from helpers import RHO, assert_exact_geostatic_step, jittered_section
 from skfem import MeshTri
-from test_axisymmetric import jittered_section
-from test_stabilisation import RHO, assert_exact_geostatic_step
 
 from skfem_npfem import ConeInput, Contacts, LinearElastic, solve_step
 from skfem_npfem.mesh.axisymmetric import axisymmetric_integration

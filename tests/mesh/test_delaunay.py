@@ -544,7 +544,7 @@ def test_near_lattice_3d_positions_that_break_qhull_triangulated_mode():
     # which used to leave the alpha shape with no simplex at all.  The joggled
     # fallback must mesh every particle, reproducibly, with the lattice's volume
     # (to 1e-3: the displacements change it by ~1e-4).
-    data = np.load(Path(__file__).parent / "data" / "qhull_twisted_facet_3d.npz")
+    data = np.load(Path(__file__).parents[1] / "data" / "qhull_twisted_facet_3d.npz")
     x, h = data["x"], float(data["h"])
     tri = alpha_shape(x, h)
     assert tri.active.all()
@@ -627,7 +627,7 @@ def test_quarter_cylinder_after_one_step_meshes_conforming() -> None:
     # have no neighbour and are not on the boundary (6 056 with scipy 1.x's
     # qhull: a non-conforming mesh); meshed, every facet has two tetrahedra
     # except the boundary's, the same facets either way.
-    data = np.load(Path(__file__).parent / "data" / "qhull_twisted_facet_3d.npz")
+    data = np.load(Path(__file__).parents[1] / "data" / "qhull_twisted_facet_3d.npz")
     x, h = data["x"], float(data["h"])
     boundaries = []
     for keep in (False, True):

@@ -30,7 +30,7 @@ COARSE = [
     "rest_fraction=0",
     "linear_solver=qdldl",
 ]
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def cli(argv: list[str]) -> tuple[int, str, str]:

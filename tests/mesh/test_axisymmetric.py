@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import jittered_section
 from skfem import (
     Basis,
     BilinearForm,
@@ -53,17 +54,6 @@ TWO_PI = 2.0 * math.pi
 
 
 # ----------------------------------------------------------------- meshes ----
-def jittered_section(r0, r1, h, nr, nz, amount=0.25, seed=0):
-    """Structured mesh of [r0, r1] x [0, h] with interior nodes jittered."""
-    rng = np.random.default_rng(seed)
-    m = MeshTri.init_tensor(np.linspace(r0, r1, nr + 1), np.linspace(0, h, nz + 1))
-    p = m.p.copy()
-    step = min((r1 - r0) / nr, h / nz)
-    inner = np.setdiff1d(np.arange(p.shape[1]), m.boundary_nodes())
-    p[:, inner] += amount * step * rng.uniform(-1, 1, (2, inner.size))
-    return MeshTri(p, m.t)
-
-
 ANNULUS = dict(r0=0.5, r1=2.0, h=1.0)  # a, b, h of the annular rectangle
 
 

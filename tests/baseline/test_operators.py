@@ -6,7 +6,7 @@ exact constant strain at every Gauss point), scikit-fem's own assembly of
 HRZ lumping fractions of the P2 triangle/tet (1/19, 16/57; 1/36, 4/27, from
 the consistent mass matrix diagonals 1/30 : 8/45 and 1/70 : 8/105).  The
 library's cone step with stress points other than the nodes is tested in
-``tests/test_stress_points.py``.
+``tests/step/test_stress_points.py``.
 """
 
 from __future__ import annotations

@@ -9,7 +9,6 @@ themselves for the fields scikit-fem interpolates.
 from __future__ import annotations
 
 import runpy
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +24,7 @@ from skfem import (
 
 import skfem_npfem as npfem
 
-DEMO = Path(__file__).resolve().parents[1] / "demos" / "skfem_round_trip.py"
+DEMO = Path(__file__).resolve().parents[2] / "demos" / "skfem_round_trip.py"
 SOIL = npfem.LinearElastic(E=1e7, nu=0.3, rho=2000.0)
 
 
@@ -128,27 +127,3 @@ def test_non_simplex_meshes_and_mismatched_particles_are_refused():
         npfem.FixedMesh(mesh)(small.x)
     with pytest.raises(npfem.ParameterError, match="mesh_source"):
         npfem.advance(small, npfem.Model(dim=2, materials=[SOIL]), 1.0, "mesh")
-
-
-@pytest.mark.parametrize(
-    ("old", "new"),
-    [
-        ("StepData", "ConeInput"),
-        ("StepSolution", "ConeSolution"),
-        ("StepResult", "Step"),
-    ],
-)
-def test_old_step_names_warn_and_are_the_same_class(old, new):
-    with pytest.warns(DeprecationWarning, match=f"{old} is renamed {new}"):
-        cls = getattr(npfem, old)
-    assert cls is getattr(npfem, new)
-    mesh, fixed = _column(3, 3)
-    p = npfem.Particles.from_mesh(mesh, SOIL, fixed=fixed)
-    model = npfem.Model(dim=2, materials=[SOIL], mode="static")
-    _, step = npfem.advance(p, model, 1.0, mesh)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        assert isinstance(step, npfem.StepResult)
-        assert isinstance(step.solution, npfem.StepSolution)
-    with pytest.raises(AttributeError, match="StepNothing"):
-        npfem.StepNothing  # noqa: B018

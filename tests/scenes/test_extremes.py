@@ -5,7 +5,7 @@ check) live in :mod:`cases.extremes`, shared with
 ``demos/studies/extremes_matrix.py`` (which writes docs/extremes.md); this module
 asserts each of them and that the interior-point iterations stay roughly
 constant across the matrix.  The column-collapse part of the matrix is in
-tests/test_extremes_collapse.py.
+tests/scenes/test_extremes_collapse.py.
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ Reference: a configuration run in its own process gives the same summary as
 the same scene run here (same code, same numbers to round-off); a rerun starts
 nothing unless the library source changed; a failing configuration is reported
 with its log.  The demos built on
-it are tested in ``tests/test_baseline_demos.py``.
+it are tested in ``tests/baseline/test_demos.py``.
 """
 
 from __future__ import annotations

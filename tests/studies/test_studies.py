@@ -18,7 +18,7 @@ import collapse_validation
 import pytest
 import speed_accuracy
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 VALIDATION = ROOT / "docs" / "validation"
 
 

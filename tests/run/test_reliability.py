@@ -127,7 +127,7 @@ def test_estimate_covers_every_measured_run():
     # particles).  The estimate is above every measurement, by less than 6x (the 3D
     # envelope is the plastic block; an elastic 3D column needs 5x less).
     rows = json.loads(
-        (Path(__file__).parents[1] / "benchmarks/results/memory.json").read_text()
+        (Path(__file__).parents[2] / "benchmarks/results/memory.json").read_text()
     )
     rows = [r for r in rows if "n" in r]
     assert len(rows) >= 30
@@ -295,7 +295,7 @@ def test_step_count_refusal_is_overridden_by_size_check_false():
 
 
 # --------------------------------------------------------------- signals --
-# (subprocess tests with real signals: tests/test_reliability_signals.py)
+# (subprocess tests with real signals: tests/run/test_reliability_signals.py)
 
 
 # -------------------------------------------------------------- resuming --
@@ -460,7 +460,7 @@ def test_tangled_fixed_mesh_is_refused_before_solving(monkeypatch):
 def test_extremes_page_lists_no_stale_gaps():
     # The former gaps give one-line errors now (tests/test_bad_input.py):
     # the page and its generator say so, with the same words.
-    root = Path(__file__).parents[1]
+    root = Path(__file__).parents[2]
     page = (root / "docs/extremes.md").read_text()
     demo = (root / "demos/studies/extremes_matrix.py").read_text()
     assert "strict xfails" not in page and "strict xfails" not in demo

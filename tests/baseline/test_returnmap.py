@@ -4,7 +4,7 @@ Reference: one N-PFEM step (``conic.solve_step``, an independent SOCP) of a
 patch whose boundary follows a uniform strain increment: every node's stress
 is the closest point of the cone to the elastic trial in the energy norm.  The
 interior-point answer is accurate to O(sqrt(tol)) along the surface (measured
-in tests/test_conic.py), so the comparison runs at tol = 1e-10 and gates at
+in tests/step/test_conic.py), so the comparison runs at tol = 1e-10 and gates at
 5e-5 c.  Also exact checks: the returned stress lies on the cone, the plastic
 strain follows the flow rule, elastic trials are untouched.
 """
