@@ -10,7 +10,9 @@ The subpackages follow one step's data flow: particles (:mod:`.particles`, with
 :mod:`.materials` and the walls of :mod:`.boundary`) -> their mesh and smoothing
 cells (:mod:`.mesh`) -> the cone program, solved and read back (:mod:`.step`) ->
 the time loop with output and checkpoints (:mod:`.run`, files in :mod:`.io`).
-Ready problems are :mod:`.scenes`; :mod:`.baseline` holds the methods N-PFEM is
+:mod:`.limit` solves the collapse multiplier and the factor of safety on the
+step's operator and cones.  Ready problems are :mod:`.scenes`;
+:mod:`.baseline` holds the methods N-PFEM is
 compared with, :mod:`.sweeps` runs parameter studies on Dask, :mod:`.viz` draws,
 :mod:`.cli` is the command line.  Every public name is available flat from the
 package.
@@ -43,6 +45,13 @@ from .errors import (
     SolverError,
 )
 from .io import ResultWriter, read_pvd, read_step
+from .limit import (
+    LimitResult,
+    SafetyResult,
+    limit_analysis,
+    reduced_strength,
+    strength_reduction,
+)
 from .loads import surface_load
 from .materials import (
     DruckerPrager,
@@ -66,11 +75,9 @@ from .run.rest import AtRest
 from .run.simulation import Simulation
 from .scenes import SCENES, get_scene, run_scene
 from .step.conic import ConeSolution, solve_step
-from .step.limit import LimitResult, limit_analysis
 from .step.model import Model
 from .step.program import ConeInput
 from .step.records import Step, StepRecord, skfem_fields
-from .step.safety import SafetyResult, reduced_strength, strength_reduction
 from .step.solver import SolverOptions
 from .step.stages import advance
 from .sweeps import sweep
