@@ -34,7 +34,6 @@ from ._deprecated import RENAMED as _RENAMED
 from ._deprecated import renamed as _renamed
 
 # isort: split
-from .baseline.roughness import stress_roughness
 from .bodies import BodyOfRevolution, RigidBody, RigidPlane
 from .boundary import Contacts, RigidWall, floor, wall_x
 from .errors import (
@@ -70,6 +69,7 @@ from .mesh.axisymmetric import (
 from .mesh.delaunay import Triangulation, alpha_shape
 from .mesh.smoothing import NodalIntegration, nodal_integration, p1_gradients
 from .mesh.sources import AlphaShapeMesher, FixedMesh, main_body
+from .metrics import stress_roughness
 from .particles import Particles
 from .run.rest import AtRest
 from .run.simulation import Simulation
