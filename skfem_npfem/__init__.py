@@ -10,12 +10,12 @@ The subpackages follow one step's data flow: particles (:mod:`.particles`, with
 :mod:`.materials` and the walls of :mod:`.boundary`) -> their mesh and smoothing
 cells (:mod:`.mesh`) -> the cone program, solved and read back (:mod:`.step`) ->
 the time loop with output and checkpoints (:mod:`.run`, files in :mod:`.io`).
-:mod:`.limit` solves the collapse multiplier and the factor of safety on the
-step's operator and cones.  Ready problems are :mod:`.scenes`;
-:mod:`.baseline` holds the methods N-PFEM is
-compared with, :mod:`.sweeps` runs parameter studies on Dask, :mod:`.viz` draws,
-:mod:`.cli` is the command line.  Every public name is available flat from the
-package.
+:mod:`.limit` finds the collapse multiplier and the factor of safety on the
+step's operator and cones.  Ready problems are :mod:`.scenes`; :mod:`.baseline`
+holds the methods N-PFEM is compared with, :mod:`.metrics` the stress roughness
+they are measured by, :mod:`.sweeps` runs parameter studies on Dask, :mod:`.viz`
+draws, :mod:`.cli` is the command line.  Every public name is available flat
+from the package.
 
 A scikit-fem mesh goes in and comes out: :meth:`Particles.from_mesh` puts a
 particle on every node of a ``MeshTri``/``MeshTet``, the same mesh is the mesh
