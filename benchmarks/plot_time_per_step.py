@@ -94,7 +94,10 @@ def plot(path: Path = OUT) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from skfem_npfem.baseline.reporting import save_png
+    studies = str(ROOT / "demos" / "studies")
+    if studies not in sys.path:
+        sys.path.insert(0, studies)
+    from _reporting import save_png
 
     pool = pooled()
     fig, ax = plt.subplots(figsize=(6.4, 4.4))

@@ -10,10 +10,12 @@ The subpackages follow one step's data flow: particles (:mod:`.particles`, with
 :mod:`.materials` and the walls of :mod:`.boundary`) -> their mesh and smoothing
 cells (:mod:`.mesh`) -> the cone program, solved and read back (:mod:`.step`) ->
 the time loop with output and checkpoints (:mod:`.run`, files in :mod:`.io`).
-Ready problems are :mod:`.scenes`; :mod:`.baseline` holds the methods N-PFEM is
-compared with, :mod:`.sweeps` runs parameter studies on Dask, :mod:`.viz` draws,
-:mod:`.cli` is the command line.  Every public name is available flat from the
-package.
+:mod:`.limit` finds the collapse multiplier and the factor of safety on the
+step's operator and cones.  Ready problems are :mod:`.scenes`; :mod:`.baseline`
+holds the methods N-PFEM is compared with, :mod:`.metrics` the stress roughness
+they are measured by, :mod:`.sweeps` runs parameter studies on Dask, :mod:`.viz`
+draws, :mod:`.cli` is the command line.  Every public name is available flat
+from the package.
 
 A scikit-fem mesh goes in and comes out: :meth:`Particles.from_mesh` puts a
 particle on every node of a ``MeshTri``/``MeshTet``, the same mesh is the mesh
@@ -26,7 +28,6 @@ from __future__ import annotations
 
 __version__ = "0.1.0"
 
-from .baseline.roughness import stress_roughness
 from .bodies import BodyOfRevolution, RigidBody, RigidPlane
 from .boundary import Contacts, RigidWall, floor, wall_x
 from .errors import (
@@ -37,6 +38,13 @@ from .errors import (
     SolverError,
 )
 from .io import ResultWriter, read_pvd, read_step
+from .limit import (
+    LimitResult,
+    SafetyResult,
+    limit_analysis,
+    reduced_strength,
+    strength_reduction,
+)
 from .loads import surface_load
 from .materials import (
     DruckerPrager,
@@ -55,16 +63,15 @@ from .mesh.axisymmetric import (
 from .mesh.delaunay import Triangulation, alpha_shape
 from .mesh.smoothing import NodalIntegration, nodal_integration, p1_gradients
 from .mesh.sources import AlphaShapeMesher, FixedMesh, main_body
+from .metrics import stress_roughness
 from .particles import Particles
 from .run.rest import AtRest
 from .run.simulation import Simulation
 from .scenes import SCENES, get_scene, run_scene
 from .step.conic import ConeSolution, solve_step
-from .step.limit import LimitResult, limit_analysis
 from .step.model import Model
 from .step.program import ConeInput
 from .step.records import Step, StepRecord, skfem_fields
-from .step.safety import SafetyResult, reduced_strength, strength_reduction
 from .step.solver import SolverOptions
 from .step.stages import advance
 from .sweeps import sweep

@@ -24,12 +24,14 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import warnings
 from collections.abc import Sequence
 
 from . import __version__
 from .errors import NpfemError, ParameterError, RunInterrupted
 from .io import dumps
 from .run.control import end_line
+from .scenes import SCENES, run_scene
 from .sweeps.cli import add_sweep_commands
 
 __all__ = ["main"]
@@ -84,8 +86,6 @@ def _format_default(p) -> str:
 
 def cmd_scenes(args: argparse.Namespace) -> int:
     """Print the scene catalogue."""
-    from .scenes import SCENES
-
     if args.markdown:
         print(scenes_markdown())
         return 0
@@ -125,8 +125,6 @@ def cmd_scenes(args: argparse.Namespace) -> int:
 
 def scenes_markdown() -> str:
     """The scene catalogue as Markdown (this is docs/scenes.md)."""
-    from .scenes import SCENES
-
     lines = [
         "# Scenes",
         "",
@@ -168,14 +166,10 @@ def scenes_markdown() -> str:
 
 def cmd_run(args: argparse.Namespace) -> int:
     """Run one scene."""
-    from .scenes import run_scene
-
     overrides = _parse_sets(args.set or [])
     progress = False if args.quiet else None
     if args.resume and not args.out:
         raise ParameterError("--resume", True, "needs --out DIR with a checkpoint")
-    import warnings
-
     # A scene's warnings (e.g. a limit load stopped by its cap before the
     # plateau) are printed as one clean line each, not as Python's
     # "file:line: UserWarning" block; the warning filters stay as they are.
@@ -251,8 +245,6 @@ def cmd_plot(args: argparse.Namespace) -> int:
         raise NpfemError(
             f"plotting needs the viz extra (pip install 'skfem-npfem[viz]'): {err}"
         ) from None
-    import warnings
-
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         written = plot_results(

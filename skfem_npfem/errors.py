@@ -7,6 +7,8 @@ Every error a user can trigger through the public API or the CLI derives from
 
 from __future__ import annotations
 
+import signal
+
 
 class NpfemError(Exception):
     """Base class of all library errors."""
@@ -126,8 +128,6 @@ class RunInterrupted(KeyboardInterrupt):
     @property
     def signal_name(self) -> str:
         """``"SIGINT"``, ``"SIGTERM"`` or ``"signal N"``."""
-        import signal
-
         try:
             return signal.Signals(self.signum).name
         except ValueError:

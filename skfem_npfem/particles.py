@@ -15,6 +15,8 @@ from skfem import Mesh
 
 from .errors import ParameterError
 from .materials import Material, full_voigt_size
+from .mesh.axisymmetric import axisymmetric_integration
+from .mesh.smoothing import check_p1_mesh, nodal_integration
 
 __all__ = ["Particles"]
 
@@ -210,9 +212,6 @@ class Particles:
         >>> p.n, float(p.mass.sum()), int(p.fixed.sum())
         (15, 4000.0, 6)
         """
-        from .mesh.axisymmetric import axisymmetric_integration
-        from .mesh.smoothing import check_p1_mesh, nodal_integration
-
         if not isinstance(mesh, Mesh):
             raise ParameterError(
                 "mesh", type(mesh).__name__, "a scikit-fem MeshTri or MeshTet"

@@ -117,7 +117,7 @@ def roughness_run(params: dict[str, Any], steps: int | None = None) -> dict[str,
         maximum, run-out, final height, volume change, the largest
         displacement and speed at the end, the median step time and wall time.
     """
-    from skfem_npfem.baseline.roughness import stress_roughness
+    from skfem_npfem.metrics import stress_roughness
     from skfem_npfem.scenes import get_scene
 
     scene = get_scene("column-collapse")

@@ -65,8 +65,7 @@ from pathlib import Path
 
 import numpy as np
 from _common import ROOT, WORK, floats, ints
-
-from skfem_npfem.baseline.reporting import save_png
+from _reporting import save_png
 
 SCENE = "column-collapse"
 G = 9.81

@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse.linalg as sla
 from _common import ROOT
+from _reporting import save_png, write_result
 from skfem import (
     Basis,
     BilinearForm,
@@ -53,7 +54,6 @@ from skfem.helpers import ddot, div, sym_grad
 
 from skfem_npfem import ConeInput, Contacts, solve_step
 from skfem_npfem.baseline import gauss_mesh
-from skfem_npfem.baseline.reporting import save_png, write_result
 from skfem_npfem.materials import LinearElastic
 from skfem_npfem.mesh.smoothing import nodal_integration
 

@@ -47,10 +47,10 @@ from pathlib import Path
 
 import numpy as np
 from _common import ROOT
+from _reporting import save_png, write_result
 
 from skfem_npfem.baseline import FemRemap
 from skfem_npfem.baseline.fem_nodes import gauss_points
-from skfem_npfem.baseline.reporting import save_png, write_result
 from skfem_npfem.baseline.transfer import recover_nodal
 from skfem_npfem.materials import LinearElastic
 from skfem_npfem.mesh.sources import AlphaShapeMesher

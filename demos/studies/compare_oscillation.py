@@ -9,7 +9,7 @@ recovery) and the explicit SPFEM through the same scene (``--set method=``):
    floor), from release to rest.  The stress roughness ``R`` of every step
    (``stress_roughness`` of the step records: rms over interior particles of
    the departure of sigma_v from its mesh neighbours' mean, relative to rms
-   sigma_v; ``skfem_npfem.baseline.roughness``) against the normalised time
+   sigma_v; ``skfem_npfem.metrics``) against the normalised time
    ``t_bar = t / sqrt(H0 / g)``, and the vertical stress of the particles at
    ``t_bar`` = 1, 2, 3 and at rest (the VTU files of the runs), side by side.
 2. **Elastic column under sudden gravity** (scene ``elastic-column``, dynamic,
@@ -19,7 +19,7 @@ recovery) and the explicit SPFEM through the same scene (``--set method=``):
    with the backward-Euler scheme of the scene (theta = 1), which damps the
    high modes.
 
-Each configuration runs in its own process (:func:`skfem_npfem.baseline.study.run_cases`
+Each configuration runs in its own process (``_study.run_cases``
 on Dask), its folder under ``--work`` (default ``out/comparison/oscillation``;
 a rerun reuses finished runs).  Writes ``oscillation.json``,
 ``oscillation.png`` (R over time) and ``oscillation_sigma_v.png`` (pictures)
@@ -40,9 +40,9 @@ from pathlib import Path
 
 import numpy as np
 from _common import ROOT
+from _reporting import markdown_table, save_png, write_result
+from _study import run_cases, study_arguments, study_folders
 
-from skfem_npfem.baseline.reporting import markdown_table, save_png, write_result
-from skfem_npfem.baseline.study import run_cases, study_arguments, study_folders
 from skfem_npfem.io import read_pvd, read_step
 
 OUT = ROOT / "docs" / "validation" / "comparison"

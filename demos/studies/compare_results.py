@@ -2,7 +2,7 @@
 """Results side by side: footing bearing factors, collapse deposits and costs.
 
 Every method through the same scenes (``--set method=``), each configuration
-in its own process (:func:`skfem_npfem.baseline.study.run_cases` on Dask), so
+in its own process (``_study.run_cases`` on Dask), so
 that wall time and peak memory are each run's own:
 
 1. **Strip footing** (scene ``strip-footing``: smooth rigid footing, weightless
@@ -40,9 +40,9 @@ import time
 from pathlib import Path
 
 from _common import ROOT
+from _reporting import markdown_table, save_png, write_result
+from _study import run_cases, study_arguments, study_folders
 
-from skfem_npfem.baseline.reporting import markdown_table, save_png, write_result
-from skfem_npfem.baseline.study import run_cases, study_arguments, study_folders
 from skfem_npfem.laws import prandtl_nc as n_c
 
 OUT = ROOT / "docs" / "validation" / "comparison"

@@ -50,9 +50,9 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _reporting import save_png
 
 import skfem_npfem as npfem
-from skfem_npfem.baseline.reporting import save_png
 
 D = 0.0357
 

@@ -39,8 +39,8 @@ import traceback
 from pathlib import Path
 
 from _common import VALIDATION, WORK, replace_rows
+from _reporting import save_png
 
-from skfem_npfem.baseline.reporting import save_png
 from skfem_npfem.errors import ParameterError, SolverError
 from skfem_npfem.scenes import get_scene
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """How rough is a smooth field? The stress roughness R against its floor.
 
-The stress roughness ``R`` (``skfem_npfem.baseline.roughness``) compares
+The stress roughness ``R`` (``skfem_npfem.metrics``) compares
 each interior particle's vertical stress with the mean of its mesh neighbours.
 On an irregular mesh a *smooth* field does not score zero: a gradient gives
 ``grad s . (x_i - mean_j x_j)`` wherever the neighbours are not centred on the
@@ -11,7 +11,7 @@ collapse is.
 
 For every step of each run this study records ``R`` and its floor: the ``R``
 of the least-squares cubic fit of the same stresses on the same particles and
-mesh (:func:`skfem_npfem.baseline.roughness.roughness_floor`), and the excess
+mesh (:func:`skfem_npfem.metrics.roughness_floor`), and the excess
 ``sqrt(R^2 - floor^2)``, the part a smooth field of that shape would not have.
 Runs: the aspect-ratio sweep a = 0.5 / 1 / 2 / 4 / 8 of ``column-collapse``
 at its default settings (stabilisation 30; ``--kappas`` sets the volume
@@ -78,7 +78,7 @@ def run(spec: tuple[float, int, float, int]) -> dict[str, Any]:
     realisation of the same collapse (its R history, run-out and volume show
     the run-to-run spread).
     """
-    from skfem_npfem.baseline.roughness import roughness_floor, roughness_index
+    from skfem_npfem.metrics import roughness_floor, roughness_index
     from skfem_npfem.scenes import get_scene
 
     aspect, across, kappa, repeat = spec

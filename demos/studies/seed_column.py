@@ -73,8 +73,8 @@ from pathlib import Path
 
 import numpy as np
 from _common import ROOT, benchmark
+from _reporting import save_png
 
-from skfem_npfem.baseline.reporting import save_png
 from skfem_npfem.laws import lube2004_runout
 from skfem_npfem.scenes.collapse_runs import bare_method
 
@@ -267,9 +267,9 @@ def load_step(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def vtu_roughness(folder: Path) -> list[float]:
-    """Stress roughness of every written step (skfem_npfem.baseline.roughness)."""
-    from skfem_npfem.baseline.roughness import stress_roughness
+    """Stress roughness of every written step (skfem_npfem.metrics)."""
     from skfem_npfem.io import read_pvd
+    from skfem_npfem.metrics import stress_roughness
 
     out = []
     for _, path in read_pvd(folder / "result.pvd")[1:]:

@@ -50,8 +50,8 @@ from typing import Any
 
 import numpy as np
 from _common import ROOT, WORK
+from _reporting import save_png
 
-from skfem_npfem.baseline.reporting import save_png
 from skfem_npfem.laws import lajeunesse2004_runout, lube2004_runout
 
 R0 = 0.039

@@ -26,9 +26,9 @@ import time
 from pathlib import Path
 
 from _common import VALIDATION
+from _reporting import save_png
 
 import skfem_npfem as npfem
-from skfem_npfem.baseline.reporting import save_png
 
 #: Bishop & Morgenstern's chart value for the slope (Griffiths & Lane 1999).
 REFERENCE = 1.38

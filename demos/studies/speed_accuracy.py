@@ -2,7 +2,7 @@
 """The speed-accuracy trade: error against wall time for every method.
 
 Two problems, each over particle spacings and time steps, each configuration in
-its own process on Dask (:func:`skfem_npfem.baseline.study.run_cases`: the
+its own process on Dask (``_study.run_cases``: the
 tasks of :func:`skfem_npfem.sweeps.run_tasks` start ``python -m skfem_npfem
 run ...``), recording wall time, peak memory, error and stress roughness:
 
@@ -52,9 +52,16 @@ import time
 from pathlib import Path
 
 from _common import ROOT
+from _reporting import (
+    best_within,
+    cheapest_within,
+    markdown_table,
+    pareto_front,
+    save_png,
+    write_result,
+)
+from _study import run_cases, study_arguments, study_folders
 
-from skfem_npfem.baseline.reporting import save_png, write_result
-from skfem_npfem.baseline.study import run_cases, study_arguments, study_folders
 from skfem_npfem.io import write_bytes
 from skfem_npfem.scenes.column_collapse import (
     COLLAPSE_STABILISATION,
@@ -231,8 +238,6 @@ def usable(result: dict, problem: str) -> list[tuple[str, dict]]:
 
 def fronts(result: dict) -> dict:
     """Per problem and setting: the names on its Pareto front, cheapest first."""
-    from skfem_npfem.baseline.reporting import pareto_front
-
     out = {}
     for problem in ("footing", "collapse"):
         rows = usable(result, problem)
@@ -410,8 +415,6 @@ def _setting(r: dict) -> str:
 
 
 def _runs_table(result: dict, problem: str) -> str:
-    from skfem_npfem.baseline.reporting import markdown_table
-
     on_front = {n for names in result["fronts"][problem].values() for n in names}
     rows = []
     for name, r in result["rows"].items():
@@ -483,12 +486,6 @@ def _pick_row(kind: str, limit: float, best: dict, nbest: dict | None):
 
 def _choices(result: dict, problem: str) -> tuple[str, list[str], list[str]]:
     """Accuracy and budget tables, where N-PFEM loses, and the short advice."""
-    from skfem_npfem.baseline.reporting import (
-        best_within,
-        cheapest_within,
-        markdown_table,
-    )
-
     rows = usable(result, problem)
     if not rows:
         return "(no finished runs)", [], []
@@ -582,8 +579,6 @@ def _roughness_notes(result: dict) -> list[str]:
 
 def _step_cost(result: dict) -> tuple[str, list[str]]:
     """Median wall time per step and particle per setting; where it beats N-PFEM."""
-    from skfem_npfem.baseline.reporting import markdown_table
-
     rows, notes = [], []
     for problem in ("footing", "collapse"):
         med = _median_by_setting(

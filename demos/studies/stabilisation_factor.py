@@ -138,7 +138,7 @@ def page(rows: list[dict[str, Any]]) -> str:
         "stabilisation_factor.json; do not edit by hand: rerun it (--page). -->",
         "",
         "R: stress roughness of sigma_v (`stress_roughness` of "
-        "`skfem_npfem/baseline/roughness.py`); run-out (L - L0)/L0; "
+        "`skfem_npfem/metrics.py`); run-out (L - L0)/L0; "
         "volume: mesh-volume change at the end; s/step: median step time (two "
         "runs at a time on 2 cores).",
         "",

@@ -10,7 +10,7 @@ oscillation, the stabilisation and the volume correction) and
    factor ``beta`` of the element-residual stabilisation: ``particle`` masses
    without stabilisation (the library's former defaults), ``mesh`` masses with
    beta = 0, 3, 10, 30, 100.  Reported: the stress roughness ``R`` (the
-   measure of ``skfem_npfem.baseline.roughness.stress_roughness``) after 20, 40,
+   measure of ``skfem_npfem.metrics.stress_roughness``) after 20, 40,
    80, 160 steps, its maximum over the run and at rest, the normalised run-out,
    the final height, the volume change and the median time of a step.
 2. **Remeshed elastic column at rest** (the same scene with c = 1 MPa: no
@@ -54,7 +54,7 @@ from skfem_npfem.sweeps import run_tasks
 
 OUT = VALIDATION / "stabilisation.json"
 BEFORE = VALIDATION / "collapse_validation_before.json"
-ROUGHNESS = "`stress_roughness` of `skfem_npfem/baseline/roughness.py`"
+ROUGHNESS = "`stress_roughness` of `skfem_npfem/metrics.py`"
 
 #: Collapse cases: label -> scene parameters.
 COLLAPSE = {

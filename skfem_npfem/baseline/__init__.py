@@ -15,14 +15,13 @@ runs them as its ``stepper`` (the scenes' ``--set method=``):
 Building blocks: :mod:`.operators` (Gauss-point operators from scikit-fem
 bases), :mod:`.fem_nodes` (P1/P2 nodal data), :mod:`.transfer` (nearest /
 patch recovery), :mod:`.returnmap` (closed-form return to the library's
-cones), :mod:`.roughness` (the stress-roughness index).  A method is
-chosen by name in :mod:`skfem_npfem.scenes.methods`.
+cones).  A method is chosen by name in :mod:`skfem_npfem.scenes.methods`,
+which also records each step's stress roughness (:mod:`skfem_npfem.metrics`).
 """
 
 from .fem_remap import FemRemap, GaussState
 from .operators import GaussMesh, StressPoints, gauss_mesh
 from .returnmap import ReturnResult, return_map
-from .roughness import stress_roughness
 from .spfem import SPFEM, stable_time_step
 from .transfer import TRANSFERS, locate, recover_nodal, transfer_values
 
@@ -39,6 +38,5 @@ __all__ = [
     "recover_nodal",
     "return_map",
     "stable_time_step",
-    "stress_roughness",
     "transfer_values",
 ]

@@ -45,7 +45,9 @@ from skfem import (
     ElementTriP1,
     ElementTriP2,
     ElementVector,
+    LinearForm,
     Mesh,
+    asm,
 )
 
 from ..errors import ParameterError
@@ -394,8 +396,6 @@ def body_force(gm: GaussMesh, rho_e: np.ndarray, g: np.ndarray) -> np.ndarray:
     (for P2 the vertex loads are zero on triangles and negative on tets: that
     is the consistent load, exact for the static problem).
     """
-    from skfem import LinearForm, asm
-
     sb = gm.scalar_basis(2)
 
     @LinearForm

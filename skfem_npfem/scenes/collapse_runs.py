@@ -6,7 +6,7 @@ with the same time loop as the plane-strain scene: adaptive time step (halved
 on a solver failure), VTU output and checkpoints, and the stop at rest.  A
 callback records per step the run-out and the height of the main body on the
 step record, :func:`~.methods.with_method` the stress roughness
-(:mod:`skfem_npfem.baseline.roughness`); the metrics are computed from those
+(:mod:`skfem_npfem.metrics`); the metrics are computed from those
 records.
 
 :data:`COLUMN_COLLAPSE` is the scene registered as ``column-collapse``: the

@@ -3,8 +3,8 @@
 A scene with the parameter ``analysis`` (:func:`analysis_param`) builds its
 particles, walls and model as usual; with ``analysis=limit`` its
 :class:`~skfem_npfem.scenes.base.SceneRun` runs no step and its metrics come
-from :func:`~skfem_npfem.step.limit.limit_analysis` (or
-:func:`~skfem_npfem.step.limit.strength_reduction`) on the initial mesh.  The
+from :func:`~skfem_npfem.limit.analysis.limit_analysis` (or
+:func:`~skfem_npfem.limit.safety.strength_reduction`) on the initial mesh.  The
 solve happens once, when the metrics are first asked for
 (:func:`limit_scene_run`).
 """
@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
-from ..step.limit import LimitResult
+from ..limit.analysis import LimitResult
 from .base import Param, SceneRun
 
 __all__ = [

@@ -15,7 +15,7 @@ This module is the one place where a method is chosen by name:
 an explicit step above the stable one): each is one
 :class:`~skfem_npfem.errors.ParameterError` before the first step.
 
-Every method reports the stress roughness of :mod:`skfem_npfem.baseline.roughness`
+Every method reports the stress roughness of :mod:`skfem_npfem.metrics`
 (on each step record and in the summary) and the method-specific metrics of
 :data:`METHOD_METRICS` (``null`` for the methods they do not apply to).
 """
@@ -26,9 +26,10 @@ from typing import Any
 
 import numpy as np
 
-from ..baseline import SPFEM, TRANSFERS, FemRemap, stress_roughness
+from ..baseline import SPFEM, TRANSFERS, FemRemap
 from ..baseline.operators import ELEMENTS
 from ..errors import ParameterError
+from ..metrics import stress_roughness
 from .base import Param, SceneRun
 
 __all__ = [

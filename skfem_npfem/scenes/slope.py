@@ -19,7 +19,7 @@ Stages, in one run:
 2. **factor of safety** by strength reduction (``c/F``, ``tan(phi)/F``) with
    the collapse mechanism (with an output folder: ``mechanism.npz``, drawn by
    ``skfem-npfem plot`` as ``plots/mechanism.png``), from limit analysis on
-   the particles' mesh (:func:`~skfem_npfem.step.safety.strength_reduction`;
+   the particles' mesh (:func:`~skfem_npfem.limit.safety.strength_reduction`;
    ``analysis=limit`` runs this stage only);
 3. **failure and run-out**, with ``runout=true``: the strengths divided by
    ``reduction`` (default: ``margin`` times the factor of safety, or 1 when

@@ -14,9 +14,9 @@ import numpy as np
 from skfem import MeshTri
 
 from ..constants import GRAVITY
+from ..limit.safety import strength_reduction
 from ..mesh.smoothing import nodal_integration
 from ..run.simulation import Simulation
-from ..step.safety import strength_reduction
 from .common import (
     solver_from,
 )

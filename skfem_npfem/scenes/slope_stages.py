@@ -21,13 +21,13 @@ from skfem import MeshTri
 
 from ..boundary import Contacts
 from ..constants import GRAVITY
+from ..limit.safety import SafetyResult, reduced_strength, strength_reduction
 from ..materials import LinearElastic, Material
 from ..mesh.regions import CrossSection, fill_regions
 from ..mesh.smoothing import nodal_integration
 from ..step.conic import solve_step
 from ..step.model import Model
 from ..step.program import ConeInput
-from ..step.safety import SafetyResult, reduced_strength, strength_reduction
 from .common import fidelity_from, solver_from
 from .limit_mode import limit_metrics
 from .slope_runout import save_mechanism

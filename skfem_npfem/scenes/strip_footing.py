@@ -29,12 +29,12 @@ from skfem import MeshTri
 
 from ..errors import ParameterError
 from ..laws import prandtl_nc
+from ..limit.analysis import limit_analysis
 from ..materials import DruckerPrager, Material, MohrCoulomb, Tresca
 from ..mesh.smoothing import nodal_integration
 from ..mesh.sources import FixedMesh
 from ..particles import Particles
 from ..run.simulation import Simulation
-from ..step.limit import limit_analysis
 from ..step.model import Model
 from .base import Param, Renamed, Scene, SceneRun
 from .common import (

@@ -10,8 +10,6 @@ The data flow of :func:`advance` (in :mod:`.stages`) goes through these modules:
   stabilisation and the volume correction;
 * :mod:`.conic` -- scaling, Clarabel's problem and the solution read back from the
   duals (:class:`ConeSolution`);
-* :mod:`.limit` -- the same operator and cones without elasticity or time: the
-  collapse multiplier and the factor of safety as cone programs;
 * :mod:`.solver`, :mod:`.backends` -- solver options and the direct linear solvers;
 * :mod:`.kinematics` -- stress rotation, strain measures, energies;
 * :mod:`.stages` -- :func:`advance`: the three stages of a step, its
@@ -19,24 +17,19 @@ The data flow of :func:`advance` (in :mod:`.stages`) goes through these modules:
 """
 
 from .conic import ConeSolution, solve_step
-from .limit import LimitResult, limit_analysis
 from .model import Model
 from .program import ConeInput
 from .records import Step, StepRecord
-from .safety import strength_reduction
 from .solver import SolverOptions
 from .stages import advance
 
 __all__ = [
     "ConeInput",
     "ConeSolution",
-    "LimitResult",
     "Model",
     "SolverOptions",
     "Step",
     "StepRecord",
     "advance",
-    "limit_analysis",
     "solve_step",
-    "strength_reduction",
 ]

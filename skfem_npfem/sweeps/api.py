@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ParameterError
+from ..scenes import get_scene
 from .cluster import (
     CONNECT_TIMEOUT,
     check_options,
@@ -105,8 +106,6 @@ def sweep(
     ... )
     >>> table[["spacing", "nu", "sigma_v_rel_l2"]]  # doctest: +SKIP
     """
-    from ..scenes import get_scene
-
     the_scene = get_scene(scene)
     runs = plan_runs(the_scene, grid, fixed, cases)
     require_dask()

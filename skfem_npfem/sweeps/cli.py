@@ -4,20 +4,21 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from typing import Any
 
+from ..scenes import get_scene
+from .api import sweep
 from .cluster import CONNECT_TIMEOUT
 from .engine import RETRIES
+from .plan import parse_grid_args, parse_set_args
+from .plot import plot_sweep
 
 __all__ = ["add_sweep_commands", "cmd_sweep", "cmd_sweep_plot"]
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     """Run a sweep; exit code 1 when some runs failed (they are in the table)."""
-    from ..scenes import get_scene
-    from .api import sweep
-    from .plan import parse_grid_args, parse_set_args
-
     get_scene(args.scene)  # an unknown scene is the first thing to report
     grid = parse_grid_args(args.grid)
     fixed = parse_set_args(args.set)
@@ -44,10 +45,6 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 def cmd_sweep_plot(args: argparse.Namespace) -> int:
     """Draw one metric of a sweep against one parameter."""
-    import warnings
-
-    from .plot import plot_sweep
-
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         path = plot_sweep(args.dir, args.metric, args.param, out=args.png, log=args.log)

@@ -15,6 +15,7 @@ Columns, in this order:
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 import numbers
@@ -22,6 +23,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from ..errors import ParameterError
 from ..io import atomic_path
 
 __all__ = ["TABLE_CSV", "TABLE_PARQUET", "flatten", "read_table", "write_table"]
@@ -119,8 +121,6 @@ def write_table(rows: Iterable[Mapping[str, Any]], out: Path) -> Any:
 
 
 def _has_pyarrow() -> bool:
-    import importlib.util
-
     try:
         return importlib.util.find_spec("pyarrow") is not None
     except (ImportError, ValueError):
@@ -136,8 +136,6 @@ def read_table(out: str | Path) -> Any:
         ``out`` holds no sweep table.
     """
     import pandas as pd
-
-    from ..errors import ParameterError
 
     out = Path(out)
     if (out / TABLE_PARQUET).is_file() and _has_pyarrow():

@@ -18,6 +18,7 @@ from typing import Any
 
 from ..errors import CheckpointError, NpfemError
 from ..io import write_bytes
+from ..scenes import run_scene
 
 __all__ = ["SUMMARY", "ByValue", "call", "has_checkpoint", "run_one", "same_parameters"]
 
@@ -125,8 +126,6 @@ def run_one(
 def _run_one(
     scene: str, overrides: dict[str, Any], folder: str, values: dict[str, Any]
 ) -> dict[str, Any]:
-    from ..scenes import run_scene
-
     out = Path(folder)
     summary_path = out / SUMMARY
     if summary_path.is_file():

@@ -1,4 +1,4 @@
-"""Limit analysis as one cone program (skfem_npfem.step.limit).
+"""Limit analysis as one cone program (skfem_npfem.limit).
 
 References: the exact bearing factor N_c of a smooth strip footing on a
 weightless Mohr-Coulomb soil (Prandtl 1920, Reissner 1924; ``laws.prandtl_nc``),

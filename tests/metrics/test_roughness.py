@@ -21,13 +21,13 @@ from roughness_reference import reference_roughness
 from skfem import MeshTri
 
 import skfem_npfem as npfem
-from skfem_npfem.baseline.roughness import (
+from skfem_npfem.io import read_pvd
+from skfem_npfem.metrics import (
     MIN_INTERIOR,
     roughness_floor,
     roughness_index,
     stress_roughness,
 )
-from skfem_npfem.io import read_pvd
 from skfem_npfem.scenes import run_scene
 
 

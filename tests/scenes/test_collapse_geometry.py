@@ -19,8 +19,8 @@ from roughness_reference import reference_roughness
 from skfem import MeshTet, MeshTri
 
 import skfem_npfem as npfem
-from skfem_npfem.baseline.roughness import roughness_index
 from skfem_npfem.cli import main
+from skfem_npfem.metrics import roughness_index
 from skfem_npfem.scenes import get_scene
 from skfem_npfem.scenes.collapse_runs import lube2004_runout
 from skfem_npfem.scenes.sizing import lattice_particles

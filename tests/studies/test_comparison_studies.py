@@ -10,8 +10,8 @@ it are tested in ``tests/baseline/test_demos.py``.
 from __future__ import annotations
 
 import pytest
+from _study import run_cases
 
-from skfem_npfem.baseline.study import run_cases
 from skfem_npfem.scenes import run_scene
 
 pytest.importorskip("distributed", reason="needs the sweep extra (Dask)")

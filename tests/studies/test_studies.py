@@ -90,9 +90,8 @@ def test_committed_figures_are_stored_with_a_palette(tmp_path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import numpy as np
+    from _reporting import save_png
     from PIL import Image
-
-    from skfem_npfem.baseline.reporting import save_png
 
     fig, ax = plt.subplots(figsize=(4, 3))
     x = np.linspace(0, 1, 200)
@@ -125,3 +124,17 @@ def test_penetration_pages_quote_their_records():
         assert f"| {name} |" in table and f"| {r['N_c']:.2f} |" in table
         # Teh & Houlsby's (1991) smooth-cone factor within 15 % in every case
         assert abs(r["N_c"] / (1.25 + 1.84 * math.log(r["rigidity_index"])) - 1) < 0.15
+
+
+def test_examples_of_the_studies_helpers():
+    """The docstring examples of the studies' shared helpers (Markdown tables,
+    Pareto fronts, the runner's ``--set`` arguments): pytest's doctests cover
+    the package only."""
+    import doctest
+
+    import _reporting
+    import _study
+
+    for module in (_reporting, _study):
+        result = doctest.testmod(module)
+        assert result.attempted > 0 and result.failed == 0

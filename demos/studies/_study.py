@@ -1,4 +1,4 @@
-"""Comparison studies: one scene configuration per process, many on Dask.
+"""The comparison studies' runner: one scene configuration per process, on Dask.
 
 A comparison of methods measures wall time and *peak memory* per
 configuration, so each configuration runs in a fresh Python process
@@ -29,9 +29,11 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from ..errors import NpfemError
-from ..io import dumps, latest_checkpoint, to_jsonable, write_bytes
-from ..io.provenance import source_sha1
+from skfem_npfem.errors import NpfemError
+from skfem_npfem.io import dumps, latest_checkpoint, to_jsonable, write_bytes
+from skfem_npfem.io.provenance import source_sha1
+from skfem_npfem.scenes import run_scene
+from skfem_npfem.sweeps import run_tasks
 
 __all__ = [
     "Case",
@@ -177,8 +179,6 @@ def run_cases(
     if todo and workers == 0 and scheduler is None:
         results.update({k: _in_process(*args) for k, args in todo.items()})
     elif todo:
-        from ..sweeps import run_tasks
-
         outcomes = run_tasks(
             run_case, todo, workers=workers, scheduler=scheduler, progress=progress
         )
@@ -191,8 +191,6 @@ def run_cases(
 
 def _in_process(scene: str, params: dict, folder: str) -> dict:
     """One case in this process (``run_cases(..., workers=0)``)."""
-    from ..scenes import run_scene
-
     folder_ = Path(folder)
     resume = _prepare(folder_)
     clean = {k: v for k, v in params.items() if v is not None}
@@ -208,7 +206,7 @@ def _in_process(scene: str, params: dict, folder: str) -> dict:
 
 
 def study_arguments(parser: Any, out: Path, work: Path) -> None:
-    """The command-line options every comparison demo shares.
+    """The command-line options every comparison study shares.
 
     ``--quick`` (reduced runs in this process), ``--out`` (JSON and figures;
     default ``out``, with ``--quick`` the work folder), ``--work`` (run folders),
@@ -232,7 +230,7 @@ def study_arguments(parser: Any, out: Path, work: Path) -> None:
 
 
 def study_folders(args: Any, out: Path, mode: str) -> tuple[Path, Path, int | None]:
-    """``(work folder, output folder, workers)`` of a demo's parsed options."""
+    """``(work folder, output folder, workers)`` of a study's parsed options."""
     work = args.work / mode
     workers = 0 if args.quick and args.workers is None else args.workers
     return work, args.out or (work if args.quick else out), workers

@@ -1,7 +1,7 @@
 """The factor of safety by strength reduction.
 
 The cohesion and the friction coefficient are divided by F until the gravity
-multiplier of the limit analysis (:mod:`.limit`) is 1.
+multiplier of the limit analysis (:mod:`.analysis`) is 1.
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..materials import Material
-from .limit import LimitResult, associated, limit_analysis
-from .solver import SolverOptions
+from ..step.solver import SolverOptions
+from .analysis import LimitResult, associated, limit_analysis
 
 __all__ = [
     "BISECTION_TOL",

@@ -1,17 +1,20 @@
-"""Files of the comparison demos: JSON results, PNG figures, Markdown tables.
+"""Files of the studies: JSON results, PNG figures, Markdown tables, Pareto fronts.
 
 Every file goes through :mod:`skfem_npfem.io`'s atomic writer and JSON policy
-(NaN and inf as ``null``), so a demo interrupted mid-write never leaves a
-half-written result in ``docs/validation/comparison``.
+(NaN and inf as ``null``), so a study interrupted mid-write never leaves a
+half-written result in ``docs/validation``.  The studies import it as
+``import _reporting`` (see :mod:`_common`); ``benchmarks/`` puts this folder on
+``sys.path`` for its figures.
 """
 
 from __future__ import annotations
 
+import io
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ..io import atomic_path, write_json
+from skfem_npfem.io import atomic_path, write_json
 
 __all__ = [
     "best_within",
@@ -25,7 +28,7 @@ __all__ = [
 
 
 def write_result(path: str | Path, result: dict) -> Path:
-    """Write a demo's result dict as JSON (folders created); return the path."""
+    """Write a study's result dict as JSON (folders created); return the path."""
     return write_json(path, result)
 
 
@@ -51,8 +54,6 @@ def save_png(fig: Any, path: str | Path, dpi: int = 120, palette: bool = True) -
     Path
         ``path``.
     """
-    import io
-
     import matplotlib.pyplot as plt
 
     path = Path(path)
@@ -72,8 +73,6 @@ def palette_png(data: bytes) -> bytes:
     Median-cut quantisation without dithering (flat areas stay flat), then the
     encoder's optimisation; transparency is dropped.
     """
-    import io
-
     from PIL import Image
 
     image = Image.open(io.BytesIO(data)).convert("RGB")

@@ -22,7 +22,7 @@ the cell volumes, ``B u = A_K^T z_K / V``, and the dissipated power sums to
 derives it.
 
 :func:`limit_analysis` solves one program (built, scaled and solved by
-:mod:`.limit_program`); :func:`~.safety.strength_reduction` finds the
+:mod:`.program`); :func:`~.safety.strength_reduction` finds the
 factor of safety ``F`` of Mohr-Coulomb materials (``c/F``, ``tan(phi)/F``) such
 that the gravity multiplier is 1, with a safeguarded secant iteration on
 ``log lambda(log F)`` (one cone program per iterate).
@@ -39,7 +39,10 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..materials import Material
-from .limit_program import (
+from ..mesh.smoothing import nodal_integration
+from ..step.program import Program
+from ..step.solver import SolverOptions
+from .program import (
     LimitProgram,
     assemble,
     dof_map,
@@ -47,8 +50,6 @@ from .limit_program import (
     solve,
     static_program,
 )
-from .program import Program
-from .solver import SolverOptions
 
 __all__ = ["LimitResult", "associated", "limit_analysis"]
 
@@ -131,8 +132,6 @@ def _strain_operator(operator: Any, materials: list[Material]) -> Any:
     """
     if hasattr(operator, "G"):
         return operator
-    from ..mesh.smoothing import nodal_integration
-
     d = operator.p.shape[0]
     comp = tuple(range(6)) if d == 3 else (0, 1, 3)
     if d == 2 and any(m.needs_zz(2) for m in materials):
@@ -197,7 +196,7 @@ def _collapse_state(
     lp : LimitProgram
         The assembled program (dof map, sizes).
     x, z : ndarray
-        Unscaled primal and dual solution (:func:`~.limit_program.solve`).
+        Unscaled primal and dual solution (:func:`~.program.solve`).
     plastic_fraction : float
         Threshold of the plastic zone on the dissipation density.
 

@@ -1,11 +1,11 @@
 """The cone program of a limit analysis: dof map, rows, scaling and solve.
 
-:func:`~.limit.limit_analysis` maximises the multiplier ``lambda`` of a
+:func:`~.analysis.limit_analysis` maximises the multiplier ``lambda`` of a
 reference load over stress fields in equilibrium with it (plus a dead load)
 inside the yield cones.  This module builds that program on the step's
 operator and cones (:func:`static_program`, :func:`dof_map`,
 :func:`assemble`), scales it (:func:`scaling`) and solves it with Clarabel
-(:func:`solve`); reading the collapse state back is :mod:`.limit`'s.
+(:func:`solve`); reading the collapse state back is :mod:`.analysis`'s.
 docs/theory.md ("Limit analysis") derives it.
 """
 
@@ -21,9 +21,10 @@ import scipy.sparse as sp
 from ..boundary import Contacts
 from ..errors import SolverError
 from ..materials import Material
-from .families import cutoff, yield_cones
-from .program import ConeInput, Program
-from .solver import ACCEPTED, SolverOptions, hint, solve_clarabel
+from ..step.conic import check_step_data
+from ..step.families import cutoff, yield_cones
+from ..step.program import ConeInput, Program
+from ..step.solver import ACCEPTED, SolverOptions, hint, solve_clarabel
 
 __all__ = [
     "LimitProgram",
@@ -76,7 +77,7 @@ def dof_map(
 
 @dataclass
 class LimitProgram:
-    """The assembled (unscaled) program of :func:`~.limit.limit_analysis`.
+    """The assembled (unscaled) program of :func:`~.analysis.limit_analysis`.
 
     Attributes
     ----------
@@ -133,7 +134,7 @@ def static_program(
     Returns
     -------
     Program
-        Checked as a step's data is (:func:`~.conic.check_step_data`).
+        Checked as a step's data is (:func:`~skfem_npfem.step.conic.check_step_data`).
     """
     d, N, n_p = operator.dim, operator.n_nodes, operator.n_points
     full = 4 if d == 2 else 6
@@ -147,8 +148,6 @@ def static_program(
         du_prescribed=np.zeros((N, d)),
         contacts=Contacts(np.zeros(0, int), np.zeros((0, d)), np.zeros(0), np.zeros(0)),
     )
-    from .conic import check_step_data
-
     check_step_data(data)
     return Program(data)
 
