@@ -33,6 +33,7 @@ import sys
 from pathlib import Path
 
 import _harness as harness
+import _tables as docs_tables
 
 SPEEDUP_TARGET = 30.0
 RUNOUT_TOLERANCE = 0.05
@@ -126,12 +127,78 @@ def markdown(rep: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+# ---------------------------------------------------------------------------
+# The tables of the docs pages, rendered from the committed JSON (--tables).
+
+TABLES: docs_tables.Tables = {}
+docs_table = docs_tables.registry(TABLES)
+
+
+AXI_VS_3D = tuple(f"{docs_tables.RESULTS}/cylinder_axi_vs_3d_{n}.json" for n in (6, 8))
+
+
+@docs_table(*AXI_VS_3D)
+def cylinder_axi_vs_3d() -> str:
+    """The seed column to rest, 3D quarter against axisymmetric section (reduced)."""
+
+    def wall(x: float) -> str:
+        return f"{x:.0f}" if x >= 100 else f"{x:.1f}"
+
+    out = []
+    for rel in AXI_VS_3D:
+        d = docs_tables.load(rel)
+        for key, model in (("quarter_cylinder", "3D quarter"), ("axisymmetric", "axi")):
+            r = d[key]
+            axi = key == "axisymmetric"
+            step = r["step_time_median_s"]
+            out.append(
+                [
+                    f"r0/{d['divisions']}",
+                    model,
+                    docs_tables.count(r["n_particles"]),
+                    r["steps"],
+                    wall(r["wall_time_t3_s"]),
+                    wall(r["wall_time_s"]),
+                    docs_tables.sig(step, 3 if step >= 1 else 2),
+                    docs_tables.num(r["ipm_iterations_mean"], 1),
+                    f"{r['peak_memory_mb']:.0f}",
+                    docs_tables.num(r["normalised_runout_t3"]),
+                    docs_tables.num(r["normalised_runout"]),
+                    docs_tables.num(r["final_height"]),
+                    f"{d['speedup_to_t3']:.0f}×" if axi else "",
+                    docs_tables.pct(d["runout_t3_relative_difference"]) if axi else "",
+                ]
+            )
+    return docs_tables.md(
+        [
+            "spacing",
+            "model",
+            "particles",
+            "steps",
+            "wall to t̄ = 3 (s)",
+            "whole run (s)",
+            "s/step (median)",
+            "IPM it. (mean)",
+            "peak MB",
+            "(r − r0)/r0 at t̄ = 3",
+            "at rest",
+            "h∞/r0",
+            "speed-up to t̄ = 3",
+            "run-out difference at t̄ = 3 (axi vs 3D)",
+        ],
+        out,
+    )
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--divisions", type=int, default=12)
     ap.add_argument("--work", default=str(harness.ROOT / "out" / "seed_column"))
     ap.add_argument("--render", default=None, help="rewrite FILE.md from FILE.json")
+    ap.add_argument("--tables", action="store_true", help=docs_tables.HELP)
     args = ap.parse_args(argv)
+    if args.tables:
+        return docs_tables.write(TABLES)
     if args.render:
         return harness.render(args.render, markdown)
     rep = compare(args.divisions, Path(args.work))

@@ -44,6 +44,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 
 import _harness as harness
+import _tables as docs_tables
 
 DEFAULT_CONFIGS = "dt=0.001,dt=0.002,dt=0.005,dt=0.01,md=0.25,md=0.5"
 L0, ASPECT = 0.2, 2.0
@@ -207,6 +208,50 @@ def markdown(report: dict) -> str:
     return "\n".join(lines)
 
 
+# ---------------------------------------------------------------------------
+# The tables of the docs pages, rendered from the committed JSON (--tables).
+
+TABLES: docs_tables.Tables = {}
+docs_table = docs_tables.registry(TABLES)
+
+
+@docs_table(f"{docs_tables.RESULTS}/dt_sweep.json")
+def dt_sweep() -> str:
+    """The default collapse to rest against the time step (benchmarks/dt_sweep.py)."""
+    out = []
+    for r in docs_tables.load(f"{docs_tables.RESULTS}/dt_sweep.json")["runs"]:
+        key, _, value = r["config"].partition("=")
+        if key == "dt":
+            label = f"Δt = {1e3 * float(value):g} ms"
+        else:
+            label = f"adaptive, `max_displacement={value}`"
+        out.append(
+            [
+                label,
+                docs_tables.num(r["normalised_runout"]),
+                docs_tables.num(r["final_height"]),
+                docs_tables.num(r["collapse_time"]),
+                docs_tables.num(r["sigma_yy_base"]),
+                docs_tables.pct(r["volume_change"]),
+                r["steps"],
+                f"{r['wall_s']:.0f}",
+            ]
+        )
+    return docs_tables.md(
+        [
+            "time step",
+            "(L∞−L0)/L0",
+            "H∞/L0",
+            "collapse time (s)",
+            "σ_yy at the base",
+            "volume change",
+            "steps",
+            "wall (s)",
+        ],
+        out,
+    )
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--configs", default=DEFAULT_CONFIGS)
@@ -234,7 +279,10 @@ def main(argv=None) -> int:
     ap.add_argument("--name", default="dt_sweep")
     ap.add_argument("--render", metavar="FILE.json")
     ap.add_argument("--child", help=argparse.SUPPRESS)
+    ap.add_argument("--tables", action="store_true", help=docs_tables.HELP)
     args = ap.parse_args(argv)
+    if args.tables:
+        return docs_tables.write(TABLES)
     if args.child:
         d = json.loads(args.child)
         harness.emit_result(child(d["config"], d["ov"]))

@@ -2,7 +2,7 @@
 """Figure of docs/performance.md: seconds per step against the program's size.
 
 Reads the committed suite reports of ``benchmarks/results/`` and pools them
-exactly as the page's "time-per-step" table does (``docs/_ext/npfem_tables.py``:
+exactly as the page's "time-per-step" table does (``benchmarks/suite.py``:
 the newest clean measurement per case, backend and preset), then plots the
 high preset's median step time per backend against the number of variables,
 one line per family of cases (2D collapse, footing, 3D block, 3D quarter
@@ -42,13 +42,12 @@ BACKENDS = {
 
 
 def pooled() -> dict[tuple[str, str, str], dict]:
-    """The table's pooled measurements (docs/_ext/npfem_tables.py)."""
-    ext = str(ROOT / "docs" / "_ext")
-    if ext not in sys.path:
-        sys.path.insert(0, ext)
-    import npfem_tables
+    """The table's pooled measurements (benchmarks/suite.py)."""
+    if str(HERE) not in sys.path:
+        sys.path.insert(0, str(HERE))
+    import suite
 
-    return npfem_tables._pooled()
+    return suite._pooled()
 
 
 def series(pool: dict) -> dict[tuple[str, str], list[tuple[float, float]]]:

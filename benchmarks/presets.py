@@ -41,6 +41,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 
 import _harness as harness
+import _tables as docs_tables
 import suite
 
 #: Warm-up steps (with the default settings) before the compared step.
@@ -429,6 +430,92 @@ def machine_line(m: dict) -> str:
     )
 
 
+# ---------------------------------------------------------------------------
+# The tables of the docs pages, rendered from the committed JSON (--tables).
+
+TABLES: docs_tables.Tables = {}
+docs_table = docs_tables.registry(TABLES)
+
+
+@docs_table(f"{docs_tables.RESULTS}/presets_step.json")
+def presets_step() -> str:
+    """One step with the high and fast presets against a tight (1e-10) solve."""
+    out = []
+    for c in docs_tables.load(f"{docs_tables.RESULTS}/presets_step.json")["cases"]:
+        backend = c["reference"]["backend"]
+        rows = {r["preset"]: r for r in c["rows"] if r["backend"] == backend}
+        hi, fa = rows.get("high"), rows.get("fast")
+        if not (hi and fa):
+            continue
+
+        def err(r: dict) -> str:
+            if "du_rel" not in r:  # the solve failed; the report says why
+                return f"failed ({r['status']})"
+            du, sigma = r["du_rel"], r["sigma_rel"]
+            return f"{docs_tables.sci(du, 1)} / {docs_tables.sci(sigma, 1)}"
+
+        out.append(
+            [
+                suite.CASE_LABELS.get(c["case"], c["case"]),
+                backend,
+                err(hi),
+                err(fa),
+                f"{hi['iterations']} → {fa['iterations']}",
+                " → ".join(docs_tables.sig(r.get("solve_s")) for r in (hi, fa)),
+            ]
+        )
+    return docs_tables.md(
+        [
+            "one step of",
+            "backend",
+            "high: Δu / σ error (rel. L2)",
+            "fast: Δu / σ error",
+            "IPM iterations high → fast",
+            "solve (s) high → fast",
+        ],
+        out,
+    )
+
+
+@docs_table(f"{docs_tables.RESULTS}/full_2k_cnr.json")
+def full_runs() -> str:
+    """Whole 2k collapse runs to rest with the MKL settings (presets.py)."""
+    names = {
+        "default": "MKL, defaults",
+        "nocnr": "`reproducible=False`",
+        "fast": "`accuracy=fast`",
+        "fast-nocnr": "both",
+    }
+    out = []
+    for r in docs_tables.load(f"{docs_tables.RESULTS}/full_2k_cnr.json")["runs"]:
+        m = r["metrics"]
+        out.append(
+            [
+                names.get(r["variant"], r["variant"]),
+                "/".join(r["linear_solvers"]),
+                docs_tables.count(r["n_particles"]),
+                r["steps"],
+                f"{r['wall_s']:.1f}",
+                docs_tables.num(r.get("step_time_median", r["wall_s"] / r["steps"])),
+                docs_tables.num(m.get("normalised_runout")),
+                docs_tables.num(m.get("final_height")),
+            ]
+        )
+    return docs_tables.md(
+        [
+            "run",
+            "backend",
+            "particles",
+            "steps",
+            "wall (s)",
+            "s/step",
+            "(L∞−L0)/L0",
+            "H∞/L0",
+        ],
+        out,
+    )
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--step", help=f"cases for the one-step check: {list(STEP_CASES)}")
@@ -457,7 +544,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--append", action="store_true")
     ap.add_argument("--render", metavar="FILE.json")
     ap.add_argument("--full-child", help=argparse.SUPPRESS)
+    ap.add_argument("--tables", action="store_true", help=docs_tables.HELP)
     args = ap.parse_args(argv)
+    if args.tables:
+        return docs_tables.write(TABLES)
 
     if args.full_child:
         run, variant = args.full_child.split("|")

@@ -1,4 +1,5 @@
-"""An axisymmetric column: the base carries the weight of the cylinder.
+"""An axisymmetric column: the base carries the weight of the cylinder
+===================================================================
 
 A solid elastic cylinder (radius R, height H) stands on a smooth floor.  With
 ``Model(axisymmetric=True)`` the mesh is the (r, z) half-section and every

@@ -1,4 +1,5 @@
-"""A granular column collapse in ten seconds.
+"""A granular column collapse in ten seconds
+=========================================
 
 A half column of dry sand (Mohr-Coulomb, phi = 30 deg, no cohesion) of aspect
 ratio a = H0/L0 = 2 is released against a smooth symmetry wall on a rough

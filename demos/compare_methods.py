@@ -1,4 +1,5 @@
-"""N-PFEM beside FEM with remapping: P1 elements lock under an undrained footing.
+"""N-PFEM beside FEM with remapping: P1 elements lock under an undrained footing
+=============================================================================
 
 A Tresca soil deforms plastically at constant volume.  Linear triangles with
 Gauss-point stresses (FEM P1) cannot represent such a flow on a general mesh:

@@ -1,4 +1,5 @@
-"""The strip footing's load-settlement curve against Prandtl's 2 + pi.
+"""The strip footing's load-settlement curve against Prandtl's 2 + pi
+==================================================================
 
 A rigid, smooth strip footing of half-width b is pushed into a weightless
 Tresca soil of cohesion c.  Each step is a cone program; the footing pressure

@@ -1,4 +1,5 @@
-"""One quasi-static step by hand: an elastic column under gravity.
+"""One quasi-static step by hand: an elastic column under gravity
+==============================================================
 
 The smallest complete N-PFEM program: particles on the nodes of a scikit-fem
 mesh, nodal smoothing cells, one quasi-static step solved as a cone program,

@@ -1,4 +1,5 @@
-"""Your own scene: an embankment built from a scikit-fem mesh.
+"""Your own scene: an embankment built from a scikit-fem mesh
+==========================================================
 
 A scene is geometry, material, walls and a time loop.  Here the geometry is a
 scikit-fem quadrilateral mesh split into triangles and mapped onto a

@@ -1,4 +1,5 @@
-"""A parameter sweep on Dask: the footing's collapse load against the spacing.
+"""A parameter sweep on Dask: the footing's collapse load against the spacing
+==========================================================================
 
 ``npfem.sweep`` runs one scene over a grid of parameters on a local Dask
 cluster (or an existing scheduler), each run in its own folder, and returns

@@ -1,4 +1,5 @@
-"""Read a result folder: the VTU/PVD series with meshio and pyvista, and the JSON.
+"""Read a result folder: the VTU/PVD series with meshio and pyvista, and the JSON
+==============================================================================
 
 ``skfem-npfem run SCENE --out DIR`` (or ``npfem.run_scene(..., out=DIR)``)
 writes one VTU file per output step, ``result.pvd`` listing them with their

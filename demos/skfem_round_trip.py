@@ -1,5 +1,6 @@
 #!/usr/bin/env python
-"""A scikit-fem round trip: mesh in, one step, mesh and P1 fields out.
+"""A scikit-fem round trip: mesh in, one step, mesh and P1 fields out
+==================================================================
 
 A soil column of width ``W`` and height ``H`` is meshed with scikit-fem,
 its nodes become particles (:meth:`skfem_npfem.Particles.from_mesh`: mass

@@ -7,17 +7,18 @@ Build (from the repository root, with the ``docs`` extra installed)::
 The build needs no network (no intersphinx), and neither do the built pages
 (MathJax is copied into the site by ``sphinx-mathjax-offline``).  It runs
 nothing heavy: the tutorials and the short gallery examples of ``demos/*.py``
-execute (a few seconds each; the examples' results are cached under
-``gallery/_run/``), the studies of ``demos/studies/`` and the benchmarks are
-shown from the results those scripts committed.  Pages
-generated at build time (``api/``, ``gallery/``) are written by the local
-extension ``_ext/npfem_docs`` and are not committed.
+execute (a few seconds each; the examples by sphinx-gallery), the studies of
+``demos/studies/`` and the benchmarks are shown from the results those scripts
+committed.  Pages generated at build time (``api/``, ``gallery/``) are written
+by sphinx-gallery and the local extension ``_ext/npfem_docs`` and are not
+committed.
 """
 
 from __future__ import annotations
 
 import os
 import sys
+import tempfile
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -29,6 +30,8 @@ sys.path.insert(0, str(HERE / "_ext"))
 os.environ["PATH"] = str(Path(sys.executable).parent) + os.pathsep + os.environ["PATH"]
 os.environ["SKFEM_NPFEM_REPO"] = str(ROOT)
 os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+# The gallery examples save their figures here (npfem_docs.saved_figures shows them).
+os.environ["NPFEM_GALLERY_OUT"] = tempfile.mkdtemp(prefix="npfem-gallery-")
 
 import skfem_npfem  # noqa: E402
 
@@ -47,8 +50,25 @@ extensions = [
     # CDN: formulas render offline and the built pages load nothing from
     # another host (tests/docs/test_docs_build.py checks it).
     "sphinx-mathjax-offline",
+    "sphinx_gallery.gen_gallery",
     "npfem_docs",
 ]
+
+# The gallery: sphinx-gallery runs every example of demos/ (its ``# %%`` cells,
+# each with its output and the figures it saved) on every build, so the pages
+# show what the package gives today; a failing example fails the build.  The
+# studies (demos/studies/, no gallery header) are not run; npfem_docs lists them.
+sphinx_gallery_conf = {
+    "examples_dirs": ["../demos"],
+    "gallery_dirs": ["gallery"],
+    "filename_pattern": r"\.py$",
+    "run_stale_examples": True,
+    "image_scrapers": ("npfem_docs.saved_figures",),
+    "capture_repr": (),
+    "download_all_examples": False,
+    "write_computation_times": False,
+    "within_subsection_order": "FileNameSortKey",
+}
 
 # Pages and files that are not part of the site.
 exclude_patterns = [
@@ -56,6 +76,8 @@ exclude_patterns = [
     "jupyter_execute",
     ".jupyter_cache",
     "**.ipynb_checkpoints",
+    # sphinx-gallery's notebook of each example (a download, not a page)
+    "gallery/*.ipynb",
 ]
 source_suffix = {".md": "myst-nb", ".rst": "restructuredtext"}
 root_doc = "index"

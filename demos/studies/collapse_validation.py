@@ -55,6 +55,7 @@ the figures from the stored cases.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 import os
@@ -64,7 +65,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _common import ROOT, WORK, floats, ints
+from _common import ROOT, WORK, benchmark, floats, ints
 from _reporting import save_png
 
 SCENE = "column-collapse"
@@ -831,6 +832,7 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--force", action="store_true", help="rerun existing cases")
     ap.add_argument("--plot-only", action="store_true")
     ap.add_argument("--run-case", help=argparse.SUPPRESS)
+    ap.add_argument("--tables", action="store_true", help=docs_tables.HELP)
     return ap
 
 
@@ -1083,9 +1085,414 @@ def print_summary(result: dict, refinement_aspect: float, n0: int) -> None:
         print_tables(result["variants"], [], {})
 
 
+# ---------------------------------------------------------------------------
+# The tables of the docs pages, rendered from the committed JSON (--tables).
+
+docs_tables = benchmark("_tables")
+TABLES: docs_tables.Tables = {}
+docs_table = docs_tables.registry(TABLES)
+
+
+#: The record before the stabilisation (particle masses, beta = 0), compact:
+#: the summary rows of the study, without its per-case records.
+COLLAPSE = "docs/validation/collapse_validation_before.json"
+
+
+#: The study with today's defaults (stabilisation beta = 30, volume
+#: correction kappa = 0.05), as the study writes it.
+COLLAPSE_NOW = "docs/validation/collapse_validation.json"
+
+
+def _measures(path: str) -> tuple[str, str, str]:
+    """Labels of the primary and the second run-out measure, and the second's key.
+
+    The scene's run-out was the main body's front when COLLAPSE was measured
+    and is the 99 % mass front since; the other one is the second measure.
+    """
+    if path == COLLAPSE:
+        return "main body", "99 % mass front", "front_q99_normalised"
+    return "99 % mass front (scene)", "main body", "runout_main_body_normalised"
+
+
+def _lube(r: dict) -> tuple[str, str]:
+    lube = r["lube"]
+    if lube.get("low") is not None and lube.get("high") is not None:
+        law = f"{lube['low']:.2f}–{lube['high']:.2f}"
+        lo, hi = r["ratio_lube_range"]
+        return law, f"{lo:.2f}–{hi:.2f}"
+    return f"{lube['value']:.2f}", f"{r['ratio_lube']:.2f}"
+
+
+@docs_table(COLLAPSE)
+def collapse_sweep(path: str = COLLAPSE) -> str:
+    """The primary aspect-ratio sweep against the experimental laws."""
+    first, second, key = _measures(path)
+
+    def rough(r: dict) -> list[str]:  # measured since the stabilisation
+        if path == COLLAPSE:
+            return []
+        return [
+            docs_tables.num(r.get("stress_roughness_max")),
+            docs_tables.num(r.get("stress_roughness")),
+        ]
+
+    out = []
+    for r in docs_tables.load(path)["sweep"]:
+        law, ratio = _lube(r)
+        out.append(
+            [
+                f"{r['aspect']:g}",
+                r["N"],
+                docs_tables.count(r["particles"]),
+                r["steps"],
+                f"**{docs_tables.num(r['normalised_runout'])}**",
+                docs_tables.num(r.get(key)),
+                docs_tables.num(r["normalised_runout_tip"]),
+                law,
+                docs_tables.num(r["lajeunesse"]["value"], 2),
+                ratio,
+                docs_tables.num(r["ratio_lajeunesse"], 2),
+                docs_tables.num(r["final_height_L0"]),
+                docs_tables.num(r["final_height_H0"]),
+                docs_tables.num(r["collapse_time"]),
+                docs_tables.num(r["collapse_time_normalised"], 2),
+                docs_tables.pct(r["volume_change"]),
+                f"{r['wall_time']:.0f}",
+                docs_tables.num(r["step_time_median"], 2),
+                *rough(r),
+            ]
+        )
+    return docs_tables.md(
+        [
+            "a",
+            "N",
+            "particles",
+            "steps",
+            f"(L∞−L0)/L0 {first}",
+            second,
+            "farthest particle",
+            "Lube law",
+            "Lajeunesse law",
+            "ratio to Lube",
+            "ratio to Lajeunesse",
+            "H∞/L0",
+            "H∞/H0",
+            "t_c (s)",
+            "t_c/√(H0/g)",
+            "mesh-area change",
+            "wall (s)",
+            "median s/step",
+            *([] if path == COLLAPSE else ["R max", "R at rest"]),
+        ],
+        out,
+    )
+
+
+@docs_table(COLLAPSE)
+def collapse_other_resolutions(path: str = COLLAPSE) -> str:
+    """The sweeps at the other resolutions (a = 2 is the refinement table)."""
+    first, second, key = _measures(path)
+    data = docs_tables.load(path)
+    rows = [r for s in data["other_sweeps"].values() for r in s["sweep"]]
+    rows.sort(key=lambda r: (r["aspect"], r["N"]))
+    out, done2 = [], False
+    for r in rows:
+        if r["aspect"] == 2:
+            if not done2:
+                ns = sorted(int(k) for k in data["other_sweeps"])
+                ns = " / ".join(str(n) for n in ns)
+                out.append(["2", ns, "see refinement", "", "", "", "", ""])
+                done2 = True
+            continue
+        out.append(
+            [
+                f"{r['aspect']:g}",
+                r["N"],
+                docs_tables.count(r["particles"]),
+                docs_tables.num(r["normalised_runout"]),
+                docs_tables.num(r.get(key)),
+                docs_tables.num(r["normalised_runout_tip"]),
+                docs_tables.num(r["final_height_L0"]),
+                docs_tables.pct(r["volume_change"]),
+            ]
+        )
+    return docs_tables.md(
+        [
+            "a",
+            "N",
+            "particles",
+            first,
+            second,
+            "farthest particle",
+            "H∞/L0",
+            "mesh-area change",
+        ],
+        out,
+    )
+
+
+@docs_table(COLLAPSE)
+def collapse_refinement(path: str = COLLAPSE) -> str:
+    """The refinement series at a = 2."""
+    first = _measures(path)[0]
+    out = []
+    for r in docs_tables.load(path)["refinement"]:
+        lo, hi = r["runout_late_range_normalised"]
+        out.append(
+            [
+                r["N"],
+                docs_tables.num(1e3 * r["spacing"], 2),
+                docs_tables.count(r["particles"]),
+                r["steps"],
+                docs_tables.num(r["normalised_runout"]),
+                f"{lo:.2f}–{hi:.2f}",
+                docs_tables.num(r["front_q99_normalised"]),
+                docs_tables.num(r["front_q95_normalised"]),
+                docs_tables.num(r["normalised_runout_tip"]),
+                docs_tables.num(r["final_height_L0"]),
+                docs_tables.num(r["collapse_time_normalised"], 2),
+                docs_tables.pct(r["volume_change"]),
+                f"{r['wall_time']:.0f}",
+                docs_tables.num(r["step_time_median"], 2),
+            ]
+        )
+    return docs_tables.md(
+        [
+            "N",
+            "spacing (mm)",
+            "particles",
+            "steps",
+            first,
+            f"{first} over the last 10 % of the run",
+            "99 % mass front",
+            "95 % mass front",
+            "farthest particle",
+            "H∞/L0",
+            "t_c/√(H0/g)",
+            "mesh-area change",
+            "wall (s)",
+            "median s/step",
+        ],
+        out,
+    )
+
+
+def _variant(label: str) -> str:
+    key, _, value = label.partition("=")
+    v = float(value)
+    names = {
+        "dt": f"Δt = {1e3 * v:g} ms",
+        "alpha": f"α = {v:g}",
+        "E": f"E = {v / 1e6:g} MPa",
+        "floor_friction": f"floor friction {v:g}°",
+        "rest_fraction": f"rest fraction {v:g} (run longer)",
+    }
+    return names.get(key, label)
+
+
+@docs_table(COLLAPSE)
+def collapse_sensitivity(path: str = COLLAPSE) -> str:
+    """The N = 12, a = 2 case against its variants."""
+    first, second, key = _measures(path)
+    data = docs_tables.load(path)
+    base = next(r for r in data["sweep"] if r["aspect"] == 2)
+    s = data["setup"]
+    label = (
+        f"baseline (Δt = {1e3 * s['dt']:g} ms, α = {s['alpha']:g}, "
+        f"E = {s['E'] / 1e6:g} MPa, floor {s['floor_friction_deg']:g}°)"
+    )
+    out = []
+    variants = [(_variant(v["variant"]), v) for v in data["variants"]]
+    for name, r in [(label, base), *variants]:
+        out.append(
+            [
+                name,
+                r["steps"],
+                docs_tables.num(r["normalised_runout"]),
+                docs_tables.num(r.get(key)),
+                docs_tables.num(r["normalised_runout_tip"]),
+                docs_tables.num(r["final_height_L0"]),
+                docs_tables.pct(r["volume_change"]),
+                docs_tables.statuses(r["status_counts"]),
+            ]
+        )
+    return docs_tables.md(
+        [
+            "variant",
+            "steps",
+            first,
+            second,
+            "farthest particle",
+            "H∞/L0",
+            "mesh-area change",
+            "statuses",
+        ],
+        out,
+    )
+
+
+def _fit_row(label: str, measure: str, fit: dict | None, primary: bool) -> list[str]:
+    def gate(ok: bool) -> str:
+        return "pass" if ok else "**fail**"
+
+    small, large = (fit or {}).get("small_a"), (fit or {}).get("large_a")
+    cells = [label, measure]
+    if small:
+        cells += [
+            f"{small['slope_through_origin']:.2f} ({gate(small['pass'])})",
+            " / ".join(f"{x:.2f}" for x in small["pointwise_slopes"]),
+        ]
+    else:
+        cells += ["—", "—"]
+    if large and len(large["aspects"]) >= 3:
+        loc = large.get("local_exponents")
+        cells += [
+            f"{large['exponent']:.3f} ({gate(large['pass'])})",
+            " / ".join(f"{x:.2f}" for x in loc) if loc else "—",
+            f"{large['prefactor']:.2f}",
+        ]
+    elif large:
+        only = ", ".join(f"{a:g}" for a in large["aspects"])
+        cells += [
+            f"{large['exponent']:.2f} from a = {only} only ({gate(large['pass'])})",
+            "—",
+            f"{large['prefactor']:.2f}",
+        ]
+    else:
+        cells += ["— (too few aspect ratios)", "—", "—"]
+    if primary:
+        cells = [f"**{c}**" if i < 2 or "pass" in c else c for i, c in enumerate(cells)]
+    return cells
+
+
+@docs_table(COLLAPSE)
+def collapse_fits(path: str = COLLAPSE) -> str:
+    """Small-a slope and large-a exponent per resolution and run-out measure."""
+    data = docs_tables.load(path)
+    n0 = data["setup"]["particles_across_sweep"]
+    sweeps = [(n0, data["fits"], data["fits_alternative_measures"])]
+    for n, s in sorted(data["other_sweeps"].items(), key=lambda kv: int(kv[0])):
+        sweeps.append((int(n), s["fits"], s.get("fits_alternative", {})))
+    out = []
+    for n, fits, alt in sweeps:
+        out.append(_fit_row(f"N = {n}", _measures(path)[0], fits, n == n0))
+        for key, measure in (
+            ("front_q99_normalised", "99 % mass front"),
+            ("normalised_runout_tip", "farthest particle"),
+        ):
+            if key in alt:
+                out.append(_fit_row(f"N = {n}", measure, alt[key], False))
+    return docs_tables.md(
+        [
+            "sweep",
+            "measure",
+            "small-a slope (gate 0.90–2.25)",
+            "point slopes a = 0.5 / 1",
+            "large-a exponent, a = 2–8 (gate 0.55–0.85)",
+            "local exponent 2→4 / 4→8",
+            "prefactor",
+        ],
+        out,
+    )
+
+
+# The rerun with today's defaults: the same tables from COLLAPSE_NOW (named
+# collapse-now-sweep, ...), and what changed against COLLAPSE.
+for _builder in (
+    collapse_sweep,
+    collapse_other_resolutions,
+    collapse_refinement,
+    collapse_sensitivity,
+    collapse_fits,
+):
+    _name = _builder.__name__.replace("collapse_", "collapse-now-").replace("_", "-")
+    _rel = f"docs/validation/{_name}.inc"
+    TABLES[_rel] = (functools.partial(_builder, COLLAPSE_NOW), (COLLAPSE_NOW,))
+
+
+def _all_rows(data: dict) -> dict[tuple[float, int, str | None], dict]:
+    """Every case of a collapse study by (aspect, N, variant)."""
+    rows = list(data["sweep"]) + list(data["refinement"]) + list(data["variants"])
+    rows += [r for s in data["other_sweeps"].values() for r in s["sweep"]]
+    return {(r["aspect"], r["N"], r.get("variant")): r for r in rows}
+
+
+@docs_table(COLLAPSE, COLLAPSE_NOW)
+def collapse_before_after() -> str:
+    """Each case of the primary sweep and the refinement, before -> now."""
+    before, now = (
+        _all_rows(docs_tables.load(COLLAPSE)),
+        _all_rows(docs_tables.load(COLLAPSE_NOW)),
+    )
+    keys = sorted(k for k in now if k in before and k[2] is None)
+
+    def pair(a, b, f) -> str:
+        return f"{f(a)} → {f(b)}"
+
+    out = []
+    for key in keys:
+        b, n = before[key], now[key]
+        lube = b["lube"]["value"]  # Lube's value at this aspect (1.2a to a = 2.3)
+        out.append(
+            [
+                f"{key[0]:g}",
+                key[1],
+                docs_tables.count(n["particles"]),
+                pair(
+                    b["normalised_runout"],
+                    n.get("runout_main_body_normalised"),
+                    docs_tables.num,
+                ),
+                pair(
+                    b["front_q99_normalised"],
+                    n["front_q99_normalised"],
+                    docs_tables.num,
+                ),
+                pair(
+                    b["front_q99_normalised"] / lube,
+                    n["front_q99_normalised"] / lube,
+                    lambda x: docs_tables.num(x, 2),
+                ),
+                pair(b["final_height_L0"], n["final_height_L0"], docs_tables.num),
+                pair(b["volume_change"], n["volume_change"], docs_tables.pct),
+                docs_tables.num(n.get("stress_roughness_max")),
+                docs_tables.num(n.get("stress_roughness")),
+                pair(
+                    b["step_time_median"],
+                    n["step_time_median"],
+                    lambda x: docs_tables.num(x, 3),
+                ),
+                pair(
+                    b["ipm_iterations_mean"],
+                    n["ipm_iterations_mean"],
+                    lambda x: docs_tables.num(x, 1),
+                ),
+            ]
+        )
+    return docs_tables.md(
+        [
+            "a",
+            "N",
+            "particles",
+            "main body",
+            "99 % mass front",
+            "99 % front / Lube",
+            "H∞/L0",
+            "mesh-area change",
+            "R max (now)",
+            "R at rest (now)",
+            "median s/step",
+            "IPM it. (mean)",
+        ],
+        out,
+    )
+
+
 def main(argv=None) -> int:
     ap = parser()
     args = ap.parse_args(argv)
+    if args.tables:
+        return docs_tables.write(TABLES)
     if args.run_case:
         spec = json.loads(args.run_case)
         run_case(

@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 import scipy.sparse.linalg as sla
-from _common import ROOT
+from _common import ROOT, benchmark
 from _reporting import save_png, write_result
 from skfem import (
     Basis,
@@ -244,12 +244,40 @@ def table(result: dict) -> str:
     return "\n".join(lines)
 
 
+# ---------------------------------------------------------------------------
+# The tables of the docs pages, rendered from the committed JSON (--tables).
+
+docs_tables = benchmark("_tables")
+TABLES: docs_tables.Tables = {}
+docs_table = docs_tables.registry(TABLES)
+
+
+@docs_table("docs/validation/comparison/locking.json")
+def locking() -> str:
+    """Cook's membrane: u_y(C) over the reference, per nu, method and mesh."""
+    data = docs_tables.load("docs/validation/comparison/locking.json")
+    out = []
+    for case in data["cases"]:
+        for method, res in case["methods"].items():
+            out.append(
+                [f"{case['nu']:g}", f"{case['reference']['value']:.4f}", method]
+                + [f"{x:.4f}" for x in res["ratio"]]
+            )
+    return docs_tables.md(
+        ["ν", "reference u_y(C)", "method"] + [f"n = {n}" for n in data["meshes"]], out
+    )
+
+
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     ap.add_argument("--quick", action="store_true", help="nu = 0.4999, n = 8, 16")
     ap.add_argument("--out", type=Path, default=OUT)
     ap.add_argument("--no-plot", action="store_true")
+    ap.add_argument("--tables", action="store_true", help=docs_tables.HELP)
     args = ap.parse_args(argv)
+    if args.tables:
+        docs_tables.write(TABLES)
+        return {}
     start = time.perf_counter()
     if args.quick:
         result = run([0.4999], [8, 16], (32,))

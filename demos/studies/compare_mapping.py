@@ -46,7 +46,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _common import ROOT
+from _common import ROOT, benchmark
 from _reporting import save_png, write_result
 
 from skfem_npfem.baseline import FemRemap
@@ -267,12 +267,66 @@ def plot(result: dict, path: Path) -> None:
     save_png(fig, path)
 
 
+# ---------------------------------------------------------------------------
+# The tables of the docs pages, rendered from the committed JSON (--tables).
+
+docs_tables = benchmark("_tables")
+TABLES: docs_tables.Tables = {}
+docs_table = docs_tables.registry(TABLES)
+
+
+MAPPING_NAMES = {
+    "npfem": "N-PFEM",
+    "fem-p1-nearest": "FEM-remap P1 nearest",
+    "fem-p1-recovery": "FEM-remap P1 recovery",
+    "fem-p2-nearest": "FEM-remap P2 nearest",
+    "fem-p2-recovery": "FEM-remap P2 recovery",
+}
+
+
+@docs_table("docs/validation/comparison/mapping.json")
+def mapping() -> str:
+    """Stress drift from remeshing: at rest and under rigid motion."""
+    data = docs_tables.load("docs/validation/comparison/mapping.json")
+    rest, rigid = data["at_rest"], data["rigid_motion"]
+    n = rest["n_remesh"]
+    out = []
+    for key, name in MAPPING_NAMES.items():
+        a, b = rest.get(key, {}), rigid.get(key, {})
+        per = a.get("drift_per_transfer", a.get("drift", math.nan) / n)
+        out.append(
+            [
+                name,
+                docs_tables.sci(a.get("drift")),
+                docs_tables.sci(per),
+                docs_tables.sci(b.get("p_drift")),
+                docs_tables.sci(b.get("q_drift")),
+                docs_tables.sci(b.get("max_drift")),
+            ]
+        )
+    return docs_tables.md(
+        [
+            "method",
+            f"at rest: drift after {n} remeshes",
+            "per remesh",
+            "rigid motion: p drift",
+            "q drift",
+            "max",
+        ],
+        out,
+    )
+
+
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     ap.add_argument("--quick", action="store_true", help="reduced run (tests)")
     ap.add_argument("--out", type=Path, default=OUT, help="output folder")
     ap.add_argument("--no-plot", action="store_true")
+    ap.add_argument("--tables", action="store_true", help=docs_tables.HELP)
     args = ap.parse_args(argv)
+    if args.tables:
+        docs_tables.write(TABLES)
+        return {}
     start = time.perf_counter()
     n_remesh, n_steps, n = (100, 20, 10) if args.quick else (100, 100, 20)
     result = {

@@ -39,7 +39,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _common import ROOT
+from _common import ROOT, benchmark
 from _reporting import markdown_table, save_png, write_result
 from _study import run_cases, study_arguments, study_folders
 
@@ -288,10 +288,21 @@ def _nan(values) -> list[float]:
     return [np.nan if v is None else v for v in values]
 
 
+#: The table of the docs page, the one this study stores in its JSON (--tables).
+docs_tables = benchmark("_tables")
+TABLES = docs_tables.stored(
+    "docs/validation/comparison/oscillation.json", "oscillation"
+)
+
+
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     study_arguments(ap, OUT, WORK)
+    ap.add_argument("--tables", action="store_true", help=docs_tables.HELP)
     args = ap.parse_args(argv)
+    if args.tables:
+        docs_tables.write(TABLES)
+        return {}
     start = time.perf_counter()
     work, out, workers = study_folders(args, OUT, "quick" if args.quick else "full")
     summaries = run_cases(

@@ -39,7 +39,7 @@ import math
 import time
 from pathlib import Path
 
-from _common import ROOT
+from _common import ROOT, benchmark
 from _reporting import markdown_table, save_png, write_result
 from _study import run_cases, study_arguments, study_folders
 
@@ -267,11 +267,22 @@ def plot(result: dict, path: Path) -> None:
     save_png(fig, path)
 
 
+#: The table of the docs page, the one this study stores in its JSON (--tables).
+docs_tables = benchmark("_tables")
+TABLES = docs_tables.stored(
+    "docs/validation/comparison/results.json", "comparison_results"
+)
+
+
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     study_arguments(ap, OUT, WORK)
     ap.add_argument("--n", type=int, default=16, help="particles across L0")
+    ap.add_argument("--tables", action="store_true", help=docs_tables.HELP)
     args = ap.parse_args(argv)
+    if args.tables:
+        docs_tables.write(TABLES)
+        return {}
     start = time.perf_counter()
     n = 6 if args.quick else args.n
     work, out, workers = study_folders(args, OUT, "quick" if args.quick else "full")

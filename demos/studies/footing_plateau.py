@@ -37,7 +37,7 @@ import json
 import time
 from pathlib import Path
 
-from _common import ROOT
+from _common import ROOT, benchmark
 
 from skfem_npfem.scenes import run_scene
 
@@ -132,6 +132,58 @@ def _table(rows: list[dict], title: str) -> list[str]:
     return lines
 
 
+# ---------------------------------------------------------------------------
+# The tables of the docs pages, rendered from the committed JSON (--tables).
+
+docs_tables = benchmark("_tables")
+TABLES: docs_tables.Tables = {}
+docs_table = docs_tables.registry(TABLES)
+
+
+@docs_table("docs/validation/footing_plateau.json")
+def footing_plateau() -> str:
+    """Bearing factors at the detected plateau, phi = 0..45 deg, block 5 b and 15 b."""
+    rows = docs_tables.load("docs/validation/footing_plateau.json")["rows"]
+    wide = {(r["phi"], r["footing"]): r for r in rows if r["domain"] != 5}
+    out = []
+    for r in rows:
+        if r["domain"] != 5:
+            continue
+        w = wide.get((r["phi"], r["footing"]))
+        old = r["bearing_factor_at_0.01m"] / r["reference"] - 1
+        out.append(
+            [
+                f"{r['phi']:g}°",
+                r["footing"],
+                docs_tables.num(r["bearing_factor"]),
+                docs_tables.num(r["reference"]),
+                docs_tables.pct(r["relative_error"], 2).replace(" ", ""),
+                docs_tables.pct(old, 1).replace(" ", ""),
+                docs_tables.pct(r["vs_rigid_plastic"], 2).replace(" ", ""),
+                r["steps"],
+                docs_tables.num(r["final_settlement"]),
+                docs_tables.num(r["wall_time"], 1),
+                docs_tables.pct(w["relative_error"], 2).replace(" ", "") if w else "—",
+            ]
+        )
+    return docs_tables.md(
+        [
+            "φ",
+            "footing",
+            "N = q/c (block 5 b, default)",
+            "N_c exact",
+            "error",
+            "at 0.01 m",
+            "N/N_rp − 1",
+            "steps",
+            "settlement (m)",
+            "wall (s)",
+            "error, block 15 b",
+        ],
+        out,
+    )
+
+
 def main() -> None:
     """Run the sweep and write JSON + Markdown."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[1])
@@ -139,7 +191,11 @@ def main() -> None:
     ap.add_argument("--phi", type=float, nargs="*", default=list(range(0, 50, 5)))
     ap.add_argument("--footing", nargs="*", default=["smooth", "rough"])
     ap.add_argument("--domain", type=float, nargs="*", default=[5.0, 15.0])
+    ap.add_argument("--tables", action="store_true", help=docs_tables.HELP)
     args = ap.parse_args()
+    if args.tables:
+        docs_tables.write(TABLES)
+        return
     rows = []
     for domain, phi, footing in itertools.product(args.domain, args.phi, args.footing):
         row = run_row(float(phi), footing, domain)

@@ -1,19 +1,23 @@
 """Local Sphinx extension of the skfem-npfem documentation.
 
-At ``builder-inited`` it writes the generated pages (never committed):
+The examples of ``demos/`` are rendered by sphinx-gallery (``conf.py``); this
+extension adds what it does not do.  At ``builder-inited`` it writes the
+generated pages (never committed):
 
 * ``api/``: one page per group of ``skfem_npfem.__all__`` (the ``#:`` comments
   of ``skfem_npfem/__init__.py``), so a name added to ``__all__`` appears in
   the reference without editing the docs (:mod:`npfem_api`);
-* ``gallery/``: one page per script of ``demos/`` and ``benchmarks/``: the
-  short examples of ``demos/`` run (cached under ``gallery/_run/``) and shown
-  cell by cell with their output and figures; the studies and benchmarks
-  with their docstring, the figures they committed under ``docs/``, the pages
-  that quote them and their source (:mod:`npfem_gallery`).
+* ``gallery/studies*``, ``gallery/benchmarks-*``, ``gallery/results-*``: one
+  page per study of ``demos/studies/`` and script of ``benchmarks/`` (never run
+  by the build) with its docstring, the figures it committed under ``docs/``,
+  the pages that quote it and its source, and one per Markdown report of
+  ``benchmarks/results`` (:mod:`npfem_studies`).
 
-It also registers the directives that build tables from the JSON the demos
-and benchmarks commit (:mod:`npfem_tables`) and the ``pending-section``
-directive of the theory page.
+It gives sphinx-gallery the figures the examples save as files
+(:func:`saved_figures`) and registers the ``pending-section`` directive of the
+theory page.  (The tables of the pages are fragments the studies and
+benchmarks write next to their JSON, ``benchmarks/_tables.py``, included with
+MyST's ``{include}``.)
 
 A page that no toctree lists (say a page another branch adds without
 touching ``index.md``) would fail the ``-W`` build; instead it is listed
@@ -24,14 +28,15 @@ build says so in its log.
 from __future__ import annotations
 
 import fnmatch
+import os
 import posixpath
 import re
+import shutil
 from pathlib import Path
 from typing import ClassVar
 
 import npfem_api
-import npfem_gallery
-import npfem_tables
+import npfem_studies
 from docutils import nodes
 from sphinx.application import Sphinx
 from sphinx.util import logging
@@ -54,8 +59,34 @@ def generate(app: Sphinx) -> None:
     src = Path(app.srcdir)
     for rel, text in npfem_api.pages().items():
         write_if_changed(src / "api" / rel, text)
-    for rel, text in npfem_gallery.pages(src, warn=logger.warning).items():
+    for rel, text in npfem_studies.pages(src).items():
         write_if_changed(src / "gallery" / rel, text)
+
+
+#: Where the examples of ``demos/`` save their figures (they read it).
+OUT_ENV = "NPFEM_GALLERY_OUT"
+#: Figure files already shown, with the modification time they were shown at.
+_SHOWN: dict[Path, int] = {}
+
+
+def saved_figures(block, block_vars: dict, gallery_conf: dict) -> str:
+    """Sphinx-gallery image scraper: the PNG files a code block saved.
+
+    The examples save their figures as files under ``$NPFEM_GALLERY_OUT``
+    (``fig.savefig``, pyvista's ``screenshot``) instead of leaving them open;
+    every file that appears or changes while a block runs is shown below it.
+    """
+    from sphinx_gallery.scrapers import figure_rst
+
+    shown = []
+    for png in sorted(Path(os.environ[OUT_ENV]).rglob("*.png")):
+        stamp = png.stat().st_mtime_ns
+        if _SHOWN.get(png) != stamp:
+            _SHOWN[png] = stamp
+            target = next(block_vars["image_path_iterator"])
+            shutil.copyfile(png, target)
+            shown.append(target)
+    return figure_rst(shown, gallery_conf["src_dir"])
 
 
 def toctree_entries(srcdir: Path, docnames: set[str]) -> set[str]:
@@ -163,5 +194,4 @@ def setup(app: Sphinx) -> dict:
     app.connect("source-read", list_unlisted_pages)
     app.connect("env-get-outdated", reread_root_on_new_pages)
     app.add_directive("pending-section", PendingSection)
-    npfem_tables.setup(app)
     return {"parallel_read_safe": True, "parallel_write_safe": True}

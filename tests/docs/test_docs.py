@@ -6,6 +6,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from skfem_npfem.cli import scenes_markdown
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -105,3 +107,38 @@ def test_tutorial_own_scene_names_every_class_it_uses():
     assert "{py:class}`~skfem_npfem.ResultWriter`" in text
     assert "Particles.create(xl, mass, stress=stress" in text.replace("npfem.", "")
     assert re.search(r"`particles\.wall_force` has one column per wall", text)
+
+
+#: The scripts that render tables of the docs pages (``--tables``): every study
+#: or benchmark with a module-level ``TABLES`` (``benchmarks/_tables.py``).
+TABLE_SCRIPTS = sorted(
+    p.relative_to(ROOT).as_posix()
+    for folder in ("demos/studies", "benchmarks")
+    for p in (ROOT / folder).glob("*.py")
+    if re.search(r"^TABLES\b", p.read_text(encoding="utf-8"), re.M)
+)
+
+
+def test_table_scripts_are_found():
+    assert "demos/studies/collapse_validation.py" in TABLE_SCRIPTS
+    assert "benchmarks/suite.py" in TABLE_SCRIPTS
+
+
+@pytest.mark.parametrize("script", TABLE_SCRIPTS)
+def test_committed_tables_are_what_the_script_renders(script, monkeypatch):
+    # A page's table is a fragment the script wrote next to its JSON; it must be
+    # what the script renders from the committed JSON today (regenerate with
+    # `python SCRIPT --tables`, which reruns nothing).
+    import runpy
+
+    monkeypatch.syspath_prepend(str(ROOT / "benchmarks"))
+    monkeypatch.syspath_prepend(str(ROOT / Path(script).parent))
+    import _tables
+
+    tables = runpy.run_path(str(ROOT / script))["TABLES"]
+    assert tables
+    for rel, (builder, sources) in tables.items():
+        committed = (ROOT / rel).read_text(encoding="utf-8")
+        assert committed == _tables.render(builder, sources), (
+            f"{rel} is stale: regenerate with `python {script} --tables`"
+        )
