@@ -33,8 +33,15 @@ from ._deprecated import renamed as _renamed
 
 # isort: split
 from .baseline.roughness import stress_roughness
-from .bodies import BodyOfRevolution, RigidBody, RigidPlane
-from .boundary import Contacts, RigidWall, floor, wall_x
+from .boundary import (
+    BodyOfRevolution,
+    Contacts,
+    RigidBody,
+    RigidPlane,
+    RigidWall,
+    floor,
+    wall_x,
+)
 from .errors import (
     CheckpointError,
     NpfemError,

@@ -43,7 +43,7 @@ from skfem_npfem import (
     nodal_integration,
     solve_step,
 )
-from skfem_npfem.step.families import tangents
+from skfem_npfem.mesh.geometry import tangents
 
 G = 9.81
 RHO = 2000.0

@@ -25,7 +25,6 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 from skfem import Mesh
 
-from ..boundary import RigidWall
 from ..errors import NpfemError, ParameterError
 from .delaunay import Triangulation, alpha_shape
 from .smoothing import check_p1_mesh
@@ -39,6 +38,14 @@ __all__ = [
     "folded_facets",
     "main_body",
 ]
+
+
+class Wall(Protocol):
+    """What a mesher reads of a wall (:class:`~skfem_npfem.RigidWall`)."""
+
+    def gap(self, x: np.ndarray) -> np.ndarray:
+        """Signed distance of points (n, d) from the wall (positive: body side)."""
+        ...
 
 
 class MeshSource(Protocol):
@@ -187,8 +194,9 @@ class AlphaShapeMesher:
         Alpha-shape factor: simplices with circumradius ``>= alpha * h`` are
         dropped (1.2-1.6; larger keeps thin fronts longer but bridges gaps).
     walls : sequence of RigidWall
-        Walls used to tell free-surface particles from boundary particles that
-        rest on a wall (within ``wall_distance * h`` of it).
+        Walls (anything with ``gap(x)``) used to tell free-surface particles
+        from boundary particles that rest on a wall (within
+        ``wall_distance * h`` of it).
     wall_distance : float
         Distance from a wall, in units of ``h``, under which a boundary particle
         is "on the wall" rather than on the free surface.
@@ -238,7 +246,7 @@ class AlphaShapeMesher:
         h: float,
         alpha: float = 1.3,
         *,
-        walls: Sequence[RigidWall] = (),
+        walls: Sequence[Wall] = (),
         wall_distance: float = 0.5,
         min_quality: float = 1e-3,
         jitter: float = 1e-6,

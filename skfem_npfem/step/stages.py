@@ -4,11 +4,13 @@
 
 1. :func:`build_operators` -- the mesh of this step (from the mesh source), the
    nodal integration on it (:mod:`skfem_npfem.mesh.smoothing`; axisymmetric models:
-   :mod:`skfem_npfem.mesh.axisymmetric`), the wall contacts
-   (:mod:`skfem_npfem.boundary`) and the :class:`~skfem_npfem.step.program.ConeInput`;
+   :mod:`skfem_npfem.mesh.axisymmetric`), the contacts of the model's
+   boundaries, walls and rigid bodies (:mod:`skfem_npfem.boundary`), and the
+   :class:`~skfem_npfem.step.program.ConeInput`;
 2. :func:`~skfem_npfem.step.conic.solve_step` -- the cone program;
 3. :func:`update_particles` -- *new* particles from the solution (stress
-   rotation, plastic strain, velocities, ballistic particles, walls).
+   rotation, plastic strain, velocities, ballistic particles, put back from
+   walls and bodies).
 
 The mesh is then forgotten: nothing is mapped between meshes.  The step's
 arrays (solution, mesh, operator) travel in a :class:`Step` that the
@@ -27,36 +29,38 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from time import perf_counter
+from typing import Any
 
 import numpy as np
 from skfem import Mesh
 
 from .._deprecated import renamed
-from ..boundary import Contacts, project_to_walls, wall_contacts
+from ..boundary import Boundary, ContactNodes, Contacts
+from ..boundary.protocol import (
+    put_back,
+    record,
+    step_contacts,
+    with_columns,
+    without_spanned,
+)
 from ..errors import ParameterError
 from ..mesh.axisymmetric import axisymmetric_integration
 from ..mesh.delaunay import p1_mesh
 from ..mesh.smoothing import NodalIntegration, nodal_integration
 from ..mesh.sources import MeshSource, as_mesh_source
 from ..particles import Particles
-from .body_stages import (
-    keep_out_of_bodies,
-    record_bodies,
-    with_body_columns,
-    with_body_contacts,
-    without_body_elements,
-)
 from .conic import ConeSolution, solve_step
 from .kinematics import equivalent_strain, rotate_stress
 from .model import Model
 from .program import ConeInput
-from .records import Step, StepRecord, skfem_fields
+from .records import Step, StepRecord, StepState, skfem_fields
 from .volume import volume_eigenstrain, volume_strains
 
 __all__ = [
     "Step",
     "StepOperators",
     "StepRecord",
+    "StepState",
     "advance",
     "build_operators",
     "move_particles",
@@ -79,7 +83,8 @@ class StepOperators:
     operator : NodalIntegration
         Smoothing cells of the mesh.
     wall_ids : ndarray (nc,) int
-        Wall of each contact candidate of ``data.contacts``.
+        Wall or body (lagged-force column) of each contact candidate of
+        ``data.contacts``.
     data : ConeInput
         The cone step's input.
     volume_strains : ndarray (n_materials,) or None
@@ -117,21 +122,22 @@ def build_operators(
     model: Model,
     dt: float,
     mesh_source: MeshSource,
-    volume_state: Sequence[float] | None = None,
-    time: float = 0.0,
+    start: StepState | None = None,
+    boundaries: Sequence[Boundary] | None = None,
 ) -> StepOperators:
     """Stage 1: the mesh, smoothing cells, contacts and cone-step data of a step.
 
-    ``volume_state`` is the previous step's ``volume_correction_strain`` (the
-    volume correction's filter state, one number per material); ``time`` the
-    time at the start of the step (where the model's rigid bodies are).
+    ``start`` is the state at the start of the step (its time: where the
+    model's rigid bodies are; the volume correction's filter state);
+    ``boundaries`` those of the model (default ``model.boundaries``): the
+    elements they span are dropped and their contact rows join the program.
     """
+    start = StepState() if start is None else start
+    boundaries = model.boundaries if boundaries is None else boundaries
     active, local_t = mesh_source(p.x)
-    dropped = 0
-    if model.bodies:
-        active, local_t, dropped = without_body_elements(
-            model, p.x, active, local_t, time
-        )
+    active, local_t, dropped = without_spanned(
+        boundaries, p.x, active, local_t, start.time
+    )
     mesh = p1_mesh(p.x[active], local_t)
     op, h = strain_operator(mesh, model)
     mass = model.node_masses(p.mass[active], p.material[active], op.volumes)
@@ -141,13 +147,10 @@ def build_operators(
         p.material[active],
         op.volumes,
         np.array([m.rho for m in model.materials], float),
-        volume_state,
+        start.volume_strain,
     )
-    contacts, wall_ids = wall_contacts(model.walls, p, active, dt, h, model.gravity)
-    if model.bodies:
-        contacts, wall_ids = with_body_contacts(
-            model, p, active, local_t, dt, h, time, contacts, wall_ids
-        )
+    nodes = ContactNodes.of_particles(p, active, local_t)
+    contacts, wall_ids = step_contacts(boundaries, nodes, dt, h, start.time)
     data = ConeInput(
         operator=op,
         materials=model.materials,
@@ -175,7 +178,7 @@ def build_operators(
         ),
     )
     return StepOperators(
-        active, local_t, op, wall_ids, data, strains, float(time), dropped
+        active, local_t, op, wall_ids, data, strains, float(start.time), dropped
     )
 
 
@@ -195,14 +198,23 @@ def strain_operator(mesh, model: Model) -> tuple[NodalIntegration, float]:
 
 
 def update_particles(
-    p: Particles, model: Model, dt: float, ops: StepOperators, sol: ConeSolution
-) -> Particles:
+    p: Particles,
+    model: Model,
+    dt: float,
+    ops: StepOperators,
+    sol: ConeSolution,
+    boundaries: Sequence[Boundary] | None = None,
+) -> tuple[Particles, list[Any]]:
     """Stage 3: new particles from the solution of the step.
 
     Active particles take the increment, the (rotated) stress and the plastic
     strain of the solution; particles outside every element (free flight) carry
-    no stress; all move as in :func:`move_particles`.
+    no stress; all move as in :func:`move_particles`, which puts back those
+    that crossed a boundary (default ``model.boundaries``).  Returns the new
+    particles and each boundary's mark
+    (:func:`~skfem_npfem.boundary.protocol.put_back`).
     """
+    boundaries = model.boundaries if boundaries is None else boundaries
     active = ops.active
     stress = p.stress.copy()
     sig = sol.sigma
@@ -224,8 +236,11 @@ def update_particles(
             (active[nodes], ops.wall_ids[:, None]),
             w * sol.lambda_n[:, None],
         )
-    motion = move_particles(p, model, dt, active, sol.du, ops.data.dynamic)
-    return p.replace(**motion, stress=stress, eps_p=eps_p, wall_force=wall_force)
+    motion, marks = move_particles(
+        p, model, dt, active, sol.du, ops.data.dynamic, boundaries, ops.time + dt
+    )
+    new = p.replace(**motion, stress=stress, eps_p=eps_p, wall_force=wall_force)
+    return new, marks
 
 
 def move_particles(
@@ -235,20 +250,27 @@ def move_particles(
     active: np.ndarray,
     du_active: np.ndarray,
     dynamic: bool,
-) -> dict[str, np.ndarray]:
+    boundaries: Sequence[Boundary],
+    t_end: float,
+) -> tuple[dict[str, np.ndarray], list[Any]]:
     """Positions, velocities, accelerations and displacements after a step.
 
     Active particles take the increments ``du_active`` of the step's solution
     (theta-scheme velocities and accelerations in dynamic steps); the others
     move ballistically under gravity (docs/theory.md, "Nodal integration",
-    inactive particles); particles behind a wall are put back on it.  Shared by
-    every method that moves the particles with the nodal increments of an
-    implicit step (N-PFEM, FEM-remap).
+    inactive particles); particles that crossed one of ``boundaries`` (behind
+    a wall, inside a body at ``t_end``) are put back on it
+    (:func:`~skfem_npfem.boundary.protocol.put_back`).  Shared by every method
+    that moves the particles with the nodal increments of an implicit step
+    (N-PFEM, FEM-remap).
 
     Returns
     -------
     dict
         ``x``, ``v``, ``a``, ``u`` of the new particles.
+    list
+        Each boundary's mark (a body group's penetration depths); None each
+        when the geometry is not updated.
     """
     g = model.gravity_vector
     du = np.zeros_like(p.x)
@@ -267,15 +289,12 @@ def move_particles(
     if np.any(inactive):
         v[inactive] = p.v[inactive] + dt * g
         a[inactive] = g
-    if model.update_geometry:
-        moved = p.x + du
-        x, v = project_to_walls(model.walls, moved, v, friction=inactive)
-        # Accumulate du itself (x - p.x would lose increments below ~1e-16 |x|);
-        # only the wall projection goes through the positions.
-        u = p.u + du + (x - moved)
-    else:
-        x, u = p.x, p.u + du
-    return {"x": x, "v": v, "a": a, "u": u}
+    if not model.update_geometry:
+        return {"x": p.x, "v": v, "a": a, "u": p.u + du}, [None] * len(boundaries)
+    # Accumulate du itself (x - p.x would lose increments below ~1e-16 |x|);
+    # only the projections go through the positions.
+    x, v, u, marks = put_back(boundaries, p.x + du, v, p.u + du, inactive, t_end)
+    return {"x": x, "v": v, "a": a, "u": u}, marks
 
 
 def advance(
@@ -284,8 +303,7 @@ def advance(
     dt: float,
     mesh_source: MeshSource | Mesh | np.ndarray,
     step: int | None = None,
-    volume_state: Sequence[float] | None = None,
-    time: float = 0.0,
+    start: StepState | None = None,
 ) -> tuple[Particles, Step]:
     """Advance the particles by one step.
 
@@ -306,25 +324,23 @@ def advance(
         ``FixedMesh(mesh)``.
     step : int, optional
         Step index (used in error messages).
-    volume_state : sequence of float, optional
-        The previous step's ``record.extra["volume_correction_strain"]`` (the
-        state of the volume correction's filter, one number per material);
-        None at the start of a run.  Only read when
-        ``model.volume_correction > 0``; :class:`~skfem_npfem.Simulation`
+    start : StepState, optional
+        The state at the start of the step besides the particles: the time
+        (where the model's rigid bodies are) and the volume correction's
+        filter state; the previous step's ``step.state``.  None: time 0, no
+        filter state (the start of a run).  :class:`~skfem_npfem.Simulation`
         passes it.
-    time : float
-        Time at the start of the step, s: where the model's rigid bodies are
-        (:class:`~skfem_npfem.Simulation` passes it; only read when
-        ``model.bodies`` is not empty).
 
     Returns
     -------
     Particles, Step
         New particles, and the step (its :class:`StepRecord` as ``.record``,
-        the solution and the mesh; ``step.to_skfem()`` gives the mesh and the
+        the solution and the mesh, the state at its end as ``.state`` for the
+        next step's ``start``; ``step.to_skfem()`` gives the mesh and the
         fields for scikit-fem).  With the volume correction on, the
         record's ``extra["volume_correction_strain"]`` holds this step's
-        volumetric eigenstrain per material.  With rigid bodies it holds, per
+        volumetric eigenstrain per material (as ``step.state.volume_strain``).
+        With rigid bodies it holds, per
         body ``<name>``: ``<name>_x``, ``<name>_y`` (displacement of the body
         at the end of the step, m), ``<name>_force_x``, ``<name>_force_y``
         (force of the soil on the body, N per m in plane strain, N of the
@@ -348,7 +364,7 @@ def advance(
 
     Examples
     --------
-    A soil column under gravity, one quasi-static step on a scikit-fem mesh:
+    A soil column under gravity, two quasi-static steps on a scikit-fem mesh:
 
     >>> import numpy as np
     >>> from skfem import MeshTri
@@ -360,6 +376,9 @@ def advance(
     >>> p, step = npfem.advance(p, model, dt=1.0, mesh_source=mesh)
     >>> step.record.status, step.record.n_active
     ('Solved', 15)
+    >>> p, step = npfem.advance(p, model, 1.0, mesh, start=step.state)
+    >>> step.state.time
+    2.0
     """
     if not (math.isfinite(dt) and dt > 0):
         raise ParameterError("dt", dt, "a finite time step > 0 (s)")
@@ -370,16 +389,15 @@ def advance(
             f"{model.dim}D positions for a {model.dim}D model",
         )
     mesh_source = as_mesh_source(mesh_source)
-    t_start = float(time)
-    if model.bodies:
-        p = with_body_columns(p, model)
+    start = StepState() if start is None else start
+    boundaries = model.boundaries
+    p = with_columns(boundaries, p)
     t0 = perf_counter()
-    ops = build_operators(p, model, dt, mesh_source, volume_state, t_start)
+    ops = build_operators(p, model, dt, mesh_source, start, boundaries)
     t1 = perf_counter()
     sol = solve_step(ops.data, model.solver, step=step)
     t2 = perf_counter()
-    new = update_particles(p, model, dt, ops, sol)
-    new, depth = keep_out_of_bodies(model, new, t_start + dt)
+    new, marks = update_particles(p, model, dt, ops, sol, boundaries)
     timings = {"mesh": t1 - t0, **sol.timings, "update": perf_counter() - t2}
     rec = StepRecord.of_step(
         step, dt, new, model.gravity, ops.active, ops.operator, sol, timings
@@ -387,19 +405,19 @@ def advance(
     rec.n_contacts = ops.contacts.size
     if ops.volume_strains is not None:
         rec.extra["volume_correction_strain"] = [float(x) for x in ops.volume_strains]
-    if model.bodies:
-        record_bodies(
-            rec,
-            model,
-            ops.contacts,
-            ops.wall_ids,
-            sol,
-            p.x[ops.active],
-            t_start + dt,
-            depth,
-            ops.dropped,
-        )
-    return new, Step(rec, sol, ops.active, ops.local_t, ops.operator, new)
+    record(
+        boundaries,
+        rec.extra,
+        ops.contacts,
+        ops.wall_ids,
+        (sol.lambda_n, sol.lambda_t),
+        p.x[ops.active],
+        ops.time + dt,
+        marks,
+        ops.dropped,
+    )
+    end = start.after(dt, ops.volume_strains)
+    return new, Step(rec, sol, ops.active, ops.local_t, ops.operator, new, end)
 
 
 def __getattr__(name: str) -> object:
