@@ -76,7 +76,7 @@ from .step.conic import ConeSolution, solve_step
 from .step.limit import LimitResult, limit_analysis
 from .step.model import Model
 from .step.program import ConeInput
-from .step.records import Step, StepRecord, skfem_fields
+from .step.records import Step, StepRecord, StepState, skfem_fields
 from .step.safety import SafetyResult, reduced_strength, strength_reduction
 from .step.solver import SolverOptions
 from .step.stages import advance
@@ -130,6 +130,7 @@ __all__ += [
     "SolverOptions",
     "Step",
     "StepRecord",
+    "StepState",
     "advance",
     "solve_step",
 ]

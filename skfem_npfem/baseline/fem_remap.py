@@ -19,24 +19,24 @@ scikit-fem (:mod:`skfem_npfem.baseline.operators`).  Each step:
    the nodal data of :mod:`skfem_npfem.baseline.fem_nodes`;
 4. Gauss-point stresses are rotated with the Gauss-point spin (the library's
    Hughes-Winget rotation), the particles move with the vertex increments
-   (:func:`skfem_npfem.step.stages.move_particles`), and nodal stresses for output are
+   (:func:`skfem_npfem.step.update.move_particles`), and nodal stresses for output are
    recovered from the Gauss points by patch recovery.
 
 So a comparison with N-PFEM isolates integration and mapping: the program,
 the solver, the contact rules and the particle update are the same code.
 
 Walls and rigid bodies (``model.boundaries``) enter as in N-PFEM, through the
-same jobs of :mod:`skfem_npfem.boundary.protocol`: the elements that span a
+same jobs of :mod:`skfem_npfem.step.boundary_jobs`: the elements that span a
 body are dropped before the state is remapped
-(:func:`~skfem_npfem.boundary.protocol.without_spanned`), the body contact
+(:func:`~skfem_npfem.step.boundary_jobs.without_spanned`), the body contact
 rows follow the wall rows
-(:func:`~skfem_npfem.boundary.protocol.step_contacts`: the body's faces
+(:func:`~skfem_npfem.step.boundary_jobs.step_contacts`: the body's faces
 against the soil's boundary nodes and its corners against the boundary
 edges, friction or adhesion bounded with the lagged normal forces of the
 body's column), the particles that end a step behind a wall or inside a
-body are put back (:func:`~skfem_npfem.boundary.protocol.put_back`) and the
+body are put back (:func:`~skfem_npfem.step.boundary_jobs.put_back`) and the
 body's position, force, moment and penetration go on the step record under
-the same keys (:func:`~skfem_npfem.boundary.protocol.record`).
+the same keys (:func:`~skfem_npfem.step.boundary_jobs.record`).
 
 With P2 elements the body rows act on the displacement nodes on the soil's
 boundary, the vertices *and* the mid-side nodes, as the wall rows of
@@ -64,15 +64,16 @@ from time import perf_counter
 import numpy as np
 
 from ..boundary import CLIP_DEPTH, Boundary, ContactNodes, oriented_boundary
-from ..boundary.protocol import record, step_contacts, with_columns, without_spanned
 from ..errors import ParameterError
 from ..mesh.sources import MeshSource
 from ..particles import Particles
+from ..step.boundary_jobs import record, step_contacts, with_columns, without_spanned
 from ..step.conic import ConeSolution, solve_step
 from ..step.kinematics import equivalent_strain, rotate_stress
 from ..step.model import Model
 from ..step.program import ConeInput
-from ..step.stages import Step, StepRecord, StepState, move_particles
+from ..step.stages import Step, StepRecord, StepState
+from ..step.update import move_particles
 from .fem_nodes import element_material, gauss_points, node_data, to_particles
 from .operators import ELEMENTS, GaussMesh, gauss_mesh, quadrature
 from .returnmap import return_map

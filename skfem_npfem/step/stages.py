@@ -2,15 +2,19 @@
 
 :func:`advance` runs the data flow of one N-PFEM step in three stages:
 
-1. :func:`build_operators` -- the mesh of this step (from the mesh source), the
-   nodal integration on it (:mod:`skfem_npfem.mesh.smoothing`; axisymmetric models:
-   :mod:`skfem_npfem.mesh.axisymmetric`), the contacts of the model's
-   boundaries, walls and rigid bodies (:mod:`skfem_npfem.boundary`), and the
-   :class:`~skfem_npfem.step.program.ConeInput`;
+1. :func:`~skfem_npfem.step.operators.build_operators` -- the mesh of this
+   step (from the mesh source, without the elements that span a rigid body),
+   its strain operator (:mod:`skfem_npfem.mesh.operators`), the contact rows
+   of the model's boundaries, walls then bodies (:mod:`skfem_npfem.boundary`),
+   and the :class:`~skfem_npfem.step.program.ConeInput`;
 2. :func:`~skfem_npfem.step.conic.solve_step` -- the cone program;
-3. :func:`update_particles` -- *new* particles from the solution (stress
-   rotation, plastic strain, velocities, ballistic particles, put back from
-   walls and bodies).
+3. :func:`~skfem_npfem.step.update.update_particles` -- *new* particles from
+   the solution (stress rotation, plastic strain, velocities, ballistic
+   particles, put back from walls and bodies).
+
+The boundaries then write their keys into the record
+(:func:`~skfem_npfem.step.boundary_jobs.record`), and the step hands the next
+one its :class:`StepState` (time, volume correction).
 
 The mesh is then forgotten: nothing is mapped between meshes.  The step's
 arrays (solution, mesh, operator) travel in a :class:`Step` that the
@@ -26,275 +30,23 @@ The step's types, from the inside out:
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass
 from time import perf_counter
-from typing import Any
 
 import numpy as np
 from skfem import Mesh
 
 from .._deprecated import renamed
-from ..boundary import Boundary, ContactNodes, Contacts
-from ..boundary.protocol import (
-    put_back,
-    record,
-    step_contacts,
-    with_columns,
-    without_spanned,
-)
 from ..errors import ParameterError
-from ..mesh.axisymmetric import axisymmetric_integration
-from ..mesh.delaunay import p1_mesh
-from ..mesh.smoothing import NodalIntegration, nodal_integration
 from ..mesh.sources import MeshSource, as_mesh_source
 from ..particles import Particles
-from .conic import ConeSolution, solve_step
-from .kinematics import equivalent_strain, rotate_stress
+from .boundary_jobs import record
+from .conic import solve_step
 from .model import Model
-from .program import ConeInput
+from .operators import build_operators
 from .records import Step, StepRecord, StepState, skfem_fields
-from .volume import volume_eigenstrain, volume_strains
+from .update import update_particles
 
-__all__ = [
-    "Step",
-    "StepOperators",
-    "StepRecord",
-    "StepState",
-    "advance",
-    "build_operators",
-    "move_particles",
-    "skfem_fields",
-    "strain_operator",
-    "update_particles",
-]
-
-
-@dataclass
-class StepOperators:
-    """What :func:`build_operators` makes of the particles for one step.
-
-    Attributes
-    ----------
-    active : ndarray (N_a,) int
-        Particles in the mesh (the mesh nodes).
-    local_t : ndarray (d+1, ne) int
-        Connectivity in node numbers ``0 .. N_a-1``.
-    operator : NodalIntegration
-        Smoothing cells of the mesh.
-    wall_ids : ndarray (nc,) int
-        Wall or body (lagged-force column) of each contact candidate of
-        ``data.contacts``.
-    data : ConeInput
-        The cone step's input.
-    volume_strains : ndarray (n_materials,) or None
-        Volumetric eigenstrain of the volume correction per material
-        (:func:`~skfem_npfem.step.volume.volume_strains`; None when it is off).
-    time : float
-        Time at the start of the step, s (where the model's bodies are).
-    dropped : int
-        Elements of the mesh source's mesh dropped because they span a body.
-
-    Notes
-    -----
-    With rigid bodies, :attr:`wall_ids` numbers the bodies after the walls
-    (``len(model.walls) + k`` for body ``k``): the columns of
-    :attr:`Particles.wall_force`.
-    """
-
-    active: np.ndarray
-    local_t: np.ndarray
-    operator: NodalIntegration
-    wall_ids: np.ndarray
-    data: ConeInput
-    volume_strains: np.ndarray | None = None
-    time: float = 0.0
-    dropped: int = 0
-
-    @property
-    def contacts(self) -> Contacts:
-        """Contact candidates (node indices local to :attr:`active`)."""
-        return self.data.contacts
-
-
-def build_operators(
-    p: Particles,
-    model: Model,
-    dt: float,
-    mesh_source: MeshSource,
-    start: StepState | None = None,
-    boundaries: Sequence[Boundary] | None = None,
-) -> StepOperators:
-    """Stage 1: the mesh, smoothing cells, contacts and cone-step data of a step.
-
-    ``start`` is the state at the start of the step (its time: where the
-    model's rigid bodies are; the volume correction's filter state);
-    ``boundaries`` those of the model (default ``model.boundaries``): the
-    elements they span are dropped and their contact rows join the program.
-    """
-    start = StepState() if start is None else start
-    boundaries = model.boundaries if boundaries is None else boundaries
-    active, local_t = mesh_source(p.x)
-    active, local_t, dropped = without_spanned(
-        boundaries, p.x, active, local_t, start.time
-    )
-    mesh = p1_mesh(p.x[active], local_t)
-    op, h = strain_operator(mesh, model)
-    mass = model.node_masses(p.mass[active], p.material[active], op.volumes)
-    strains = volume_strains(
-        model.volume_correction,
-        p.mass[active],
-        p.material[active],
-        op.volumes,
-        np.array([m.rho for m in model.materials], float),
-        start.volume_strain,
-    )
-    nodes = ContactNodes.of_particles(p, active, local_t)
-    contacts, wall_ids = step_contacts(boundaries, nodes, dt, h, start.time)
-    data = ConeInput(
-        operator=op,
-        materials=model.materials,
-        material=p.material[active],
-        sigma_n=p.stress[active],
-        force=model.external_force(p.x.shape[0], active, mass),
-        fixed=p.fixed[active],
-        du_prescribed=p.v_prescribed[active] * dt,
-        contacts=contacts,
-        dt=dt,
-        mass=mass,
-        v_n=p.v[active],
-        theta1=model.theta1,
-        theta2=model.theta2,
-        dynamic=model.mode == "dynamic",
-        stress_scale=model.stress_scale,
-        stabilisation=model.stabilisation,
-        stabilisation_mode=model.stabilisation_mode,
-        a_n=p.a[active],
-        eigenstrain=volume_eigenstrain(
-            strains,
-            p.material[active],
-            p.stress.shape[1],
-            (0, 1, 2) if model.dim == 3 or model.axisymmetric else (0, 1),
-        ),
-    )
-    return StepOperators(
-        active, local_t, op, wall_ids, data, strains, float(start.time), dropped
-    )
-
-
-def strain_operator(mesh, model: Model) -> tuple[NodalIntegration, float]:
-    """The step's strain operator on ``mesh`` and the particle spacing ``h``.
-
-    Plane strain and 3D: :func:`~skfem_npfem.mesh.smoothing.nodal_integration`.
-    Axisymmetric models (``model.axisymmetric``) get the ``2 pi r``-weighted
-    cells with the hoop strain (:mod:`skfem_npfem.mesh.axisymmetric`); their spacing
-    comes from the planar cell areas, not from the (m^3) ring volumes.
-    """
-    if model.axisymmetric:
-        op = axisymmetric_integration(mesh, model.components)
-        return op, op.length_scale
-    op = nodal_integration(mesh, model.components)
-    return op, float(np.mean(op.volumes)) ** (1.0 / model.dim)
-
-
-def update_particles(
-    p: Particles,
-    model: Model,
-    dt: float,
-    ops: StepOperators,
-    sol: ConeSolution,
-    boundaries: Sequence[Boundary] | None = None,
-) -> tuple[Particles, list[Any]]:
-    """Stage 3: new particles from the solution of the step.
-
-    Active particles take the increment, the (rotated) stress and the plastic
-    strain of the solution; particles outside every element (free flight) carry
-    no stress; all move as in :func:`move_particles`, which puts back those
-    that crossed a boundary (default ``model.boundaries``).  Returns the new
-    particles and each boundary's mark
-    (:func:`~skfem_npfem.boundary.protocol.put_back`).
-    """
-    boundaries = model.boundaries if boundaries is None else boundaries
-    active = ops.active
-    stress = p.stress.copy()
-    sig = sol.sigma
-    if model.objective_rotation:
-        sig = rotate_stress(sig, ops.operator.gradient(sol.du))
-    stress[active] = sig
-    # A particle outside every element is a grain in free flight: it carries no
-    # stress (a stale one would come back into the body when it lands).
-    inactive = np.ones(p.n, bool)
-    inactive[active] = False
-    stress[inactive] = 0.0
-    eps_p = p.eps_p.copy()
-    eps_p[active] += equivalent_strain(sol.deps_p)
-    wall_force = np.zeros_like(p.wall_force)
-    if ops.contacts.size:
-        nodes, w, _ = ops.contacts.weights()
-        np.add.at(
-            wall_force,
-            (active[nodes], ops.wall_ids[:, None]),
-            w * sol.lambda_n[:, None],
-        )
-    motion, marks = move_particles(
-        p, model, dt, active, sol.du, ops.data.dynamic, boundaries, ops.time + dt
-    )
-    new = p.replace(**motion, stress=stress, eps_p=eps_p, wall_force=wall_force)
-    return new, marks
-
-
-def move_particles(
-    p: Particles,
-    model: Model,
-    dt: float,
-    active: np.ndarray,
-    du_active: np.ndarray,
-    dynamic: bool,
-    boundaries: Sequence[Boundary],
-    t_end: float,
-) -> tuple[dict[str, np.ndarray], list[Any]]:
-    """Positions, velocities, accelerations and displacements after a step.
-
-    Active particles take the increments ``du_active`` of the step's solution
-    (theta-scheme velocities and accelerations in dynamic steps); the others
-    move ballistically under gravity (docs/theory.md, "Nodal integration",
-    inactive particles); particles that crossed one of ``boundaries`` (behind
-    a wall, inside a body at ``t_end``) are put back on it
-    (:func:`~skfem_npfem.boundary.protocol.put_back`).  Shared by every method
-    that moves the particles with the nodal increments of an implicit step
-    (N-PFEM, FEM-remap).
-
-    Returns
-    -------
-    dict
-        ``x``, ``v``, ``a``, ``u`` of the new particles.
-    list
-        Each boundary's mark (a body group's penetration depths); None each
-        when the geometry is not updated.
-    """
-    g = model.gravity_vector
-    du = np.zeros_like(p.x)
-    du[active] = du_active
-    th1, th2 = model.theta1, model.theta2
-    inactive = np.ones(p.n, bool)
-    inactive[active] = False
-    if np.any(inactive):
-        du[inactive] = dt * p.v[inactive] + th2 * dt**2 * g
-    if dynamic:
-        v = p.v + (du - dt * p.v) / (th2 * dt)
-        a = ((v - p.v) / dt - (1 - th1) * p.a) / th1
-    else:
-        v = du / dt
-        a = np.zeros_like(p.a)
-    if np.any(inactive):
-        v[inactive] = p.v[inactive] + dt * g
-        a[inactive] = g
-    if not model.update_geometry:
-        return {"x": p.x, "v": v, "a": a, "u": p.u + du}, [None] * len(boundaries)
-    # Accumulate du itself (x - p.x would lose increments below ~1e-16 |x|);
-    # only the projections go through the positions.
-    x, v, u, marks = put_back(boundaries, p.x + du, v, p.u + du, inactive, t_end)
-    return {"x": x, "v": v, "a": a, "u": u}, marks
+__all__ = ["Step", "StepRecord", "StepState", "advance", "skfem_fields"]
 
 
 def advance(
@@ -391,7 +143,6 @@ def advance(
     mesh_source = as_mesh_source(mesh_source)
     start = StepState() if start is None else start
     boundaries = model.boundaries
-    p = with_columns(boundaries, p)
     t0 = perf_counter()
     ops = build_operators(p, model, dt, mesh_source, start, boundaries)
     t1 = perf_counter()
@@ -399,15 +150,12 @@ def advance(
     t2 = perf_counter()
     new, marks = update_particles(p, model, dt, ops, sol, boundaries)
     timings = {"mesh": t1 - t0, **sol.timings, "update": perf_counter() - t2}
-    rec = StepRecord.of_step(
-        step, dt, new, model.gravity, ops.active, ops.operator, sol, timings
-    )
-    rec.n_contacts = ops.contacts.size
+    extra = {}
     if ops.volume_strains is not None:
-        rec.extra["volume_correction_strain"] = [float(x) for x in ops.volume_strains]
+        extra["volume_correction_strain"] = [float(x) for x in ops.volume_strains]
     record(
         boundaries,
-        rec.extra,
+        extra,
         ops.contacts,
         ops.wall_ids,
         (sol.lambda_n, sol.lambda_t),
@@ -417,6 +165,11 @@ def advance(
         ops.dropped,
     )
     end = start.after(dt, ops.volume_strains)
+    rec = StepRecord.of_step(
+        step, dt, new, model.gravity, ops.active, ops.operator, sol, timings
+    )
+    rec.n_contacts = ops.contacts.size
+    rec.extra.update(extra)
     return new, Step(rec, sol, ops.active, ops.local_t, ops.operator, new, end)
 
 
