@@ -1,6 +1,6 @@
 """Stage 1 of a step: the mesh, its strain operator, contacts and cone-step data.
 
-:func:`build_operators` asks, in one line down the house, the model's
+:func:`build_operators` asks, in this order, the model's
 boundaries for the elements they span (:mod:`skfem_npfem.boundary`), the mesh
 for its strain operator (:mod:`skfem_npfem.mesh`), the boundaries for their
 contact rows, the model for the nodes' masses and loads and the volume
