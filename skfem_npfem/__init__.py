@@ -28,8 +28,15 @@ from __future__ import annotations
 
 __version__ = "0.1.0"
 
-from .bodies import BodyOfRevolution, RigidBody, RigidPlane
-from .boundary import Contacts, RigidWall, floor, wall_x
+from .boundary import (
+    BodyOfRevolution,
+    Contacts,
+    RigidBody,
+    RigidPlane,
+    RigidWall,
+    floor,
+    wall_x,
+)
 from .errors import (
     CheckpointError,
     NpfemError,
@@ -71,7 +78,7 @@ from .scenes import SCENES, get_scene, run_scene
 from .step.conic import ConeSolution, solve_step
 from .step.model import Model
 from .step.program import ConeInput
-from .step.records import Step, StepRecord, skfem_fields
+from .step.records import Step, StepRecord, StepState, skfem_fields
 from .step.solver import SolverOptions
 from .step.stages import advance
 from .sweeps import sweep
@@ -124,6 +131,7 @@ __all__ += [
     "SolverOptions",
     "Step",
     "StepRecord",
+    "StepState",
     "advance",
     "solve_step",
 ]

@@ -19,24 +19,24 @@ scikit-fem (:mod:`skfem_npfem.baseline.operators`).  Each step:
    the nodal data of :mod:`skfem_npfem.baseline.fem_nodes`;
 4. Gauss-point stresses are rotated with the Gauss-point spin (the library's
    Hughes-Winget rotation), the particles move with the vertex increments
-   (:func:`skfem_npfem.step.stages.move_particles`), and nodal stresses for output are
+   (:func:`skfem_npfem.step.update.move_particles`), and nodal stresses for output are
    recovered from the Gauss points by patch recovery.
 
 So a comparison with N-PFEM isolates integration and mapping: the program,
 the solver, the contact rules and the particle update are the same code.
 
-Rigid bodies (``model.bodies``) enter as in N-PFEM, through the same stage
-functions of :mod:`skfem_npfem.step.stages`: the elements that span a body
-are dropped before the state is remapped
-(:func:`~skfem_npfem.step.body_stages.without_body_elements`), the body contact
-rows are added after the wall rows
-(:func:`~skfem_npfem.step.body_stages.add_body_contacts`: the body's faces
+Walls and rigid bodies (``model.boundaries``) enter as in N-PFEM, through the
+same jobs of :mod:`skfem_npfem.step.boundary_jobs`: the elements that span a
+body are dropped before the state is remapped
+(:func:`~skfem_npfem.step.boundary_jobs.without_spanned`), the body contact
+rows follow the wall rows
+(:func:`~skfem_npfem.step.boundary_jobs.step_contacts`: the body's faces
 against the soil's boundary nodes and its corners against the boundary
 edges, friction or adhesion bounded with the lagged normal forces of the
-body's column), the particles that end a step inside a body are put back
-on its outline (:func:`~skfem_npfem.step.body_stages.keep_out_of_bodies`) and the
+body's column), the particles that end a step behind a wall or inside a
+body are put back (:func:`~skfem_npfem.step.boundary_jobs.put_back`) and the
 body's position, force, moment and penetration go on the step record under
-the same keys (:func:`~skfem_npfem.step.body_stages.record_bodies`).
+the same keys (:func:`~skfem_npfem.step.boundary_jobs.record`).
 
 With P2 elements the body rows act on the displacement nodes on the soil's
 boundary, the vertices *and* the mid-side nodes, as the wall rows of
@@ -63,23 +63,17 @@ from time import perf_counter
 
 import numpy as np
 
-from ..bodies import CLIP_DEPTH, oriented_boundary
-from ..boundary import node_contacts
+from ..boundary import CLIP_DEPTH, Boundary, ContactNodes, oriented_boundary
 from ..errors import ParameterError
 from ..mesh.sources import MeshSource
 from ..particles import Particles
-from ..step.body_stages import (
-    add_body_contacts,
-    keep_out_of_bodies,
-    record_bodies,
-    with_body_columns,
-    without_body_elements,
-)
+from ..step.boundary_jobs import record, step_contacts, with_columns, without_spanned
 from ..step.conic import ConeSolution, solve_step
 from ..step.kinematics import equivalent_strain, rotate_stress
 from ..step.model import Model
 from ..step.program import ConeInput
-from ..step.stages import Step, StepRecord, move_particles
+from ..step.stages import Step, StepRecord, StepState
+from ..step.update import move_particles
 from .fem_nodes import element_material, gauss_points, node_data, to_particles
 from .operators import ELEMENTS, GaussMesh, gauss_mesh, quadrature
 from .returnmap import return_map
@@ -265,7 +259,7 @@ class FemRemap:
         dt: float,
         mesh_source: MeshSource,
         step: int | None = None,
-        time: float = 0.0,
+        start: StepState | None = None,
     ) -> tuple[GaussState, Step]:
         """Advance one step (the counterpart of :func:`skfem_npfem.advance`).
 
@@ -280,9 +274,10 @@ class FemRemap:
             ``x -> (active, local_t)``.
         step : int, optional
             Step index (for error messages).
-        time : float
-            Time at the start of the step, s: where the model's rigid bodies
-            are (only read when ``model.bodies`` is not empty).
+        start : StepState, optional
+            The state at the start of the step (the previous step's
+            ``result.state``): its time is where the model's rigid bodies
+            are.  None: time 0.
 
         Returns
         -------
@@ -291,37 +286,38 @@ class FemRemap:
             and ``outside_old_mesh`` (and, with rigid bodies, the body keys of
             :func:`skfem_npfem.advance`); ``result.solution`` is on the
             particles (recovered nodal stresses, mid-edge reactions split to
-            the ends); ``result.operator`` is the Gauss-point operator.
+            the ends); ``result.operator`` is the Gauss-point operator;
+            ``result.state`` the state at the end of the step.
         """
         self.check_state(state, model, dt)
-        t_start = float(time)
-        if model.bodies:
-            state = with_body_columns(state, model)
+        start = StepState() if start is None else start
+        t_start = float(start.time)
+        boundaries = model.boundaries
+        state = with_columns(boundaries, state)
         t0 = perf_counter()
         active, local_t = mesh_source(state.x)
-        dropped = 0
-        if model.bodies:
-            # P2: no sliver, its mid-edge node would start inside the body.
-            sliver = CLIP_DEPTH if self.element == "p1" else 0.0
-            active, local_t, dropped = without_body_elements(
-                model, state.x, active, local_t, t_start, sliver
-            )
+        # P2: no sliver, its mid-edge node would start inside the body.
+        sliver = CLIP_DEPTH if self.element == "p1" else 0.0
+        active, local_t, dropped = without_spanned(
+            boundaries, state.x, active, local_t, t_start, sliver
+        )
         cells = np.ascontiguousarray(active[local_t].T)
         ta = perf_counter()
         sig_gp, eps_gp, info = self.remap(state, cells, model)
         t_map = perf_counter() - ta
         gm = gauss_mesh(state.x[active], local_t, self.element, model.components)
         data, wall_ids = self._step_data(
-            state, model, dt, gm, active, local_t, cells, sig_gp, t_start
+            state, model, boundaries, dt, gm, active, local_t, cells, sig_gp, t_start
         )
         t1 = perf_counter()
         sol = solve_step(data, model.solver, step=step)
         t2 = perf_counter()
-        new, out = self._update(state, model, dt, gm, active, cells, sol, eps_gp)
+        new, out, marks = self._update(
+            state, model, boundaries, dt, gm, active, cells, sol, eps_gp, t_start
+        )
         new = new.replace(
             wall_force=self._wall_forces(state, gm, active, data, wall_ids, sol)
         )
-        new, depth = keep_out_of_bodies(model, new, t_start + dt)
         timings = {
             "mesh": t1 - t0 - t_map,
             "transfer": t_map,
@@ -331,54 +327,53 @@ class FemRemap:
         rec = StepRecord.of_step(
             step, dt, new, model.gravity, active, gm.points, sol, timings, **info
         )
-        if model.bodies:
-            record_bodies(
-                rec,
-                model,
-                data.contacts,
-                wall_ids,
-                sol,
-                gm.node_x,
-                t_start + dt,
-                depth,
-                dropped,
-            )
-        return new, Step(rec, out, active, local_t, gm.points, new)
+        record(
+            boundaries,
+            rec.extra,
+            data.contacts,
+            wall_ids,
+            (sol.lambda_n, sol.lambda_t),
+            gm.node_x,
+            t_start + dt,
+            marks,
+            dropped,
+        )
+        end = start.after(dt, None)
+        return new, Step(rec, out, active, local_t, gm.points, new, end)
 
     def _step_data(
-        self, state, model, dt, gm: GaussMesh, active, local_t, cells, sig_gp, t
+        self,
+        state,
+        model,
+        boundaries: list[Boundary],
+        dt,
+        gm: GaussMesh,
+        active,
+        local_t,
+        cells,
+        sig_gp,
+        t,
     ):
         """The cone step's data on the Gauss points, and each contact's wall."""
         nodes = node_data(state, model, gm, active)
         vol_e = gm.points.volumes.reshape(-1, gm.nq).sum(axis=1)
         h = float(np.mean(vol_e)) ** (1 / model.dim)
-        contacts, wall_ids = node_contacts(
-            model.walls,
-            gm.node_x,
-            nodes.v,
-            nodes.fixed,
-            nodes.v_prescribed,
-            nodes.lagged,
-            dt,
-            h,
-            model.gravity,
+        # The noise level of the lagged forces, one per column: the walls'
+        # from the nodes' own lagged forces, the bodies' from the particles'.
+        level = np.max(np.abs(state.wall_force), axis=0, initial=0.0)
+        nw = len(model.walls)
+        level[:nw] = np.max(np.abs(nodes.lagged[:, :nw]), axis=0, initial=0.0)
+        contact_nodes = ContactNodes(
+            x=gm.node_x,
+            v=nodes.v,
+            fixed=nodes.fixed,
+            v_prescribed=nodes.v_prescribed,
+            lagged=nodes.lagged,
+            noise_ref=level[None],
+            local_t=local_t,
+            facets=lambda: _boundary_half_edges(gm, local_t),
         )
-        if model.bodies:
-            contacts, wall_ids = add_body_contacts(
-                model,
-                contacts,
-                wall_ids,
-                gm.node_x,
-                nodes.v,
-                nodes.fixed,
-                nodes.v_prescribed,
-                nodes.lagged,
-                _boundary_half_edges(gm, local_t),
-                dt,
-                h,
-                t,
-                noise_ref=state.wall_force,
-            )
+        contacts, wall_ids = step_contacts(boundaries, contact_nodes, dt, h, t)
         data = ConeInput(
             operator=gm.points,
             materials=model.materials,
@@ -398,7 +393,9 @@ class FemRemap:
         )
         return data, wall_ids
 
-    def _update(self, state, model, dt, gm: GaussMesh, active, cells, sol, eps_gp):
+    def _update(
+        self, state, model, boundaries, dt, gm: GaussMesh, active, cells, sol, eps_gp, t
+    ):
         """Rotate Gauss-point stresses, recover nodal output, move particles."""
         sig = sol.sigma
         if model.objective_rotation:
@@ -412,8 +409,15 @@ class FemRemap:
         stress[active] = nodal[:, :-1]
         eps_p = state.eps_p.copy()
         eps_p[active] = np.maximum(nodal[:, -1], 0.0)
-        motion = move_particles(
-            state, model, dt, active, sol.du[:nv], model.mode == "dynamic"
+        motion, marks = move_particles(
+            state,
+            model,
+            dt,
+            active,
+            sol.du[:nv],
+            model.mode == "dynamic",
+            boundaries,
+            t + dt,
         )
         new = state.replace(
             **motion,
@@ -435,7 +439,7 @@ class FemRemap:
             timings=sol.timings,
             sizes=sol.sizes,
         )
-        return new, out
+        return new, out, marks
 
     def _wall_forces(self, state, gm: GaussMesh, active, data, wall_ids, sol):
         """Lagged normal forces per particle (mid-edge forces split to the ends)."""

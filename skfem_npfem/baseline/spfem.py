@@ -61,7 +61,7 @@ from ..particles import Particles
 from ..step.conic import ConeSolution
 from ..step.kinematics import equivalent_strain, rotate_stress
 from ..step.model import Model
-from ..step.stages import Step, StepRecord
+from ..step.stages import Step, StepRecord, StepState
 from .returnmap import elastic_trial, return_map
 
 __all__ = ["MID_RUN_MARGIN", "SAFETY", "SPFEM", "stable_time_step"]
@@ -178,7 +178,7 @@ class SPFEM:
         dt: float,
         mesh_source: MeshSource,
         step: int | None = None,
-        time: float = 0.0,
+        start: StepState | None = None,
     ) -> tuple[Particles, Step]:
         """Advance by ``dt`` in explicit substeps on one mesh.
 
@@ -186,9 +186,9 @@ class SPFEM:
         ``result.record.extra`` holds ``substeps``, ``stable_dt``,
         ``explicit_dt`` and ``cfl``.
 
-        ``time`` (the time at the start of the step) is accepted for the
-        signature's sake: SPFEM refuses rigid bodies, the only thing that
-        reads it.
+        ``start`` (the state at the start of the step) only gives the time
+        of the returned ``result.state``: SPFEM refuses rigid bodies and has
+        no volume correction, the rest of what reads it.
 
         Raises
         ------
@@ -234,7 +234,8 @@ class SPFEM:
             cfl=h / stable,
         )
         rec.n_contacts = int(np.count_nonzero(np.any(wall_force > 0, axis=1)))
-        return q, Step(rec, sol, active, local_t, ni, q)
+        end = (StepState() if start is None else start).after(dt, None)
+        return q, Step(rec, sol, active, local_t, ni, q, end)
 
     def _substeps(self, dt: float, stable: float, step: int | None) -> int:
         """Number of substeps of a step of ``dt`` on a mesh of this stable step."""

@@ -8,5 +8,8 @@
 * :mod:`.smoothing` -- nodal integration: smoothing cells and the smoothed strain
   operator ``G`` from scikit-fem's P1 gradients;
 * :mod:`.axisymmetric` -- the same for the (r, z) half-section of a body of
-  revolution, with the hoop strain.
+  revolution, with the hoop strain;
+* :mod:`.operators` -- the strain operator of a step's mesh (plane or
+  axisymmetric) and the particle spacing;
+* :mod:`.geometry` -- the tangents of unit normals (contact rows, rigid bodies).
 """

@@ -41,19 +41,19 @@ __all__ = [
 ]
 
 
+class Wall(Protocol):
+    """What a mesher reads of a wall (:class:`~skfem_npfem.RigidWall`)."""
+
+    def gap(self, x: np.ndarray) -> np.ndarray:
+        """Signed distance of points (n, d) from the wall (positive: body side)."""
+        ...
+
+
 class MeshSource(Protocol):
     """Turns particle positions into a mesh for one step."""
 
     def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Return ``(active_index (N_a,), local_t (d+1, ne))`` for positions x."""
-        ...
-
-
-class Wall(Protocol):
-    """What the mesher asks of a wall (:class:`~skfem_npfem.RigidWall` is one)."""
-
-    def gap(self, x: np.ndarray) -> np.ndarray:
-        """Signed distance of points (n, d) from the wall (positive: body side)."""
         ...
 
 

@@ -16,20 +16,21 @@ import math
 import signal
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from skfem import Mesh
 
-from ..bodies import check_clear
+from ..boundary import check_clear
 from ..errors import ParameterError, RunInterrupted, SolverError
 from ..io import read_checkpoint, write_checkpoint
 from ..mesh.sources import MeshSource, as_mesh_source
 from ..particles import Particles
 from ..step.kinematics import energies
 from ..step.model import Model
-from ..step.stages import Step, StepRecord, advance
+from ..step.stages import Step, StepRecord, StepState, advance
 from .control import INTERVAL, AbandonStep, Progress, SignalGuard
 from .rest import AtRest
 from .statistics import peak_memory_mb, run_statistics
@@ -85,9 +86,10 @@ class Simulation:
     extra_point_data : callable or None
         ``f(particles) -> dict`` of more point data for the VTU files.
     stepper : callable or None
-        The step, ``stepper(particles, model, dt, mesh_source, step=k) ->
-        (particles, Step)``, called with ``time=`` (the time at the start
-        of the step) as well when the model has rigid bodies; None: N-PFEM's
+        The step, ``stepper(particles, model, dt, mesh_source, step=k,
+        start=state) -> (particles, Step)``, where ``state`` is the
+        :class:`~skfem_npfem.step.records.StepState` at the start of the step
+        and the returned step's ``state`` the one at its end; None: N-PFEM's
         :func:`~skfem_npfem.step.stages.advance`.  Another method (FEM with remapping,
         explicit SPFEM: :mod:`skfem_npfem.baseline`) plugs in here and may keep
         more state in a subclass of :class:`Particles`; checkpoints keep it.
@@ -157,7 +159,8 @@ class Simulation:
         self.meta = dict(meta or {})
         self.extra_point_data = extra_point_data
         self.stepper = stepper
-        self.time = 0.0
+        #: What the next step starts from besides the particles (time, filter).
+        self.state = StepState()
         self.step = 0
         self.records: list[StepRecord] = []
         self._successes = 0
@@ -177,6 +180,15 @@ class Simulation:
                 )
             for body in model.bodies:
                 check_clear([body], particles.x, 0.0, 1e-6 * body.size)
+
+    @property
+    def time(self) -> float:
+        """Time at the end of the last step, s (``state.time``)."""
+        return self.state.time
+
+    @time.setter
+    def time(self, value: float) -> None:
+        self.state = replace(self.state, time=float(value))
 
     # -- output ---------------------------------------------------------------
     def point_data(self, p: Particles, active: np.ndarray | None) -> dict:
@@ -247,12 +259,12 @@ class Simulation:
         """
         self.particles, meta = read_checkpoint(path, type(self.particles))
         self.step = int(meta["step"])
-        self.time = float(meta["time"])
         self.dt = float(meta["dt"])
         self._successes = int(meta.get("successes", 0))
         self.initial = dict(meta.get("initial", self.initial))
         self.records = [StepRecord.from_dict(r) for r in meta.get("records", [])]
         self.last_record = self.records[-1] if self.records else None
+        self.state = StepState.resumed(float(meta["time"]), self.last_record)
         self._peak_memory_before = float(meta.get("peak_memory_mb", 0.0))
         return meta
 
@@ -361,7 +373,7 @@ class Simulation:
         rec = result.record
         self.particles = new
         self.step += 1
-        self.time += rec.dt
+        self.state = result.state
         rec.step, rec.time = self.step, self.time
         v0 = self.records[0].mesh_volume if self.records else rec.mesh_volume
         rec.volume_change = rec.mesh_volume / v0 - 1.0 if v0 > 0 else 0.0
@@ -466,20 +478,9 @@ class Simulation:
             self.dt = min(self.dt_max, 2 * dt, 0.9 * dt * limit / du)
 
     def _advance(self, dt: float) -> tuple[Particles, Step]:
+        method = advance if self.stepper is None else self.stepper
         args = (self.particles, self.model, dt, self.mesh_source)
-        if self.stepper is not None:
-            if self.model.bodies:  # the bodies move: the stepper needs the time
-                return self.stepper(*args, step=self.step + 1, time=self.time)
-            return self.stepper(*args, step=self.step + 1)
-        # The volume correction's filter state lives in the last record (so
-        # checkpoints, which keep the records, carry it).
-        last = self.last_record
-        state = None if last is None else last.extra.get("volume_correction_strain")
-        if self.model.bodies:
-            return advance(
-                *args, step=self.step + 1, volume_state=state, time=self.time
-            )
-        return advance(*args, step=self.step + 1, volume_state=state)
+        return method(*args, step=self.step + 1, start=self.state)
 
     def summary(self) -> dict[str, Any]:
         """Solver statistics of the run (steps, iterations, time per phase).

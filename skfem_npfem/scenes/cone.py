@@ -33,8 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from ..bodies import RigidBody
-from ..boundary import wall_x
+from ..boundary import RigidBody, wall_x
 from ..errors import ParameterError
 from ..laws import teh_houlsby_nc
 from ..loads import surface_load

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 from skfem import MeshTri
 
-from ..bodies import RigidBody
+from ..boundary import RigidBody
 from ..errors import ParameterError
 from ..laws import prandtl_nc
 from ..materials import Tresca

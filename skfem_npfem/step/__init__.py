@@ -12,8 +12,15 @@ The data flow of :func:`advance` (in :mod:`.stages`) goes through these modules:
   duals (:class:`ConeSolution`);
 * :mod:`.solver`, :mod:`.backends` -- solver options and the direct linear solvers;
 * :mod:`.kinematics` -- stress rotation, strain measures, energies;
-* :mod:`.stages` -- :func:`advance`: the three stages of a step, its
-  :class:`Step` and :class:`StepRecord`.
+* :mod:`.operators` -- stage 1: the mesh, its strain operator, the contacts
+  and the cone program's input (:class:`~.operators.StepOperators`);
+* :mod:`.update` -- stage 3: new particles from the solution, moved and put
+  back from the boundaries;
+* :mod:`.boundary_jobs` -- the step asking the model's boundaries (walls,
+  rigid bodies) each job once;
+* :mod:`.records` -- what a step leaves: :class:`Step`, :class:`StepRecord`
+  and the :class:`StepState` the next step starts from;
+* :mod:`.stages` -- :func:`advance`: the three stages of a step in a line.
 """
 
 from .conic import ConeSolution, solve_step

@@ -33,6 +33,7 @@ import clarabel
 import numpy as np
 import scipy.sparse as sp
 
+from ..mesh.geometry import tangents
 from .program import Block, Program, Term
 from .stabilisation import mean_stress_link, residual_penalty
 from .volume import eigenstrain_work
@@ -49,7 +50,6 @@ __all__ = [
     "friction",
     "inertia",
     "prescribed_work",
-    "tangents",
     "yield_cones",
 ]
 
@@ -254,19 +254,6 @@ def yield_cones(prog: Program) -> Block:
         cones.extend([clarabel.SecondOrderConeT(1 + m)] * n)
         nrow += n * (1 + m)
     return _rows(prog, rows, cols, vals, b, cones, "stress")
-
-
-def tangents(normals: np.ndarray) -> np.ndarray:
-    """Unit tangents (n, d-1, d) orthogonal to unit normals (n, d)."""
-    d = normals.shape[1]
-    if d == 2:
-        return np.stack([-normals[:, 1], normals[:, 0]], axis=1)[:, None, :]
-    # 3D: pick the coordinate axis least aligned with n, Gram-Schmidt.
-    ref = np.eye(3)[np.argmin(np.abs(normals), axis=1)]
-    t1 = ref - np.sum(ref * normals, axis=1, keepdims=True) * normals
-    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
-    t2 = np.cross(normals, t1)
-    return np.stack([t1, t2], axis=1)
 
 
 #: Objective terms, summed.

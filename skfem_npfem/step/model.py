@@ -7,8 +7,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..bodies import BodyOfRevolution, RigidBody, RigidPlane
-from ..boundary import RigidWall
+from ..boundary import (
+    BodyOfRevolution,
+    Boundary,
+    RigidBodies,
+    RigidBody,
+    RigidPlane,
+    RigidWall,
+    Walls,
+)
 from ..constants import GRAVITY
 from ..errors import ParameterError
 from ..materials import Material
@@ -42,7 +49,7 @@ class Model:
         Rigid planes the particles may touch.
     bodies : list of RigidBody, RigidPlane or BodyOfRevolution
         Rigid bodies moving with a prescribed velocity
-        (:mod:`skfem_npfem.bodies`): polygons (:class:`RigidBody`) in 2D
+        (:mod:`skfem_npfem.boundary`): polygons (:class:`RigidBody`) in 2D
         models, planes and bodies of revolution in 3D ones.  Their lagged
         normal forces are the columns ``len(walls) ..`` of
         :attr:`Particles.wall_force` (added by :func:`~skfem_npfem.advance`
@@ -83,8 +90,9 @@ class Model:
         material's particles should fill ``sum m / rho``; remeshing and
         linearised increments lose some of it, and this returns it through
         the solve, the deficit decaying as ``(1 + kappa n)(1 - kappa)^n`` over
-        ``n`` steps (a critically damped filter; its state travels in the
-        step records).  0 (default) switches it off; needs ``rho > 0``.
+        ``n`` steps (a critically damped filter; its state travels from
+        step to step in :class:`~skfem_npfem.step.records.StepState`).
+        0 (default) switches it off; needs ``rho > 0``.
         The plane-strain ``column-collapse`` scene defaults to 0.05 for a
         material whose own volume barely changes (psi = 0, rho g H0 / E <=
         0.01; docs/validation.md, "At the default spacing").
@@ -316,6 +324,28 @@ class Model:
         if self.axisymmetric or any(m.needs_zz(2) for m in self.materials):
             return (0, 1, 2, 3)
         return (0, 1, 3)
+
+    @property
+    def boundaries(self) -> list[Boundary]:
+        """The walls, then the bodies (if any), as the boundaries of a step.
+
+        :class:`~skfem_npfem.boundary.walls.Walls` always (its contact rows
+        come first, with ids ``0 .. len(walls)-1``), then
+        :class:`~skfem_npfem.boundary.rigid_bodies.RigidBodies` when the model
+        has bodies (ids from ``len(walls)``).
+        """
+        out: list[Boundary] = [Walls(self.walls, self.gravity)]
+        if self.bodies:
+            out.append(
+                RigidBodies(
+                    self.bodies,
+                    len(self.walls),
+                    self.dim,
+                    self.axisymmetric,
+                    self.gravity,
+                )
+            )
+        return out
 
     @property
     def gravity_vector(self) -> np.ndarray:

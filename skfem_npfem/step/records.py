@@ -23,7 +23,51 @@ from .conic import ConeSolution
 from .kinematics import energies
 from .program import StrainOperator
 
-__all__ = ["Step", "StepRecord", "skfem_fields"]
+__all__ = ["Step", "StepRecord", "StepState", "skfem_fields"]
+
+
+@dataclass(frozen=True)
+class StepState:
+    """What one step hands the next besides the particles.
+
+    :func:`~skfem_npfem.step.stages.advance` takes it as ``start`` and returns
+    the state at the end of the step as :attr:`Step.state`.
+
+    Attributes
+    ----------
+    time : float
+        Time, s (where the model's rigid bodies are).
+    volume_strain : tuple of float or None
+        The volume correction's filter state: the volumetric eigenstrain of
+        the step that ended here, one number per material
+        (:func:`~skfem_npfem.step.volume.volume_strains`); None at the start
+        of a run or with the correction off.
+
+    Examples
+    --------
+    >>> StepState().after(0.5, None)
+    StepState(time=0.5, volume_strain=None)
+    """
+
+    time: float = 0.0
+    volume_strain: tuple[float, ...] | None = None
+
+    @classmethod
+    def resumed(cls, time: float, last: StepRecord | None) -> StepState:
+        """The state of a run resumed at ``time`` after the record ``last``.
+
+        A checkpoint keeps the records: the filter state is the last one's
+        ``extra["volume_correction_strain"]`` (None: the correction is off).
+        """
+        strain = None if last is None else last.extra.get("volume_correction_strain")
+        return cls(time, None if strain is None else tuple(strain))
+
+    def after(self, dt: float, volume_strain: np.ndarray | None) -> StepState:
+        """The state at the end of a step of ``dt`` that used ``volume_strain``."""
+        strain = None
+        if volume_strain is not None:
+            strain = tuple(float(x) for x in volume_strain)
+        return StepState(self.time + dt, strain)
 
 
 @dataclass
@@ -163,6 +207,9 @@ class Step:
     particles : Particles or None
         The particles at the end of the step (the first value :func:`advance`
         returns); needed by :attr:`mesh` and :meth:`to_skfem`.
+    state : StepState or None
+        The state at the end of the step, for the next step's ``start``
+        (every method of the library sets it).
     """
 
     record: StepRecord
@@ -171,6 +218,7 @@ class Step:
     local_t: np.ndarray
     operator: StrainOperator
     particles: Particles | None = None
+    state: StepState | None = None
 
     @property
     def cells(self) -> np.ndarray:

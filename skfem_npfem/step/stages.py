@@ -2,13 +2,19 @@
 
 :func:`advance` runs the data flow of one N-PFEM step in three stages:
 
-1. :func:`build_operators` -- the mesh of this step (from the mesh source), the
-   nodal integration on it (:mod:`skfem_npfem.mesh.smoothing`; axisymmetric models:
-   :mod:`skfem_npfem.mesh.axisymmetric`), the wall contacts
-   (:mod:`skfem_npfem.boundary`) and the :class:`~skfem_npfem.step.program.ConeInput`;
+1. :func:`~skfem_npfem.step.operators.build_operators` -- the mesh of this
+   step (from the mesh source, without the elements that span a rigid body),
+   its strain operator (:mod:`skfem_npfem.mesh.operators`), the contact rows
+   of the model's boundaries, walls then bodies (:mod:`skfem_npfem.boundary`),
+   and the :class:`~skfem_npfem.step.program.ConeInput`;
 2. :func:`~skfem_npfem.step.conic.solve_step` -- the cone program;
-3. :func:`update_particles` -- *new* particles from the solution (stress
-   rotation, plastic strain, velocities, ballistic particles, walls).
+3. :func:`~skfem_npfem.step.update.update_particles` -- *new* particles from
+   the solution (stress rotation, plastic strain, velocities, ballistic
+   particles, put back from walls and bodies).
+
+The boundaries then write their keys into the record
+(:func:`~skfem_npfem.step.boundary_jobs.record`), and the step hands the next
+one its :class:`StepState` (time, volume correction).
 
 The mesh is then forgotten: nothing is mapped between meshes.  The step's
 arrays (solution, mesh, operator) travel in a :class:`Step` that the
@@ -24,257 +30,22 @@ The step's types, from the inside out:
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass
 from time import perf_counter
 
 import numpy as np
 from skfem import Mesh
 
-from ..boundary import Contacts, project_to_walls, wall_contacts
 from ..errors import ParameterError
-from ..mesh.axisymmetric import axisymmetric_integration
-from ..mesh.delaunay import p1_mesh
-from ..mesh.smoothing import NodalIntegration, nodal_integration
 from ..mesh.sources import MeshSource, as_mesh_source
 from ..particles import Particles
-from .body_stages import (
-    keep_out_of_bodies,
-    record_bodies,
-    with_body_columns,
-    with_body_contacts,
-    without_body_elements,
-)
-from .conic import ConeSolution, solve_step
-from .kinematics import equivalent_strain, rotate_stress
+from .boundary_jobs import record
+from .conic import solve_step
 from .model import Model
-from .program import ConeInput
-from .records import Step, StepRecord, skfem_fields
-from .volume import volume_eigenstrain, volume_strains
+from .operators import build_operators
+from .records import Step, StepRecord, StepState, skfem_fields
+from .update import update_particles
 
-__all__ = [
-    "Step",
-    "StepOperators",
-    "StepRecord",
-    "advance",
-    "build_operators",
-    "move_particles",
-    "skfem_fields",
-    "strain_operator",
-    "update_particles",
-]
-
-
-@dataclass
-class StepOperators:
-    """What :func:`build_operators` makes of the particles for one step.
-
-    Attributes
-    ----------
-    active : ndarray (N_a,) int
-        Particles in the mesh (the mesh nodes).
-    local_t : ndarray (d+1, ne) int
-        Connectivity in node numbers ``0 .. N_a-1``.
-    operator : NodalIntegration
-        Smoothing cells of the mesh.
-    wall_ids : ndarray (nc,) int
-        Wall of each contact candidate of ``data.contacts``.
-    data : ConeInput
-        The cone step's input.
-    volume_strains : ndarray (n_materials,) or None
-        Volumetric eigenstrain of the volume correction per material
-        (:func:`~skfem_npfem.step.volume.volume_strains`; None when it is off).
-    time : float
-        Time at the start of the step, s (where the model's bodies are).
-    dropped : int
-        Elements of the mesh source's mesh dropped because they span a body.
-
-    Notes
-    -----
-    With rigid bodies, :attr:`wall_ids` numbers the bodies after the walls
-    (``len(model.walls) + k`` for body ``k``): the columns of
-    :attr:`Particles.wall_force`.
-    """
-
-    active: np.ndarray
-    local_t: np.ndarray
-    operator: NodalIntegration
-    wall_ids: np.ndarray
-    data: ConeInput
-    volume_strains: np.ndarray | None = None
-    time: float = 0.0
-    dropped: int = 0
-
-    @property
-    def contacts(self) -> Contacts:
-        """Contact candidates (node indices local to :attr:`active`)."""
-        return self.data.contacts
-
-
-def build_operators(
-    p: Particles,
-    model: Model,
-    dt: float,
-    mesh_source: MeshSource,
-    volume_state: Sequence[float] | None = None,
-    time: float = 0.0,
-) -> StepOperators:
-    """Stage 1: the mesh, smoothing cells, contacts and cone-step data of a step.
-
-    ``volume_state`` is the previous step's ``volume_correction_strain`` (the
-    volume correction's filter state, one number per material); ``time`` the
-    time at the start of the step (where the model's rigid bodies are).
-    """
-    active, local_t = mesh_source(p.x)
-    dropped = 0
-    if model.bodies:
-        active, local_t, dropped = without_body_elements(
-            model, p.x, active, local_t, time
-        )
-    mesh = p1_mesh(p.x[active], local_t)
-    op, h = strain_operator(mesh, model)
-    mass = model.node_masses(p.mass[active], p.material[active], op.volumes)
-    strains = volume_strains(
-        model.volume_correction,
-        p.mass[active],
-        p.material[active],
-        op.volumes,
-        np.array([m.rho for m in model.materials], float),
-        volume_state,
-    )
-    contacts, wall_ids = wall_contacts(model.walls, p, active, dt, h, model.gravity)
-    if model.bodies:
-        contacts, wall_ids = with_body_contacts(
-            model, p, active, local_t, dt, h, time, contacts, wall_ids
-        )
-    data = ConeInput(
-        operator=op,
-        materials=model.materials,
-        material=p.material[active],
-        sigma_n=p.stress[active],
-        force=model.external_force(p.x.shape[0], active, mass),
-        fixed=p.fixed[active],
-        du_prescribed=p.v_prescribed[active] * dt,
-        contacts=contacts,
-        dt=dt,
-        mass=mass,
-        v_n=p.v[active],
-        theta1=model.theta1,
-        theta2=model.theta2,
-        dynamic=model.mode == "dynamic",
-        stress_scale=model.stress_scale,
-        stabilisation=model.stabilisation,
-        stabilisation_mode=model.stabilisation_mode,
-        a_n=p.a[active],
-        eigenstrain=volume_eigenstrain(
-            strains,
-            p.material[active],
-            p.stress.shape[1],
-            (0, 1, 2) if model.dim == 3 or model.axisymmetric else (0, 1),
-        ),
-    )
-    return StepOperators(
-        active, local_t, op, wall_ids, data, strains, float(time), dropped
-    )
-
-
-def strain_operator(mesh, model: Model) -> tuple[NodalIntegration, float]:
-    """The step's strain operator on ``mesh`` and the particle spacing ``h``.
-
-    Plane strain and 3D: :func:`~skfem_npfem.mesh.smoothing.nodal_integration`.
-    Axisymmetric models (``model.axisymmetric``) get the ``2 pi r``-weighted
-    cells with the hoop strain (:mod:`skfem_npfem.mesh.axisymmetric`); their spacing
-    comes from the planar cell areas, not from the (m^3) ring volumes.
-    """
-    if model.axisymmetric:
-        op = axisymmetric_integration(mesh, model.components)
-        return op, op.length_scale
-    op = nodal_integration(mesh, model.components)
-    return op, float(np.mean(op.volumes)) ** (1.0 / model.dim)
-
-
-def update_particles(
-    p: Particles, model: Model, dt: float, ops: StepOperators, sol: ConeSolution
-) -> Particles:
-    """Stage 3: new particles from the solution of the step.
-
-    Active particles take the increment, the (rotated) stress and the plastic
-    strain of the solution; particles outside every element (free flight) carry
-    no stress; all move as in :func:`move_particles`.
-    """
-    active = ops.active
-    stress = p.stress.copy()
-    sig = sol.sigma
-    if model.objective_rotation:
-        sig = rotate_stress(sig, ops.operator.gradient(sol.du))
-    stress[active] = sig
-    # A particle outside every element is a grain in free flight: it carries no
-    # stress (a stale one would come back into the body when it lands).
-    inactive = np.ones(p.n, bool)
-    inactive[active] = False
-    stress[inactive] = 0.0
-    eps_p = p.eps_p.copy()
-    eps_p[active] += equivalent_strain(sol.deps_p)
-    wall_force = np.zeros_like(p.wall_force)
-    if ops.contacts.size:
-        nodes, w, _ = ops.contacts.weights()
-        np.add.at(
-            wall_force,
-            (active[nodes], ops.wall_ids[:, None]),
-            w * sol.lambda_n[:, None],
-        )
-    motion = move_particles(p, model, dt, active, sol.du, ops.data.dynamic)
-    return p.replace(**motion, stress=stress, eps_p=eps_p, wall_force=wall_force)
-
-
-def move_particles(
-    p: Particles,
-    model: Model,
-    dt: float,
-    active: np.ndarray,
-    du_active: np.ndarray,
-    dynamic: bool,
-) -> dict[str, np.ndarray]:
-    """Positions, velocities, accelerations and displacements after a step.
-
-    Active particles take the increments ``du_active`` of the step's solution
-    (theta-scheme velocities and accelerations in dynamic steps); the others
-    move ballistically under gravity (docs/theory.md, "Nodal integration",
-    inactive particles); particles behind a wall are put back on it.  Shared by
-    every method that moves the particles with the nodal increments of an
-    implicit step (N-PFEM, FEM-remap).
-
-    Returns
-    -------
-    dict
-        ``x``, ``v``, ``a``, ``u`` of the new particles.
-    """
-    g = model.gravity_vector
-    du = np.zeros_like(p.x)
-    du[active] = du_active
-    th1, th2 = model.theta1, model.theta2
-    inactive = np.ones(p.n, bool)
-    inactive[active] = False
-    if np.any(inactive):
-        du[inactive] = dt * p.v[inactive] + th2 * dt**2 * g
-    if dynamic:
-        v = p.v + (du - dt * p.v) / (th2 * dt)
-        a = ((v - p.v) / dt - (1 - th1) * p.a) / th1
-    else:
-        v = du / dt
-        a = np.zeros_like(p.a)
-    if np.any(inactive):
-        v[inactive] = p.v[inactive] + dt * g
-        a[inactive] = g
-    if model.update_geometry:
-        moved = p.x + du
-        x, v = project_to_walls(model.walls, moved, v, friction=inactive)
-        # Accumulate du itself (x - p.x would lose increments below ~1e-16 |x|);
-        # only the wall projection goes through the positions.
-        u = p.u + du + (x - moved)
-    else:
-        x, u = p.x, p.u + du
-    return {"x": x, "v": v, "a": a, "u": u}
+__all__ = ["Step", "StepRecord", "StepState", "advance", "skfem_fields"]
 
 
 def advance(
@@ -283,8 +54,7 @@ def advance(
     dt: float,
     mesh_source: MeshSource | Mesh | np.ndarray,
     step: int | None = None,
-    volume_state: Sequence[float] | None = None,
-    time: float = 0.0,
+    start: StepState | None = None,
 ) -> tuple[Particles, Step]:
     """Advance the particles by one step.
 
@@ -305,25 +75,23 @@ def advance(
         ``FixedMesh(mesh)``.
     step : int, optional
         Step index (used in error messages).
-    volume_state : sequence of float, optional
-        The previous step's ``record.extra["volume_correction_strain"]`` (the
-        state of the volume correction's filter, one number per material);
-        None at the start of a run.  Only read when
-        ``model.volume_correction > 0``; :class:`~skfem_npfem.Simulation`
+    start : StepState, optional
+        The state at the start of the step besides the particles: the time
+        (where the model's rigid bodies are) and the volume correction's
+        filter state; the previous step's ``step.state``.  None: time 0, no
+        filter state (the start of a run).  :class:`~skfem_npfem.Simulation`
         passes it.
-    time : float
-        Time at the start of the step, s: where the model's rigid bodies are
-        (:class:`~skfem_npfem.Simulation` passes it; only read when
-        ``model.bodies`` is not empty).
 
     Returns
     -------
     Particles, Step
         New particles, and the step (its :class:`StepRecord` as ``.record``,
-        the solution and the mesh; ``step.to_skfem()`` gives the mesh and the
+        the solution and the mesh, the state at its end as ``.state`` for the
+        next step's ``start``; ``step.to_skfem()`` gives the mesh and the
         fields for scikit-fem).  With the volume correction on, the
         record's ``extra["volume_correction_strain"]`` holds this step's
-        volumetric eigenstrain per material.  With rigid bodies it holds, per
+        volumetric eigenstrain per material (as ``step.state.volume_strain``).
+        With rigid bodies it holds, per
         body ``<name>``: ``<name>_x``, ``<name>_y`` (displacement of the body
         at the end of the step, m), ``<name>_force_x``, ``<name>_force_y``
         (force of the soil on the body, N per m in plane strain, N of the
@@ -347,7 +115,7 @@ def advance(
 
     Examples
     --------
-    A soil column under gravity, one quasi-static step on a scikit-fem mesh:
+    A soil column under gravity, two quasi-static steps on a scikit-fem mesh:
 
     >>> import numpy as np
     >>> from skfem import MeshTri
@@ -359,6 +127,9 @@ def advance(
     >>> p, step = npfem.advance(p, model, dt=1.0, mesh_source=mesh)
     >>> step.record.status, step.record.n_active
     ('Solved', 15)
+    >>> p, step = npfem.advance(p, model, 1.0, mesh, start=step.state)
+    >>> step.state.time
+    2.0
     """
     if not (math.isfinite(dt) and dt > 0):
         raise ParameterError("dt", dt, "a finite time step > 0 (s)")
@@ -369,33 +140,33 @@ def advance(
             f"{model.dim}D positions for a {model.dim}D model",
         )
     mesh_source = as_mesh_source(mesh_source)
-    t_start = float(time)
-    if model.bodies:
-        p = with_body_columns(p, model)
+    start = StepState() if start is None else start
+    boundaries = model.boundaries
     t0 = perf_counter()
-    ops = build_operators(p, model, dt, mesh_source, volume_state, t_start)
+    ops = build_operators(p, model, dt, mesh_source, start, boundaries)
     t1 = perf_counter()
     sol = solve_step(ops.data, model.solver, step=step)
     t2 = perf_counter()
-    new = update_particles(p, model, dt, ops, sol)
-    new, depth = keep_out_of_bodies(model, new, t_start + dt)
+    new, marks = update_particles(p, model, dt, ops, sol, boundaries)
     timings = {"mesh": t1 - t0, **sol.timings, "update": perf_counter() - t2}
+    extra = {}
+    if ops.volume_strains is not None:
+        extra["volume_correction_strain"] = [float(x) for x in ops.volume_strains]
+    record(
+        boundaries,
+        extra,
+        ops.contacts,
+        ops.wall_ids,
+        (sol.lambda_n, sol.lambda_t),
+        p.x[ops.active],
+        ops.time + dt,
+        marks,
+        ops.dropped,
+    )
+    end = start.after(dt, ops.volume_strains)
     rec = StepRecord.of_step(
         step, dt, new, model.gravity, ops.active, ops.operator, sol, timings
     )
     rec.n_contacts = ops.contacts.size
-    if ops.volume_strains is not None:
-        rec.extra["volume_correction_strain"] = [float(x) for x in ops.volume_strains]
-    if model.bodies:
-        record_bodies(
-            rec,
-            model,
-            ops.contacts,
-            ops.wall_ids,
-            sol,
-            p.x[ops.active],
-            t_start + dt,
-            depth,
-            ops.dropped,
-        )
-    return new, Step(rec, sol, ops.active, ops.local_t, ops.operator, new)
+    rec.extra.update(extra)
+    return new, Step(rec, sol, ops.active, ops.local_t, ops.operator, new, end)

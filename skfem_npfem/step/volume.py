@@ -41,8 +41,9 @@ changes the body's expansion velocity abruptly.  The inertial forces of those
 changes were of the order of the weight (the floor reaction of a 325-particle
 column fell by 40 % in one step) and doubled the stress roughness maximum
 (docs/validation.md).  Here the first response to a jump is ``kappa^2`` of it
-instead of ``kappa``.  The state is one number per material, ``x_{n-1}``; the
-time loop keeps it in the step record (``volume_correction_strain``), so
+instead of ``kappa``.  The state is one number per material, ``x_{n-1}``; each
+step hands it to the next in its :class:`~skfem_npfem.step.records.StepState`
+and writes it into the step record (``volume_correction_strain``), so
 checkpoints carry it and a resumed run repeats the uninterrupted one.
 
 In the cone program it is a linear term of the complementary energy,

@@ -19,7 +19,7 @@ from skfem import MeshTri
 
 from skfem_npfem import advance
 from skfem_npfem.baseline import FemRemap
-from skfem_npfem.bodies import RigidBody
+from skfem_npfem.boundary import RigidBody
 from skfem_npfem.errors import ParameterError
 from skfem_npfem.materials import LinearElastic
 from skfem_npfem.mesh.sources import FixedMesh
@@ -57,8 +57,10 @@ def punch_force(method: FemRemap | None) -> tuple[float, dict]:
     p, model, source = confined_layer()
     state = p if method is None else method.initial_state(p, source)
     step = advance if method is None else method.advance
+    start = None
     for k in range(STEPS):
-        state, result = step(state, model, DT, source, step=k + 1, time=k * DT)
+        state, result = step(state, model, DT, source, step=k + 1, start=start)
+        start = result.state
     return result.record.extra["punch_force_y"], result.record.extra
 
 

@@ -25,7 +25,7 @@ from skfem import MeshTri
 
 import skfem_npfem as npfem
 from skfem_npfem import ParameterError, RigidBody
-from skfem_npfem.bodies import (
+from skfem_npfem.boundary import (
     body_contacts,
     boundary_facets,
     boundary_tributary,

@@ -24,7 +24,7 @@ from skfem import MeshTet, MeshTri
 
 import skfem_npfem as npfem
 from skfem_npfem import BodyOfRevolution, ParameterError, RigidPlane
-from skfem_npfem.bodies import boundary_faces, face_tributary, spanning_tetrahedra
+from skfem_npfem.boundary import boundary_faces, face_tributary, spanning_tetrahedra
 from skfem_npfem.io import checkpoint_path
 
 E, NU, RHO, G = 1e6, 0.3, 1800.0, 9.81

@@ -43,7 +43,8 @@ from skfem_npfem import (
     nodal_integration,
     solve_step,
 )
-from skfem_npfem.step.families import tangents
+from skfem_npfem.boundary import Boundary
+from skfem_npfem.mesh.geometry import tangents
 
 G = 9.81
 RHO = 2000.0
@@ -428,3 +429,51 @@ def test_drop_theta2_half_bounces():
     _, _, t, yb, _, ymin, t_imp, _ = _drop(0.5, t_end=0.13)
     assert ymin.min() >= -1e-9
     assert yb[t > t_imp].max() > 1e-3  # measured 8.7 mm (theta2 = 1: 6e-5 m)
+
+
+class _RowCounter:
+    """A boundary that spans nothing, adds no rows and puts nothing back.
+
+    It only writes how many contact rows the boundaries before it gave.
+    """
+
+    def with_columns(self, p):
+        return p
+
+    def without_spanned(self, x, active, local_t, time, sliver):
+        return active, local_t, 0
+
+    def contacts(self, nodes, dt, h, time):
+        return Contacts.empty(nodes.x.shape[1]), np.zeros(0, int)
+
+    def put_back(self, x, v, u, friction, t_end):
+        return x, v, u, None
+
+    def record(self, extra, contacts, ids, lambdas, x, t_end, mark, dropped):
+        extra["rows_seen"] = contacts.size
+
+
+class _CountingModel(Model):
+    """A model whose step also asks a :class:`_RowCounter`."""
+
+    @property
+    def boundaries(self):
+        return [*super().boundaries, _RowCounter()]
+
+
+def test_a_boundary_that_adds_nothing_leaves_the_step_unchanged():
+    mesh = MeshTri.init_tensor(np.linspace(0, 0.2, 9), np.linspace(0.0, 0.1, 5))
+    p = Particles.create(mesh.p.T, RHO * nodal_integration(mesh).volumes, n_walls=1)
+    kw = {
+        "dim": 2,
+        "materials": [LinearElastic(1e7, 0.3, RHO)],
+        "walls": [floor(2, friction_angle=20.0)],
+    }
+    ref_p, ref = advance(p, Model(**kw), 2.5e-3, mesh)
+    new_p, new = advance(p, _CountingModel(**kw), 2.5e-3, mesh)
+    assert isinstance(_RowCounter(), Boundary)
+    assert ref.record.n_contacts == 9  # the bottom row of particles
+    assert new.record.extra["rows_seen"] == ref.record.n_contacts
+    for name in ("x", "v", "a", "u", "stress", "eps_p", "wall_force"):
+        np.testing.assert_array_equal(getattr(new_p, name), getattr(ref_p, name))
+    assert new.state == ref.state

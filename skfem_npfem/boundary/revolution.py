@@ -14,12 +14,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
+from ..mesh.geometry import tangents
 from .body import _ON_CORNER, _ON_OUTLINE
 from .solid import (
     _check_interface,
     _Moving3D,
     _positive,
-    _tangents,
     _unit3,
     _vector3,
 )
@@ -250,7 +250,7 @@ class BodyOfRevolution(_Moving3D):
         z = d @ self.axis
         rho = d - z[:, None] * self.axis
         r = np.linalg.norm(rho, axis=1)
-        fallback = _tangents(self.axis[None])[0, 0]
+        fallback = tangents(self.axis[None])[0, 0]
         on_axis = r <= _ON_OUTLINE * self.size
         e_r = np.where(
             on_axis[:, None], fallback, rho / np.where(on_axis, 1.0, r)[:, None]

@@ -14,8 +14,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..boundary import Contacts
 from .body import _CORNER_MARGIN, _ON_CORNER, RigidBody, _near
+from .contacts import Contacts
 
 __all__ = [
     "body_contacts",

@@ -6,7 +6,7 @@ a prescribed velocity: a footing, a cone with its shaft, a pipe section.  Every
 step of a model with bodies
 
 1. drops the elements of the step's mesh that span a body
-   (:func:`~skfem_npfem.bodies.spanning.spanning_elements`: an element whose
+   (:func:`~skfem_npfem.boundary.spanning.spanning_elements`: an element whose
    centroid or an edge midpoint is inside, or whose edge crosses the outline,
    deeper than a sliver: an edge that joins the soil on the two faces of a
    corner may cut the corner off);
@@ -43,8 +43,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..boundary import Contacts
 from ..errors import ParameterError
+from .contacts import Contacts
 
 __all__ = [
     "RigidBody",

@@ -1,6 +1,6 @@
 """Which elements of a step's mesh span a moving rigid body (plane strain, axisymmetry).
 
-Every step of a model with :class:`~skfem_npfem.bodies.RigidBody` bodies drops
+Every step of a model with :class:`~skfem_npfem.boundary.RigidBody` bodies drops
 the elements that span a body before it assembles anything, so that no element
 bridges a body; :func:`spanning_elements` decides which, allowing a sliver at
 a corner of the body (docs/theory.md, "Moving rigid bodies").

@@ -12,11 +12,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..boundary import Contacts
+from ..mesh.geometry import tangents
 from .body import _ON_OUTLINE
+from .contacts import Contacts
 from .plane import RigidPlane
 from .revolution import BodyOfRevolution
-from .solid import _tangents
 
 __all__ = [
     "boundary_faces",
@@ -113,7 +113,7 @@ def spanning_tetrahedra(
     than ``_SPAN_DEPTH`` (5 %) of the element's longest edge: a face between
     nodes on a curved surface cuts into it by its sagitta and is kept.
     Bodies thinner than about half an element may be missed (the 2D
-    :func:`~skfem_npfem.bodies.spanning_elements` also tests crossing edges).
+    :func:`~skfem_npfem.boundary.spanning_elements` also tests crossing edges).
     """
     ne = t.shape[1]
     drop = np.zeros(ne, bool)
@@ -165,10 +165,10 @@ def solid_contacts(
 ) -> tuple[Contacts, np.ndarray]:
     """Contact candidates of nodes against 3D bodies over one step.
 
-    The 3D counterpart of :func:`~skfem_npfem.bodies.body_contacts` (node
+    The 3D counterpart of :func:`~skfem_npfem.boundary.body_contacts` (node
     rows only): a node closer to a body than ``h + 2 (|v| + |V|) dt + g
     dt^2`` gets the row ``gap + n . (du - dU) >= 0``, its slip measured
-    against the body along :func:`~skfem_npfem.step.families.tangents` of
+    against the body along :func:`~skfem_npfem.mesh.geometry.tangents` of
     ``n``; Tresca adhesion bounds it by ``adhesion`` times the node's contact
     area (:func:`face_tributary` projected on the body's surface), Coulomb by
     ``mu`` times the lagged normal force, both only where the node was in
@@ -213,7 +213,7 @@ def solid_contacts(
         free = ~np.all(fixed[cand] | (np.abs(normal) == 0.0), axis=1)
         cand, dist, normal = cand[free], dist[free], normal[free]
         rel = du_pres[cand] - dU
-        tang = _tangents(normal) if cand.size else np.zeros((0, 2, 3))
+        tang = tangents(normal) if cand.size else np.zeros((0, 2, 3))
         lam = lagged[cand, b_id]
         touching = lam > 1e-8 * np.max(np.abs(noise_ref[:, b_id]), initial=0.0)
         if body.adhesion > 0:
@@ -250,14 +250,14 @@ def solid_loads(
     """Force (3,) and moment (3,) that the soil exerts on each 3D body, N and N m.
 
     The contact force on a node is ``n lambda_n + sum_k t_k lambda_t,k``
-    (:func:`~skfem_npfem.step.families.tangents` of ``n``); the body gets the
+    (:func:`~skfem_npfem.mesh.geometry.tangents` of ``n``); the body gets the
     opposite.  The moment is about the body's reference point at ``time``,
     from the node positions ``x``.
     """
     n = contacts.normal
     f = -n * lambda_n[:, None]
     if lambda_t.size and contacts.size:
-        f -= np.einsum("ckd,ck->cd", _tangents(n), lambda_t)
+        f -= np.einsum("ckd,ck->cd", tangents(n), lambda_t)
     out = []
     for b_id, body in enumerate(bodies):
         sel = body_ids == b_id

@@ -1,0 +1,77 @@
+"""Boundaries: rigid walls and moving rigid bodies, and what a step asks of them.
+
+* :mod:`.contacts` -- :class:`Contacts`, the contact candidates of a step;
+* :mod:`.protocol` -- :class:`Boundary`, what a step needs of any boundary
+  (elements it spans, contact rows, particles put back, record keys), the
+  step's nodes as the rows see them (:class:`ContactNodes`) and the functions
+  that ask every boundary of a list;
+* :mod:`.walls` -- :class:`RigidWall` (a fixed plane, with :func:`floor` and
+  :func:`wall_x`), its contact rows and projection, and :class:`Walls`, a
+  model's walls as one boundary;
+* :mod:`.rigid_bodies` -- :class:`RigidBodies`, a model's bodies as one
+  boundary;
+* 2D bodies: :mod:`.body` -- :class:`RigidBody` (a polygon moved at a
+  prescribed velocity), particles put back out of a body, the loads a body
+  takes; :mod:`.spanning` -- the elements of a step's mesh that span a body
+  (a sliver at a corner allowed); :mod:`.contact` -- contact with the
+  particles' boundary, found every step (boundary nodes against faces, body
+  corners against boundary edges);
+* 3D bodies: :class:`RigidPlane` (:mod:`.plane`, a moving half-space) and
+  :class:`BodyOfRevolution` (:mod:`.revolution`, an ``(r, z)`` profile turned
+  about an axis), with what they share in :mod:`.solid`; :mod:`.contact3d` --
+  the tetrahedra that span them, their contacts and loads.
+"""
+
+from .body import RigidBody, body_loads, check_clear, project_out_of_bodies
+from .contact import (
+    body_contacts,
+    boundary_facets,
+    boundary_tributary,
+    corner_contacts,
+    oriented_boundary,
+)
+from .contact3d import (
+    boundary_faces,
+    face_tributary,
+    solid_contacts,
+    solid_loads,
+    spanning_tetrahedra,
+)
+from .contacts import Contacts
+from .plane import RigidPlane
+from .protocol import Boundary, ContactNodes
+from .revolution import BodyOfRevolution
+from .rigid_bodies import RigidBodies
+from .spanning import CLIP_DEPTH, spanning_elements
+from .walls import RigidWall, Walls, floor, node_contacts, project_to_walls, wall_x
+
+__all__ = [
+    "CLIP_DEPTH",
+    "BodyOfRevolution",
+    "Boundary",
+    "ContactNodes",
+    "Contacts",
+    "RigidBodies",
+    "RigidBody",
+    "RigidPlane",
+    "RigidWall",
+    "Walls",
+    "body_contacts",
+    "body_loads",
+    "boundary_faces",
+    "boundary_facets",
+    "boundary_tributary",
+    "check_clear",
+    "corner_contacts",
+    "face_tributary",
+    "floor",
+    "node_contacts",
+    "oriented_boundary",
+    "project_out_of_bodies",
+    "project_to_walls",
+    "solid_contacts",
+    "solid_loads",
+    "spanning_elements",
+    "spanning_tetrahedra",
+    "wall_x",
+]

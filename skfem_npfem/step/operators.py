@@ -1,0 +1,154 @@
+"""Stage 1 of a step: the mesh, its strain operator, contacts and cone-step data.
+
+:func:`build_operators` asks, in this order, the model's
+boundaries for the elements they span (:mod:`skfem_npfem.boundary`), the mesh
+for its strain operator (:mod:`skfem_npfem.mesh`), the boundaries for their
+contact rows, the model for the nodes' masses and loads and the volume
+correction for its eigenstrain, and packs it all into the
+:class:`~skfem_npfem.step.program.ConeInput` of the step.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..boundary import Boundary, Contacts
+from ..mesh.delaunay import p1_mesh
+from ..mesh.operators import strain_operator
+from ..mesh.smoothing import NodalIntegration
+from ..mesh.sources import MeshSource
+from ..particles import Particles
+from .boundary_jobs import (
+    particle_nodes,
+    step_contacts,
+    with_columns,
+    without_spanned,
+)
+from .model import Model
+from .program import ConeInput
+from .records import StepState
+from .volume import volume_eigenstrain, volume_strains
+
+__all__ = ["StepOperators", "build_operators"]
+
+
+@dataclass
+class StepOperators:
+    """What :func:`build_operators` makes of the particles for one step.
+
+    Attributes
+    ----------
+    active : ndarray (N_a,) int
+        Particles in the mesh (the mesh nodes).
+    local_t : ndarray (d+1, ne) int
+        Connectivity in node numbers ``0 .. N_a-1``.
+    operator : NodalIntegration
+        Smoothing cells of the mesh.
+    wall_ids : ndarray (nc,) int
+        Wall or body (lagged-force column) of each contact candidate of
+        ``data.contacts``.
+    data : ConeInput
+        The cone step's input.
+    volume_strains : ndarray (n_materials,) or None
+        Volumetric eigenstrain of the volume correction per material
+        (:func:`~skfem_npfem.step.volume.volume_strains`; None when it is off).
+    time : float
+        Time at the start of the step, s (where the model's bodies are).
+    dropped : int
+        Elements of the mesh source's mesh dropped because they span a body.
+    columns : int
+        Lagged-force columns of the particles after the step: one per wall,
+        then one per body (:attr:`Particles.wall_force`).
+
+    Notes
+    -----
+    With rigid bodies, :attr:`wall_ids` numbers the bodies after the walls
+    (``len(model.walls) + k`` for body ``k``): the columns of
+    :attr:`Particles.wall_force`.
+    """
+
+    active: np.ndarray
+    local_t: np.ndarray
+    operator: NodalIntegration
+    wall_ids: np.ndarray
+    data: ConeInput
+    volume_strains: np.ndarray | None = None
+    time: float = 0.0
+    dropped: int = 0
+    columns: int = 0
+
+    @property
+    def contacts(self) -> Contacts:
+        """Contact candidates (node indices local to :attr:`active`)."""
+        return self.data.contacts
+
+
+def build_operators(
+    p: Particles,
+    model: Model,
+    dt: float,
+    mesh_source: MeshSource,
+    start: StepState | None = None,
+    boundaries: Sequence[Boundary] | None = None,
+) -> StepOperators:
+    """Stage 1: the mesh, smoothing cells, contacts and cone-step data of a step.
+
+    ``start`` is the state at the start of the step (its time: where the
+    model's rigid bodies are; the volume correction's filter state);
+    ``boundaries`` those of the model (default ``model.boundaries``): the
+    elements they span are dropped and their contact rows join the program,
+    on the particles' lagged forces with a column for every wall and body.
+    """
+    start = StepState() if start is None else start
+    boundaries = model.boundaries if boundaries is None else boundaries
+    time = float(start.time)
+    active, local_t = mesh_source(p.x)
+    active, local_t, dropped = without_spanned(boundaries, p.x, active, local_t, time)
+    mesh = p1_mesh(p.x[active], local_t)
+    op, h = strain_operator(mesh, model.components, model.axisymmetric)
+    nodes = particle_nodes(with_columns(boundaries, p), active, local_t)
+    contacts, wall_ids = step_contacts(boundaries, nodes, dt, h, time)
+    mass = model.node_masses(p.mass[active], p.material[active], op.volumes)
+    force = model.external_force(p.x.shape[0], active, mass)
+    strains = volume_strains(
+        model.volume_correction,
+        p.mass[active],
+        p.material[active],
+        op.volumes,
+        np.array([m.rho for m in model.materials], float),
+        start.volume_strain,
+    )
+    eigenstrain = volume_eigenstrain(
+        strains,
+        p.material[active],
+        p.stress.shape[1],
+        (0, 1, 2) if model.dim == 3 or model.axisymmetric else (0, 1),
+    )
+    data = ConeInput(
+        operator=op,
+        materials=model.materials,
+        material=p.material[active],
+        sigma_n=p.stress[active],
+        force=force,
+        fixed=p.fixed[active],
+        du_prescribed=p.v_prescribed[active] * dt,
+        contacts=contacts,
+        dt=dt,
+        mass=mass,
+        v_n=p.v[active],
+        theta1=model.theta1,
+        theta2=model.theta2,
+        dynamic=model.mode == "dynamic",
+        stress_scale=model.stress_scale,
+        stabilisation=model.stabilisation,
+        stabilisation_mode=model.stabilisation_mode,
+        a_n=p.a[active],
+        eigenstrain=eigenstrain,
+    )
+    columns = nodes.lagged.shape[1]
+    return StepOperators(
+        active, local_t, op, wall_ids, data, strains, time, dropped, columns
+    )
