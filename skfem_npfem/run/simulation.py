@@ -157,6 +157,7 @@ class Simulation:
         self.meta = dict(meta or {})
         self.extra_point_data = extra_point_data
         self.stepper = stepper
+        self.after_output = lambda sim: None  # after a step's files are written
         self.time = 0.0
         self.step = 0
         self.records: list[StepRecord] = []
@@ -390,6 +391,7 @@ class Simulation:
             self.step % self.checkpoint_every == 0 or stop_now or last
         ):
             self.save_checkpoint()
+        self.after_output(self)
         rec.timings["output"] = time.perf_counter() - t_out
         return stop_now
 
@@ -409,7 +411,7 @@ class Simulation:
                     where = f"dt={dt:g}{unit}" + (
                         f" (floor {self.dt_min:g} s)" if self.adaptive else ""
                     )
-                    if saved is not None:
+                    if saved is not None and self.step:  # step 0: nothing to keep
                         where += f"; results up to step {self.step} are on disk"
                     raise SolverError(
                         err.status,
