@@ -191,15 +191,22 @@ class RunFolder:
         sim = self._sim
         if sim is None:
             return
-        if getattr(sim, "checkpoint_dir", None) == self._staged:
+        staged = self._staged.resolve()
+        checkpoints = getattr(sim, "checkpoint_dir", None)
+        if checkpoints is not None and Path(checkpoints).resolve() == staged:
             sim.checkpoint_dir = self.folder
         mover = getattr(sim.writer, "move_to", None)
-        if callable(mover) and sim.writer.out_dir == self._staged:
+        if callable(mover) and Path(sim.writer.out_dir).resolve() == staged:
             mover(self.folder)
 
     def moved(self, path: Any) -> Any:
         """``path`` after the commit (a staged file's name in ``DIR``)."""
-        if self.committed and path is not None and Path(path).parent == self._staged:
+        staged = self._staged.resolve()
+        if (
+            self.committed
+            and path is not None
+            and Path(path).parent.resolve() == staged
+        ):
             return self.folder / Path(path).name
         return path
 

@@ -25,7 +25,7 @@ import skfem_npfem as npfem
 import skfem_npfem.io as npio
 import skfem_npfem.io.run_folder as run_folder
 import skfem_npfem.step.stages as step_module
-from skfem_npfem.cli import main
+from skfem_npfem.cli import interrupted_message, main
 from skfem_npfem.errors import RunInterrupted, SolverError
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -161,6 +161,8 @@ def test_an_interrupted_run(used, monkeypatch, sigint_raises, abandon):
     if abandon:
         assert files(d) == before
         assert err.checkpoint is None and err.summary_path is None
+        said = interrupted_message(err)
+        assert said.endswith("nothing written (no step finished: --out is as it was)")
     else:
         assert err.checkpoint == d / "checkpoint_000002.npz"
         assert err.summary_path == d / "summary.json"
@@ -176,7 +178,7 @@ def test_an_interrupted_run(used, monkeypatch, sigint_raises, abandon):
 KILLER = """
 import os, signal, sys
 import skfem_npfem.step.stages as stages
-from skfem_npfem.cli import main
+from skfem_npfem.cli import interrupted_message, main
 original = stages.solve_step
 def dying(data, options=None, step=None):
     if step == int(sys.argv[1]):
