@@ -231,7 +231,8 @@ def interrupted_message(err: KeyboardInterrupt, command: str = "run") -> str:
         saved.append(f"checkpoint {err.checkpoint}")
     if err.summary_path is not None:
         saved.append(f'partial summary {err.summary_path} ("interrupted": true)')
-    msg += ", ".join(saved) if saved else "nothing written (no --out)"
+    why = "no step finished: --out is as it was" if err.step == 0 else "no --out"
+    msg += ", ".join(saved) if saved else f"nothing written ({why})"
     if err.checkpoint is not None:
         msg += "; continue with --resume"
     return msg

@@ -7,7 +7,10 @@
 * :mod:`~skfem_npfem.io.results` -- the VTU + PVD result series
   (:class:`ResultWriter`, :func:`read_pvd`, :func:`read_step`);
 * :mod:`~skfem_npfem.io.checkpoints` -- restart checkpoints (format
-  ``skfem-npfem-checkpoint/1``) and the simulation state they hold.
+  ``skfem-npfem-checkpoint/1``) and the simulation state they hold;
+* :mod:`~skfem_npfem.io.run_folder` -- a run's output folder
+  (:class:`RunFolder`): a fresh run is staged until it has a finished step,
+  so a run that fails early leaves the earlier results as they were.
 
 Scene summaries and ``scene.json`` (:mod:`skfem_npfem.scenes`) and the
 pictures of :mod:`skfem_npfem.viz.plot` are written through the same atomic writer.
@@ -38,11 +41,13 @@ from .files import (
     write_json,
 )
 from .results import ResultWriter, read_pvd, read_step, step_time
+from .run_folder import RunFolder, finish_commits
 
 __all__ = [
     "CHECKPOINT_FORMAT",
     "LOCK_NAME",
     "ResultWriter",
+    "RunFolder",
     "atomic_path",
     "check_writable_dir",
     "checkpoint_path",
@@ -50,6 +55,7 @@ __all__ = [
     "clear_run_files",
     "clear_temporaries",
     "dumps",
+    "finish_commits",
     "folder_lock",
     "latest_checkpoint",
     "load_checkpoint",

@@ -233,10 +233,11 @@ def read_checkpoint(
 
 
 #: Names of a run's files in its folder (and in ``plots/``), removed before a
-#: fresh run.
+#: fresh run's files take their place: steps, indexes, checkpoints, the
+#: mechanism of a limit analysis, ``scene.json`` and a ``summary.json``.
 RUN_FILES = re.compile(
     r"\.?(?:\.tmp_)?(?:checkpoint_\d+\.npz|result_\d+\.vtu|result\.pvd"
-    r"|result\.vtu\.series|scene\.json)"
+    r"|result\.vtu\.series|scene\.json|mechanism\.npz|summary\.json)"
 )
 PLOT_FILES = re.compile(r"[\w.+-]+\.(?:png|gif|mp4)")
 #: Temporaries of the atomic writer (:func:`~skfem_npfem.io.files.atomic_path`)
@@ -268,17 +269,34 @@ def clear_run_files(folder: str | os.PathLike) -> list[Path]:
     """Remove the files an earlier run left in ``folder``; return them.
 
     Only the package's own names are touched (:data:`RUN_FILES`: checkpoints,
-    result steps and their indexes, ``scene.json``, and the pictures in
-    ``plots/``); other files stay.  A fresh run calls this first, so that a
-    later ``--resume`` can never pick up another run's checkpoint.
+    result steps and their indexes, ``mechanism.npz``, ``summary.json``,
+    ``scene.json``, and the pictures in ``plots/``), and a summary of another
+    name that ``scene.json`` says the run wrote there; other files stay.
+    ``scene.json`` goes last, so a removal cut short can be repeated.  A fresh
+    run calls this before its own files take their place, so that a later
+    ``--resume`` can never pick up another run's checkpoint.
     """
     folder = Path(folder)
     removed = []
-    for sub, pattern in ((folder, RUN_FILES), (folder / "plots", PLOT_FILES)):
+    summary = _summary_name(folder)
+    for sub, pattern, extra in (
+        (folder, RUN_FILES, summary),
+        (folder / "plots", PLOT_FILES, None),
+    ):
         if not sub.is_dir():
             continue
-        for f in sorted(sub.iterdir()):
-            if pattern.fullmatch(f.name) and f.is_file():
+        files = sorted(sub.iterdir(), key=lambda f: (f.name == "scene.json", f.name))
+        for f in files:
+            if (pattern.fullmatch(f.name) or f.name == extra) and f.is_file():
                 f.unlink(missing_ok=True)
                 removed.append(f)
     return removed
+
+
+def _summary_name(folder: Path) -> str | None:
+    """The name of the summary ``folder/scene.json`` records, if any."""
+    try:
+        name = json.loads((folder / "scene.json").read_text()).get("summary")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return name if isinstance(name, str) and name == Path(name).name else None

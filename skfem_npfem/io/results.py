@@ -168,6 +168,17 @@ class ResultWriter:
                 f.unlink()
         self._write_index()
 
+    def move_to(self, out_dir: str | os.PathLike) -> None:
+        """Write the next steps and the indexes into ``out_dir`` instead.
+
+        For a run whose files were moved there (a staged run that committed,
+        :class:`~skfem_npfem.io.run_folder.RunFolder`); the steps written so
+        far are listed by name, so the indexes stay valid.
+        """
+        self.out_dir = Path(out_dir)
+        self.pvd_path = self.out_dir / self.pvd_path.name
+        self.series_path = self.out_dir / self.series_path.name
+
     def _kept_steps(self, last: int) -> dict[int, tuple[float, str]]:
         """Steps ``<= last`` to keep on resuming: the index plus the files on disk.
 

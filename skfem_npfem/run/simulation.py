@@ -16,7 +16,6 @@ import math
 import signal
 import time
 from collections.abc import Callable
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -161,6 +160,7 @@ class Simulation:
         self.stepper = stepper
         #: What the next step starts from besides the particles (time, filter).
         self.state = StepState()
+        self.after_output = lambda sim: None  # after a step's files are written
         self.step = 0
         self.records: list[StepRecord] = []
         self._successes = 0
@@ -185,10 +185,6 @@ class Simulation:
     def time(self) -> float:
         """Time at the end of the last step, s (``state.time``)."""
         return self.state.time
-
-    @time.setter
-    def time(self, value: float) -> None:
-        self.state = replace(self.state, time=float(value))
 
     # -- output ---------------------------------------------------------------
     def point_data(self, p: Particles, active: np.ndarray | None) -> dict:
@@ -402,6 +398,7 @@ class Simulation:
             self.step % self.checkpoint_every == 0 or stop_now or last
         ):
             self.save_checkpoint()
+        self.after_output(self)
         rec.timings["output"] = time.perf_counter() - t_out
         return stop_now
 
@@ -421,7 +418,7 @@ class Simulation:
                     where = f"dt={dt:g}{unit}" + (
                         f" (floor {self.dt_min:g} s)" if self.adaptive else ""
                     )
-                    if saved is not None:
+                    if saved is not None and self.step:  # step 0: nothing to keep
                         where += f"; results up to step {self.step} are on disk"
                     raise SolverError(
                         err.status,

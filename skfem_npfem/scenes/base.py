@@ -20,11 +20,9 @@ from typing import Any
 
 from ..errors import CheckpointError, ParameterError, RunInterrupted
 from ..io import (
+    RunFolder,
     check_writable_dir,
     checkpoint_step,
-    clear_run_files,
-    clear_temporaries,
-    folder_lock,
     load_checkpoint,
     to_jsonable,
     write_json,
@@ -165,12 +163,16 @@ class Scene:
         built, the resume point, the step count) runs before a file in ``out``
         is touched, so a refused run leaves an earlier run's results intact.
         Then the run holds ``out`` (:func:`~skfem_npfem.io.folder_lock`; a
-        second run into the same folder at the same time is refused) and, if
-        fresh (``resume=False``), owns it: the files of an earlier run there
-        (steps, index, checkpoints, ``scene.json``, ``plots/``) are removed
-        first.  On SIGINT/SIGTERM the run stops after its current step, writes
-        a checkpoint and the partial summary (``"interrupted": true``) and
-        raises :class:`~skfem_npfem.errors.RunInterrupted`.
+        second run into the same folder at the same time is refused).  A
+        fresh run (``resume=False``) is staged
+        (:class:`~skfem_npfem.io.RunFolder`): the files of an earlier run there
+        (steps, index, checkpoints, ``mechanism.npz``, the summary,
+        ``scene.json``, ``plots/``) are replaced by its own once it has a
+        finished step (or has ended, for a run without steps), and stay as
+        they were if it fails before.  On SIGINT/SIGTERM the run stops after
+        its current step, writes a checkpoint and the partial summary
+        (``"interrupted": true``) and raises
+        :class:`~skfem_npfem.errors.RunInterrupted`.
         """
         values = self.resolve(overrides)
         start = time.perf_counter()
@@ -182,6 +184,8 @@ class Scene:
         if summary is not None:
             check_writable_dir("--summary", Path(summary).parent, summary, create=False)
         checkpoint = self._resume_point(out, values) if resume else None
+        folder = None if out is None else RunFolder(out, fresh=checkpoint is None)
+        out = None if folder is None else folder.path  # a fresh run is staged
         srun = self.build(values, out=out, progress=progress, resume=resume)
         sim = srun.simulation
         run_kwargs = dict(srun.run_kwargs)
@@ -192,15 +196,13 @@ class Scene:
             if run_kwargs.get("steps") is not None:  # steps counts from step 0
                 run_kwargs["steps"] = run_kwargs["steps"] - sim.step
         _check_step_count(sim, run_kwargs, values)
-        with folder_lock(out) if out is not None else nullcontext():
-            if out is not None:
-                clear_temporaries(out)  # what a killed run may have left
-                if checkpoint is None:
-                    clear_run_files(out)
+        with folder.hold() if folder is not None else nullcontext():
+            if folder is not None:
+                folder.watch(sim)
                 # lets `skfem-npfem plot DIR` find the scene and its scales
                 write_json(
                     Path(out) / "scene.json",
-                    {"scene": self.name, "parameters": values},
+                    {"scene": self.name, "parameters": values} | folder.names(summary),
                 )
                 opener = getattr(sim.writer, "open", None)
                 if callable(opener):
@@ -210,12 +212,12 @@ class Scene:
             except RunInterrupted as err:
                 err.summary = self._result(srun, values, start, err)
                 if summary is not None:
-                    write_json(summary, err.summary)
+                    write_json(_target(folder, summary), err.summary)
                     err.summary_path = Path(summary)
                 raise
             result = self._result(srun, values, start)
             if summary is not None:
-                write_json(summary, result)
+                write_json(_target(folder, summary), result)
         return result
 
     def _result(
@@ -278,6 +280,11 @@ class Scene:
         if meta.get("step") != step:
             raise CheckpointError(f"{path}: holds step {meta.get('step')}, not {step}")
         return path
+
+
+def _target(folder: RunFolder | None, summary: str | Path) -> Path:
+    """Where the summary is written now (staged if it goes into the folder)."""
+    return Path(summary) if folder is None else folder.file(summary)
 
 
 def _check_not_past_end(sim: Any, run_kwargs: dict, checkpoint: Path) -> None:

@@ -12,6 +12,7 @@ from skfem_npfem.particles import Particles
 from skfem_npfem.run.simulation import AtRest, Simulation
 from skfem_npfem.scenes.column_collapse import initial_particles, lattice
 from skfem_npfem.step.model import Model
+from skfem_npfem.step.records import StepState
 from skfem_npfem.step.stages import StepRecord, advance
 
 H = 0.05  # lattice spacing of the small blocks, m
@@ -224,9 +225,9 @@ def test_at_rest_rule():
     rule = AtRest(fraction=0.01, min_time=0.05)
     assert not rule(sim)  # no records yet
     sim.records = [rec(10.0, 0.0), rec(0.05, 0.0)]
-    sim.time = 0.01
+    sim.state = StepState(time=0.01)
     assert not rule(sim)  # too early
-    sim.time = 0.1
+    sim.state = StepState(time=0.1)
     assert rule(sim)
     pe0 = sim.initial["potential_energy"]
     drop = AtRest(fraction=0.01, reference="potential_drop")
