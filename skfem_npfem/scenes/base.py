@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import math
 import time
-import warnings
 from collections.abc import Callable, Mapping
 from contextlib import nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .. import __version__
 from ..errors import CheckpointError, ParameterError, RunInterrupted
 from ..io import (
     check_writable_dir,
@@ -30,16 +30,9 @@ from ..io import (
     write_json,
 )
 from .limits import check_steps
-from .params import Param, Renamed, parse_value
+from .params import Param
 
-__all__ = [
-    "DEFAULT_CHECKPOINT_EVERY",
-    "Param",
-    "Renamed",
-    "Scene",
-    "SceneRun",
-    "parse_value",
-]
+__all__ = ["DEFAULT_CHECKPOINT_EVERY", "RESUME_MAY_CHANGE", "Scene", "SceneRun"]
 
 #: Steps between checkpoints of scenes that do not choose (``checkpoint_every``).
 DEFAULT_CHECKPOINT_EVERY = 20
@@ -85,8 +78,6 @@ class Scene:
         ``scenery(parameters: dict, folder: Path | None) -> Scenery``: what a
         picture of a result shows besides the particles (floor, walls, outline,
         reference values, step labels); see :mod:`skfem_npfem.scenes.scenery`.
-    renamed : tuple of Renamed
-        Old parameter names that still work (with a ``FutureWarning``).
     """
 
     name: str
@@ -95,52 +86,18 @@ class Scene:
     build: Callable[..., SceneRun]
     metrics_doc: dict[str, str]
     scenery: Callable[..., Any] | None = None
-    renamed: tuple[Renamed, ...] = ()
 
-    def translate(
-        self, overrides: Mapping[str, Any] | None, *, warn: bool = True
-    ) -> dict[str, Any]:
-        """``overrides`` with every old (renamed) name replaced by the new one.
-
-        Each old name given raises a ``FutureWarning`` naming its replacement
-        (``warn=False``: silently, e.g. for the saved parameters of a
-        checkpoint).  Giving both an old name and its replacement is an error.
-        """
+    def resolve(self, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
+        """Defaults updated with validated overrides."""
         if overrides is not None and not isinstance(overrides, Mapping):
             raise ParameterError(
                 "overrides",
                 overrides,
                 "a dict of parameter name -> value, e.g. {'E': 2e7}",
             )
-        out = dict(overrides or {})
-        by_name = {p.name: p for p in self.params}
-        for r in self.renamed:
-            if r.old not in out:
-                continue
-            value = out.pop(r.old)
-            if r.new in out:
-                raise ParameterError(
-                    r.old, value, f"not together with {r.new}, which replaces it"
-                )
-            new = r.apply(value, out, by_name[r.new])
-            if warn:
-                how = f" ({r.how})" if r.how else ""
-                warnings.warn(
-                    f"{self.name}: parameter {r.old} is deprecated, use {r.new}"
-                    f"{how}; {r.old}={value} runs as "
-                    + ", ".join(f"{k}={v:.6g}" for k, v in new.items()),
-                    FutureWarning,
-                    stacklevel=3,
-                )
-            out.update(new)
-        return out
-
-    def resolve(self, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
-        """Defaults updated with validated overrides (old names translated)."""
         by_name = {p.name: p for p in self.params}
         values = {p.name: p.default for p in self.params}
-        overrides = self.translate(overrides)
-        for key, val in overrides.items():
+        for key, val in (overrides or {}).items():
             if key not in by_name:
                 raise ParameterError(
                     "parameter",
@@ -226,8 +183,6 @@ class Scene:
         interrupt: RunInterrupted | None = None,
     ) -> dict[str, Any]:
         """The summary of a finished (or interrupted) run."""
-        from .. import __version__
-
         sim = srun.simulation
         result = {
             "scene": self.name,
@@ -258,8 +213,7 @@ class Scene:
             )
         saved = meta.get("parameters")
         if saved is not None:
-            # A checkpoint of an older version may hold renamed parameters.
-            saved = to_jsonable(self.translate(saved, warn=False))
+            saved = to_jsonable(saved)
             now = to_jsonable(values)
             # A parameter the checkpointed version did not have yet, left at
             # its default now, is the behaviour that version had: not a change.

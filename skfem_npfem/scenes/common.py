@@ -16,12 +16,9 @@ from ..io import ResultWriter, checkpoint_step
 from ..step.model import NODAL_MASS
 from ..step.solver import ACCURACY_PRESETS, LINEAR_SOLVERS, SolverOptions
 from ..step.stabilisation import STABILISATION_MODES
-from .base import Param
-from .limits import check_size, check_steps
+from .params import Param
 
 __all__ = [
-    "check_size",
-    "check_steps",
     "elastic_params",
     "make_writer",
     "solver_from",

@@ -18,7 +18,8 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..step.limit import LimitResult
-from .base import Param, SceneRun
+from .base import SceneRun
+from .params import Param
 
 __all__ = [
     "ANALYSES",

@@ -29,7 +29,8 @@ import numpy as np
 from ..baseline import SPFEM, TRANSFERS, FemRemap, stress_roughness
 from ..baseline.operators import ELEMENTS
 from ..errors import ParameterError
-from .base import Param, SceneRun
+from .base import SceneRun
+from .params import Param
 
 __all__ = [
     "METHODS",

@@ -1,15 +1,13 @@
-"""Scene parameters: declared with unit, default and bounds, parsed from text, renamed.
+"""Scene parameters: declared with unit, default and bounds, parsed from text.
 
 A :class:`Param` checks a value (strings as typed on the command line are
 parsed first, :func:`parse_value`) and says what is allowed in the message of
-its :class:`~skfem_npfem.errors.ParameterError`; a :class:`Renamed` keeps an
-old parameter name working with a warning.
+its :class:`~skfem_npfem.errors.ParameterError`.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -18,7 +16,7 @@ import numpy as np
 from ..errors import ParameterError
 from .limits import MAGNITUDES
 
-__all__ = ["POSITIVE", "Param", "Renamed", "parse_value"]
+__all__ = ["POSITIVE", "Param", "parse_value"]
 
 #: Bounds of a parameter that must be a finite number > 0 (``Param(..., **POSITIVE)``).
 POSITIVE = {"lo": 0, "lo_open": True}
@@ -154,38 +152,3 @@ def parse_value(param: Param, text: str) -> Any:
     except (ValueError, OverflowError):
         raise ParameterError(param.name, text, param.allowed()) from None
     return t
-
-
-@dataclass(frozen=True)
-class Renamed:
-    """An old parameter name that still works, with a deprecation message.
-
-    Attributes
-    ----------
-    old : str
-        The old name.
-    new : str
-        The parameter that replaces it.
-    how : str
-        How the old value maps onto the new parameter(s), for the message
-        (e.g. "rho = gamma / gravity"); empty: the same value.
-    convert : callable or None
-        ``convert(value, given) -> dict`` of new parameter values from the old
-        (checked) value and the other given values; None: ``{new: value}``.
-    param : Param or None
-        How the old value is checked (None: as the new parameter).
-    """
-
-    old: str
-    new: str
-    how: str = ""
-    convert: Callable[[Any, Mapping[str, Any]], dict[str, Any]] | None = None
-    param: Param | None = None
-
-    def apply(self, value: Any, given: Mapping[str, Any], new: Param) -> dict:
-        """New parameter values for the old ``value`` (checked)."""
-        checker = self.param if self.param is not None else new
-        v = checker.check(value)
-        if self.convert is None:
-            return {self.new: v}
-        return self.convert(v, given)

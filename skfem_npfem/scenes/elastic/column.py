@@ -15,17 +15,16 @@ from typing import Any
 import numpy as np
 from skfem import MeshTet, MeshTri
 
-from ..constants import GRAVITY
-from ..errors import ParameterError
-from ..materials import LinearElastic
-from ..mesh.smoothing import nodal_integration
-from ..mesh.sources import FixedMesh
-from ..particles import Particles
-from ..run.simulation import Simulation
-from ..step.model import Model
-from .base import Param, Scene, SceneRun
-from .common import (
-    check_size,
+from ...constants import GRAVITY
+from ...errors import ParameterError
+from ...materials import LinearElastic
+from ...mesh.smoothing import nodal_integration
+from ...mesh.sources import FixedMesh
+from ...particles import Particles
+from ...run.simulation import Simulation
+from ...step.model import Model
+from ..base import Scene, SceneRun
+from ..common import (
     elastic_params,
     fidelity_from,
     fidelity_params,
@@ -33,9 +32,10 @@ from .common import (
     solver_from,
     solver_params,
 )
-from .limits import SPACING
-from .methods import METHOD_METRICS, method_params, with_method
-from .scenery import Scenery, box, number
+from ..limits import SPACING, check_size
+from ..methods import METHOD_METRICS, method_params, with_method
+from ..params import Param
+from ..scenery import Scenery, box, number
 
 PARAMS = [
     Param("dim", 2, "-", "spatial dimension (2: plane strain, 3: 3D)", int, (2, 3)),

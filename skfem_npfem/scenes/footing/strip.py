@@ -7,7 +7,7 @@ the surface particles at ``x <= b`` down; it is smooth (horizontal motion free)
 or rough (horizontal motion fixed).  The footing pressure is the sum of the
 vertical reactions over ``b``.
 
-Settlement steps (:mod:`~skfem_npfem.scenes.plateau`): ``steps`` equal steps
+Settlement steps (:mod:`~skfem_npfem.scenes.footing.plateau`): ``steps`` equal steps
 reach ``settlement``; the run then goes on with growing increments until the
 load curve is flat (the load changes by at most ``plateau_tol`` while the
 settlement doubles) or a cap (``max_settlement``, ``max_steps``) stops it with a
@@ -27,17 +27,17 @@ from typing import Any
 import numpy as np
 from skfem import MeshTri
 
-from ..errors import ParameterError
-from ..laws import prandtl_nc
-from ..materials import DruckerPrager, Material, MohrCoulomb, Tresca
-from ..mesh.smoothing import nodal_integration
-from ..mesh.sources import FixedMesh
-from ..particles import Particles
-from ..run.simulation import Simulation
-from ..step.limit import limit_analysis
-from ..step.model import Model
-from .base import Param, Renamed, Scene, SceneRun
-from .common import (
+from ...errors import ParameterError
+from ...laws import prandtl_nc
+from ...materials import DruckerPrager, Material, MohrCoulomb, Tresca
+from ...mesh.smoothing import nodal_integration
+from ...mesh.sources import FixedMesh
+from ...particles import Particles
+from ...run.simulation import Simulation
+from ...step.limit import limit_analysis
+from ...step.model import Model
+from ..base import Scene, SceneRun
+from ..common import (
     elastic_params,
     fidelity_from,
     fidelity_params,
@@ -45,30 +45,28 @@ from .common import (
     solver_from,
     solver_params,
 )
-from .footing_mesh import (  # noqa: F401
-    DEFAULT_DOMAIN,
-    DEFAULT_SPACING,
-    LIMIT_DOMAIN,
-    LIMIT_SPACING,
-    graded_coordinates,
-    graded_count,
-    resolve_defaults,
-    soil_mesh,
-    soil_particles,
-    unit_weight,
-)
-from .footing_scenery import footing_scenery, saved_load_curve  # noqa: F401
-from .limit_mode import (
+from ..limit_mode import (
     LIMIT_METRICS,
     analysis_param,
     check_limit_method,
     limit_metrics,
     limit_scene_run,
 )
-from .limits import SPACING as SPACING_RANGE
-from .methods import METHOD_METRICS, method_params, with_method
-from .params import POSITIVE
+from ..limits import SPACING as SPACING_RANGE
+from ..methods import METHOD_METRICS, method_params, with_method
+from ..params import POSITIVE, Param
+from .mesh import (
+    DEFAULT_DOMAIN,
+    DEFAULT_SPACING,
+    LIMIT_DOMAIN,
+    LIMIT_SPACING,
+    resolve_defaults,
+    soil_mesh,
+    soil_particles,
+    unit_weight,
+)
 from .plateau import PlateauRule
+from .scenery import footing_scenery
 
 MATERIALS = ("tresca", "mohr-coulomb", "drucker-prager")
 
@@ -291,12 +289,6 @@ def soil_material(values: dict[str, Any]) -> tuple[Material, float]:
     return mat, phi
 
 
-def _rho_from_gamma(gamma: float, given: dict[str, Any]) -> dict[str, float]:
-    """The old ``gamma`` (N/m^3) as the density at the given or default gravity."""
-    gravity = _GRAVITY.check(given.get("gravity", _GRAVITY.default))
-    return {"rho": gamma / gravity}
-
-
 def plateau_rule(values: dict[str, Any]) -> PlateauRule:
     """The stepping and stop rule from the resolved parameters."""
     b = values["half_width"]
@@ -471,9 +463,6 @@ def load_curve(sim: Simulation) -> list[list[float]]:
     ]
 
 
-_GRAVITY = next(p for p in PARAMS if p.name == "gravity")
-
-
 SCENE = Scene(
     name="strip-footing",
     description=__doc__.strip().splitlines()[0].split(": ", 1)[1],
@@ -481,13 +470,4 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=footing_scenery,
-    renamed=(
-        Renamed(
-            "gamma",
-            "rho",
-            "with gravity, as in the other scenes: rho = gamma / gravity",
-            _rho_from_gamma,
-            Param("gamma", 0.0, "N/m^3", "unit weight", float, lo=0),
-        ),
-    ),
 )

@@ -41,50 +41,46 @@ from __future__ import annotations
 
 import math
 import warnings
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..boundary import floor, wall_x
-from ..constants import GRAVITY
-from ..errors import ParameterError
-from ..laws import lube2005_runout as lube_runout
-from ..materials import DruckerPrager, MohrCoulomb
-from ..mesh.smoothing import nodal_integration
-from ..mesh.sources import AlphaShapeMesher, main_body
-from ..particles import Particles
-from ..run.simulation import AtRest, Simulation
-from ..step.model import Model
-from ..step.stages import Step
-from .base import Renamed, Scene, SceneRun
-from .collapse_params import (  # noqa: F401
+from ...boundary import floor, wall_x
+from ...constants import GRAVITY
+from ...errors import ParameterError
+from ...laws import lube2005_runout as lube_runout
+from ...materials import DruckerPrager, MohrCoulomb
+from ...mesh.smoothing import nodal_integration
+from ...mesh.sources import AlphaShapeMesher, main_body
+from ...particles import Particles
+from ...run.simulation import AtRest, Simulation
+from ...step.model import Model
+from ...step.stages import Step
+from ..base import Scene, SceneRun
+from ..common import check_soil, fidelity_from, make_writer, solver_from
+from ..limits import check_size
+from ..methods import with_method
+from ..scenery import Scenery, box, number, time_label
+from .params import (
     COLLAPSE_STABILISATION,
     COLLAPSE_VOLUME_CORRECTION,
-    MATERIALS,
     MAX_STIFFNESS_RATIO,
     MAX_STRENGTH_RATIO,
     METRICS,
     PARAMS,
     VOLUME_CORRECTION_STRAIN,
 )
-from .collapse_runout import (
+from .runout import (
     collapse_time,
     detached_fraction,
     detached_warnings,
     front,
     mass_front,
+    picture_front,
     rest_warnings,
 )
-from .common import (
-    check_size,
-    check_soil,
-    fidelity_from,
-    make_writer,
-    solver_from,
-)
-from .methods import with_method
-from .scenery import Scenery, box, number, time_label
 
 
 def lattice(x0: float, x1: float, height: float, spacing: float) -> np.ndarray:
@@ -359,9 +355,8 @@ def run_control(
 def collapse_scenery(p: dict, folder: Path | None = None) -> Scenery:
     """The plane-strain collapse's scenery: rough floor, symmetry wall, Lube 2005."""
     s = Scenery(scene="column-collapse")
-    # (results of an older version name the half-width "length")
     a = number(p, "aspect")
-    L0 = number(p, "half_width") or number(p, "length")
+    L0 = number(p, "half_width")
     if a is None or L0 is None:
         return s
     H0, g = a * L0, number(p, "gravity", GRAVITY) or GRAVITY
@@ -372,14 +367,11 @@ def collapse_scenery(p: dict, folder: Path | None = None) -> Scenery:
         s.walls.append((0.0, 1, "smooth wall (symmetry plane)"))
     s.runout_reference = L0 * (1.0 + lube_runout(a))
     s.runout_label = "Lube et al. 2005: L\u221e"
+    s.front = partial(picture_front, symmetric=s.symmetric)
     s.tau = math.sqrt(H0 / g)
     s.label = time_label(s.tau)
     return s
 
-
-#: Parameters renamed for one vocabulary across the scenes (``width`` is a
-#: full width, ``half_width`` a half width); the old names still work.
-RENAMED = (Renamed("length", "half_width", "the same value: L0"),)
 
 SCENE = Scene(
     name="column-collapse",
@@ -388,5 +380,4 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=collapse_scenery,
-    renamed=RENAMED,
 )

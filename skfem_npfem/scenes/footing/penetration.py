@@ -30,26 +30,27 @@ from typing import Any
 import numpy as np
 from skfem import MeshTri
 
-from ..bodies import RigidBody
-from ..errors import ParameterError
-from ..laws import prandtl_nc
-from ..materials import Tresca
-from ..mesh.smoothing import nodal_integration
-from ..mesh.sources import AlphaShapeMesher
-from ..particles import Particles
-from ..run.simulation import Simulation
-from ..step.model import Model
-from .base import Param, Scene, SceneRun
-from .common import (
-    check_size,
+from ...bodies import RigidBody
+from ...errors import ParameterError
+from ...laws import prandtl_nc
+from ...materials import Tresca
+from ...mesh.smoothing import nodal_integration
+from ...mesh.sources import AlphaShapeMesher
+from ...particles import Particles
+from ...run.simulation import Simulation
+from ...step.model import Model
+from ..base import Scene, SceneRun
+from ..common import (
     fidelity_from,
     fidelity_params,
     make_writer,
     solver_from,
     solver_params,
 )
-from .methods import METHOD_METRICS, method_params, with_method
-from .params import POSITIVE
+from ..limits import check_size
+from ..methods import METHOD_METRICS, method_params, with_method
+from ..params import POSITIVE, Param
+from ..scenery import Scenery, box, number
 from .penetration_common import (
     axis_count,
     graded_axis,
@@ -57,7 +58,6 @@ from .penetration_common import (
     locking_warnings,
     penetration_warnings,
 )
-from .scenery import Scenery, box, number
 
 __all__ = [
     "INTERFACES",

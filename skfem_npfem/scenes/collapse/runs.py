@@ -24,42 +24,39 @@ from typing import Any
 
 import numpy as np
 
-from ..constants import GRAVITY
-from ..laws import lajeunesse2004_runout, lube2004_runout
-from ..laws import lube2005_runout as lube_runout
-from ..mesh.sources import main_body
-from ..run.simulation import AtRest, Simulation
-from ..step.stages import Step
-from .base import Scene, SceneRun
+from ...constants import GRAVITY
+from ...laws import lajeunesse2004_runout, lube2004_runout
+from ...laws import lube2005_runout as lube_runout
+from ...mesh.sources import main_body
+from ...run.simulation import AtRest, Simulation
+from ...step.stages import Step
+from ..base import Scene, SceneRun
+from ..common import fidelity_from, solver_from
+from ..methods import with_method
+from ..scenery import Scenery, box, number, time_label
 from .box_column import box_column
-from .collapse_geometry import (
+from .cylinder import ColumnSetup, cylinder_column, mass_quantile, radial_front
+from .geometry import (
     CYLINDRICAL,
     GEOMETRY_PARAMS,
     GeometryScene,
     metrics_doc,
 )
-from .column_collapse import (
-    COLLAPSE_VOLUME_CORRECTION,
-    VOLUME_CORRECTION_STRAIN,
-    collapse_scenery,
-    collapse_simulation,
+from .params import COLLAPSE_VOLUME_CORRECTION, VOLUME_CORRECTION_STRAIN
+from .plane_strain import SCENE as PLANE_STRAIN
+from .plane_strain import collapse_scenery, collapse_simulation, run_control
+from .runout import (
     collapse_time,
     detached_fraction,
     detached_warnings,
+    picture_front,
     rest_warnings,
-    run_control,
 )
-from .column_collapse import SCENE as PLANE_STRAIN
-from .common import fidelity_from, solver_from
-from .cylinder import ColumnSetup, cylinder_column, mass_quantile, radial_front
-from .methods import with_method
-from .scenery import Scenery, box, number, time_label
 
 __all__ = [
     "COLUMN_COLLAPSE",
     "bare_method",
     "build_geometry",
-    "lube2004_runout",
     "with_geometries",
 ]
 
@@ -76,7 +73,7 @@ MASS_BASIS = {
 #: measurements on the seed column (docs/seed_column.md, "Smooth and
 #: volume-keeping by default" and "The 3D default to rest").  The 3D quarter
 #: goes with the alpha-shape factor 2.0
-#: (:data:`~skfem_npfem.scenes.cylinder.GEOMETRY_ALPHA`).  The reference
+#: (:data:`~skfem_npfem.scenes.collapse.cylinder.GEOMETRY_ALPHA`).  The reference
 #: paper's bare method is ``--set stabilisation=0 --set volume_correction=0``.
 CYLINDER_FIDELITY = {
     "axisymmetric": (100.0, "full", COLLAPSE_VOLUME_CORRECTION),
@@ -337,7 +334,6 @@ def with_geometries(plane: Scene) -> GeometryScene:
         metrics_doc=metrics_doc(plane.metrics_doc),
         plane_names=names,
         scenery=geometry_scenery,
-        renamed=plane.renamed,
     )
 
 
@@ -380,6 +376,7 @@ def geometry_scenery(p: dict, folder: Path | None = None) -> Scenery:
     s.field_names = dict(AXISYMMETRIC_FIELDS)
     s.runout_reference = r0 * (1.0 + lube2004_runout(h0 / r0))
     s.runout_label = "Lube et al. 2004: r\u221e"
+    s.front = picture_front
     s.tau = math.sqrt(h0 / g)
     s.label = time_label(s.tau, "h0")
     return s

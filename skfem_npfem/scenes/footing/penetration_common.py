@@ -1,7 +1,7 @@
 """What the penetration scenes share: graded lattices, interfaces, reports.
 
-The footing (:mod:`~skfem_npfem.scenes.penetration`) and the cone
-(:mod:`~skfem_npfem.scenes.cone`) build their soil on a graded lattice (its
+The footing (:mod:`~skfem_npfem.scenes.footing.penetration`) and the cone
+(:mod:`~skfem_npfem.scenes.footing.cone`) build their soil on a graded lattice (its
 growth is the strip footing's too), turn
 the ``interface`` choice into an adhesion, warn about what makes a run's
 loads doubtful, and the cone reads its steady factor off the curve.

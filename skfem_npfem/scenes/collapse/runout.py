@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ..run.simulation import AtRest, Simulation
+from ...run.simulation import AtRest, Simulation
 
 __all__ = [
     "DETACHED_WARNING",
@@ -24,6 +24,7 @@ __all__ = [
     "detached_warnings",
     "front",
     "mass_front",
+    "picture_front",
     "rest_warnings",
 ]
 
@@ -45,6 +46,13 @@ def mass_front(x: np.ndarray, mass: np.ndarray, symmetric: bool) -> float:
     if symmetric:
         return quantile(0.99)
     return 0.5 * (quantile(0.995) - quantile(0.005))
+
+
+def picture_front(
+    points: np.ndarray, mass: np.ndarray, symmetric: bool = True
+) -> float:
+    """:func:`mass_front` of a picture's step: its points' (x, y) and masses."""
+    return float(mass_front(np.asarray(points)[:, :2], np.asarray(mass), symmetric))
 
 
 def front(x: np.ndarray, body: np.ndarray, symmetric: bool) -> tuple[float, float]:

@@ -10,16 +10,14 @@ from typing import Any
 
 import numpy as np
 
-from ..materials import Material, MohrCoulomb, Tresca
-from ..mesh.regions import (
+from ...materials import Material, MohrCoulomb, Tresca
+from ...mesh.regions import (
     CrossSection,
     Region,
     check_regions,
     read_cross_section,
 )
-from .common import (
-    check_size,
-)
+from ..limits import check_size
 
 __all__ = ["parametric_section", "section_materials", "section_of", "supports"]
 

@@ -33,26 +33,27 @@ from typing import Any
 
 import numpy as np
 
-from ..bodies import RigidBody
-from ..boundary import wall_x
-from ..errors import ParameterError
-from ..laws import teh_houlsby_nc
-from ..loads import surface_load
-from ..mesh.axisymmetric import AxisymmetricMohrCoulomb
-from ..mesh.sources import AlphaShapeMesher
-from ..particles import Particles
-from ..run.simulation import Simulation
-from ..step.model import Model
-from .base import Param, Scene, SceneRun
-from .common import (
-    check_size,
+from ...bodies import RigidBody
+from ...boundary import wall_x
+from ...errors import ParameterError
+from ...laws import teh_houlsby_nc
+from ...loads import surface_load
+from ...mesh.axisymmetric import AxisymmetricMohrCoulomb
+from ...mesh.sources import AlphaShapeMesher
+from ...particles import Particles
+from ...run.simulation import Simulation
+from ...step.model import Model
+from ..base import Scene, SceneRun
+from ..common import (
     fidelity_from,
     fidelity_params,
     make_writer,
     solver_from,
     solver_params,
 )
-from .params import POSITIVE
+from ..limits import check_size
+from ..params import POSITIVE, Param
+from ..scenery import Scenery, box, number
 from .penetration_common import (
     Steady,
     axis_count,
@@ -61,7 +62,6 @@ from .penetration_common import (
     penetration_warnings,
     steady_factor,
 )
-from .scenery import Scenery, box, number
 
 __all__ = ["INTERFACES", "SCENE", "Steady", "cone_body", "steady_factor"]
 

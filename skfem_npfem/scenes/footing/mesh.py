@@ -14,12 +14,10 @@ from typing import Any
 import numpy as np
 from skfem import MeshTri
 
-from ..errors import ParameterError
-from ..mesh.smoothing import nodal_integration
-from ..particles import Particles
-from .common import (
-    check_size,
-)
+from ...errors import ParameterError
+from ...mesh.smoothing import nodal_integration
+from ...particles import Particles
+from ..limits import check_size
 from .penetration_common import grow_axis, grown_count
 
 #: Default element size under the footing and block size / b (incremental).

@@ -19,19 +19,19 @@ from typing import Any
 import numpy as np
 from skfem import MeshTri
 
-from ..boundary import Contacts
-from ..constants import GRAVITY
-from ..materials import LinearElastic, Material
-from ..mesh.regions import CrossSection, fill_regions
-from ..mesh.smoothing import nodal_integration
-from ..step.conic import solve_step
-from ..step.model import Model
-from ..step.program import ConeInput
-from ..step.safety import SafetyResult, reduced_strength, strength_reduction
-from .common import fidelity_from, solver_from
-from .limit_mode import limit_metrics
-from .slope_runout import save_mechanism
-from .slope_section import _surface_height, section_materials, section_of, supports
+from ...boundary import Contacts
+from ...constants import GRAVITY
+from ...materials import LinearElastic, Material
+from ...mesh.regions import CrossSection, fill_regions
+from ...mesh.smoothing import nodal_integration
+from ...step.conic import solve_step
+from ...step.model import Model
+from ...step.program import ConeInput
+from ...step.safety import SafetyResult, reduced_strength, strength_reduction
+from ..common import fidelity_from, solver_from
+from ..limit_mode import limit_metrics
+from .runout import save_mechanism
+from .section import _surface_height, section_materials, section_of, supports
 
 __all__ = [
     "SlopeBody",

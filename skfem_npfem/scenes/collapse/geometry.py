@@ -2,7 +2,7 @@
 
 ``column-collapse --set geometry=plane-strain|axisymmetric|quarter-cylinder|box``:
 
-* ``plane-strain`` (default): :mod:`skfem_npfem.scenes.column_collapse`,
+* ``plane-strain`` (default): :mod:`skfem_npfem.scenes.collapse.plane_strain`,
   unchanged (the same particles, steps and metrics);
 * ``axisymmetric``: a cylindrical column as the ``(r, z)`` half-section of
   :mod:`skfem_npfem.mesh.axisymmetric` (masses and volumes of the full ring);
@@ -13,7 +13,7 @@
   (:mod:`.box_column`).
 
 The cylindrical geometries default to the reference paper's seed column
-(:data:`~skfem_npfem.scenes.cylinder.SEED`: ``r0 = 3.9`` cm, ``h0 = 7.8`` cm,
+(:data:`~skfem_npfem.scenes.collapse.cylinder.SEED`: ``r0 = 3.9`` cm, ``h0 = 7.8`` cm,
 the soil of the plane-strain defaults, ``dt = 2`` ms, Drucker-Prager matched to
 Mohr-Coulomb in triaxial compression, spacing ``r0/18``).  Two of ``radius``,
 ``height`` and ``aspect`` fix the third; the defaults fill ``radius`` first,
@@ -32,12 +32,13 @@ import warnings
 from dataclasses import dataclass
 from typing import Any
 
-from ..errors import ParameterError
-from .base import Param, Scene
+from ...errors import ParameterError
+from ..base import Scene
+from ..common import check_soil
+from ..limits import LENGTH, check_size
+from ..params import Param
 from .box_column import DEPTH_SPACINGS
-from .common import check_soil
 from .cylinder import GEOMETRY_ALPHA, SEED, SEED_DIVISIONS
-from .limits import LENGTH, check_size
 from .sizing import lattice_particles
 
 __all__ = [
@@ -343,7 +344,6 @@ class GeometryScene(Scene):
 
     def resolve(self, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
         """Defaults updated with validated overrides, then the geometry rules."""
-        overrides = self.translate(overrides)
         values = super().resolve(overrides)
         finalize(values, frozenset(overrides or {}), self.plane_names)
         return values

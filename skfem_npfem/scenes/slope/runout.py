@@ -13,14 +13,14 @@ from typing import Any
 import numpy as np
 from skfem import MeshTri
 
-from ..constants import GRAVITY
-from ..mesh.smoothing import nodal_integration
-from ..run.simulation import Simulation
-from ..step.safety import strength_reduction
-from .common import (
+from ...constants import GRAVITY
+from ...mesh.smoothing import nodal_integration
+from ...run.simulation import Simulation
+from ...step.safety import strength_reduction
+from ..common import (
     solver_from,
 )
-from .slope_section import (
+from .section import (
     _surface_height,
 )
 

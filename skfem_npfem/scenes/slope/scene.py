@@ -37,38 +37,24 @@ from typing import Any
 
 import numpy as np
 
-from ..constants import GRAVITY
-from ..mesh.regions import CrossSection
-from ..mesh.smoothing import nodal_integration
-from ..mesh.sources import AlphaShapeMesher, FixedMesh
-from ..particles import Particles
-from ..run.simulation import AtRest, Simulation
-from .base import Param, Scene, SceneRun
-from .common import elastic_params, fidelity_params, make_writer, solver_params
-from .limit_mode import LIMIT_METRICS, analysis_param
-from .params import POSITIVE
-from .scenery import Scenery, number
-from .slope_runout import (  # noqa: F401
-    deposit_factor_of_safety,
-    deposit_slopes,
+from ...constants import GRAVITY
+from ...mesh.regions import CrossSection
+from ...mesh.smoothing import nodal_integration
+from ...mesh.sources import AlphaShapeMesher, FixedMesh
+from ...particles import Particles
+from ...run.simulation import AtRest, Simulation
+from ..base import Scene, SceneRun
+from ..common import elastic_params, fidelity_params, make_writer, solver_params
+from ..limit_mode import LIMIT_METRICS, analysis_param
+from ..params import POSITIVE, Param
+from ..scenery import Scenery, number
+from .runout import (
     runout_metrics,
-    save_mechanism,
 )
-from .slope_section import (  # noqa: F401
-    _area,
-    _dedupe,
-    _surface_height,
-    parametric_section,
-    section_materials,
-    section_of,
-    supports,
-)
-from .slope_stages import (  # noqa: F401
-    factor_of_safety,
+from .stages import (
     flow_model,
     fos_metrics,
     initial_stress,
-    reduced_strength_flow,
     slope_body,
 )
 
