@@ -30,7 +30,7 @@ from ..io import (
     write_json,
 )
 from .limits import check_steps
-from .params import Param
+from .params import Param, Values
 
 __all__ = ["DEFAULT_CHECKPOINT_EVERY", "RESUME_MAY_CHANGE", "Scene", "SceneRun"]
 
@@ -71,13 +71,18 @@ class Scene:
     params : list of Param
         Parameters with defaults and units.
     build : callable
-        ``build(values: dict, out: Path | None, progress: bool | None) -> SceneRun``.
+        ``build(values: Values, out: Path | None, progress: bool | None) ->
+        SceneRun``: the run of resolved values (:meth:`resolve`).
     metrics_doc : dict
         Summary metric name -> description (with unit).
     scenery : callable or None
         ``scenery(parameters: dict, folder: Path | None) -> Scenery``: what a
         picture of a result shows besides the particles (floor, walls, outline,
         reference values, step labels); see :mod:`skfem_npfem.scenes.scenery`.
+    derive : callable or None
+        ``derive(values: dict) -> None``: the scene's one resolving function,
+        which fills the defaults derived from other parameters (e.g. a spacing
+        from a height) in place, before the run is built.
     """
 
     name: str
@@ -86,9 +91,21 @@ class Scene:
     build: Callable[..., SceneRun]
     metrics_doc: dict[str, str]
     scenery: Callable[..., Any] | None = None
+    derive: Callable[[dict[str, Any]], Any] | None = None
 
-    def resolve(self, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
-        """Defaults updated with validated overrides."""
+    def resolve(self, overrides: Mapping[str, Any] | None = None) -> Values:
+        """The values of a run: defaults, validated overrides, derived defaults.
+
+        The derived defaults are filled by :attr:`derive`; the values are
+        read-only from here on.
+        """
+        values = self.checked(overrides)
+        if self.derive is not None:
+            self.derive(values)
+        return Values(values)
+
+    def checked(self, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
+        """Defaults updated with validated overrides (no derived defaults yet)."""
         if overrides is not None and not isinstance(overrides, Mapping):
             raise ParameterError(
                 "overrides",
@@ -157,7 +174,7 @@ class Scene:
                 # lets `skfem-npfem plot DIR` find the scene and its scales
                 write_json(
                     Path(out) / "scene.json",
-                    {"scene": self.name, "parameters": values},
+                    {"scene": self.name, "parameters": dict(values)},
                 )
                 opener = getattr(sim.writer, "open", None)
                 if callable(opener):
@@ -178,7 +195,7 @@ class Scene:
     def _result(
         self,
         srun: SceneRun,
-        values: dict[str, Any],
+        values: Values,
         start: float,
         interrupt: RunInterrupted | None = None,
     ) -> dict[str, Any]:
@@ -186,7 +203,7 @@ class Scene:
         sim = srun.simulation
         result = {
             "scene": self.name,
-            "parameters": values,
+            "parameters": dict(values),
             "metrics": srun.metrics(sim),
             "solver": sim.summary(),
             "wall_time_total": time.perf_counter() - start,
@@ -201,7 +218,7 @@ class Scene:
             )
         return result
 
-    def _resume_point(self, out: str | Path | None, values: dict[str, Any]) -> Path:
+    def _resume_point(self, out: str | Path | None, values: Values) -> Path:
         """The latest checkpoint of ``out``, checked against this scene and values."""
         if out is None:
             raise ParameterError("resume", True, "needs out (a folder)")
@@ -214,7 +231,7 @@ class Scene:
         saved = meta.get("parameters")
         if saved is not None:
             saved = to_jsonable(saved)
-            now = to_jsonable(values)
+            now = to_jsonable(dict(values))
             # A parameter the checkpointed version did not have yet, left at
             # its default now, is the behaviour that version had: not a change.
             defaults = to_jsonable({p.name: p.default for p in self.params})
@@ -249,7 +266,7 @@ def _check_not_past_end(sim: Any, run_kwargs: dict, checkpoint: Path) -> None:
         )
 
 
-def _check_step_count(sim: Any, run_kwargs: dict, values: dict[str, Any]) -> None:
+def _check_step_count(sim: Any, run_kwargs: dict, values: Values) -> None:
     """Refuse a run that plans more than :data:`~.limits.MAX_STEPS` steps."""
     t_end, steps = run_kwargs.get("t_end"), run_kwargs.get("steps")
     by_time = math.inf
@@ -287,7 +304,7 @@ RESUME_MAY_CHANGE = frozenset(
 )
 
 
-def _attach_checkpoints(sim: Any, out: str | Path | None, values: dict) -> None:
+def _attach_checkpoints(sim: Any, out: str | Path | None, values: Values) -> None:
     """Checkpoint into ``out`` unless the scene already chose a folder."""
     if out is None or sim.checkpoint_dir is not None:
         return

@@ -11,7 +11,7 @@ solve happens once, when the metrics are first asked for
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -59,7 +59,7 @@ def analysis_param(incremental: str) -> Param:
     )
 
 
-def check_limit_method(values: dict[str, Any]) -> None:
+def check_limit_method(values: Mapping[str, Any]) -> None:
     """Refuse a baseline method together with ``analysis=limit``."""
     method = values.get("method", "npfem")
     if values.get("analysis") == "limit" and method != "npfem":

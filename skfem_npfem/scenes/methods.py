@@ -22,6 +22,7 @@ Every method reports the stress roughness of :mod:`skfem_npfem.baseline.roughnes
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -201,7 +202,7 @@ _FROM_RECORDS = {
 }
 
 
-def with_method(values: dict[str, Any], srun: SceneRun) -> SceneRun:
+def with_method(values: Mapping[str, Any], srun: SceneRun) -> SceneRun:
     """Run a scene with the method of ``values`` (see the module notes).
 
     Raises

@@ -23,12 +23,13 @@ explicitly, is refused (``aspect`` with both ``radius`` and ``height``,
 above ``r0/4`` or a run whose estimated memory exceeds the machine's
 (:func:`~.limits.check_size` with the particle count of :mod:`.sizing`).
 :class:`GeometryScene` is a scene whose :meth:`~GeometryScene.resolve` knows
-which parameters were given; :mod:`.collapse_runs` builds the runs.
+which parameters were given; :mod:`.runs` builds the runs.
 """
 
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,7 +37,7 @@ from ...errors import ParameterError
 from ..base import Scene
 from ..common import check_soil
 from ..limits import LENGTH, check_size
-from ..params import Param
+from ..params import Param, Values
 from .box_column import DEPTH_SPACINGS
 from .cylinder import GEOMETRY_ALPHA, SEED, SEED_DIVISIONS
 from .sizing import lattice_particles
@@ -309,7 +310,7 @@ def _material(values: dict[str, Any], given: frozenset[str]) -> None:
         values["dp_match"] = "plane-strain" if geo == "box" else "compression"
 
 
-def _check_values(values: dict[str, Any]) -> None:
+def _check_values(values: Mapping[str, Any]) -> None:
     """Material and time-integration checks (as the plane-strain scene's)."""
     check_soil(values)
     if values["geometry"] == "box":
@@ -342,8 +343,8 @@ class GeometryScene(Scene):
     #: Names of the plane-strain scene's parameters.
     plane_names: frozenset[str] = frozenset()
 
-    def resolve(self, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
+    def resolve(self, overrides: Mapping[str, Any] | None = None) -> Values:
         """Defaults updated with validated overrides, then the geometry rules."""
-        values = super().resolve(overrides)
+        values = self.checked(overrides)
         finalize(values, frozenset(overrides or {}), self.plane_names)
-        return values
+        return Values(values)

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Mapping
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -62,6 +63,7 @@ from ..base import Scene, SceneRun
 from ..common import check_soil, fidelity_from, make_writer, solver_from
 from ..limits import check_size
 from ..methods import with_method
+from ..params import Values
 from ..scenery import Scenery, box, number, time_label
 from .params import (
     COLLAPSE_STABILISATION,
@@ -131,7 +133,7 @@ def initial_particles(
     return p.replace(wall_force=wall_force)
 
 
-def _check(values: dict[str, Any]) -> float:
+def _check(values: Mapping[str, Any]) -> float:
     """Refuse inconsistent values; return the particle spacing h."""
     L0, H0 = values["half_width"], values["aspect"] * values["half_width"]
     h = values["spacing"] if values["spacing"] is not None else L0 / 22.0
@@ -181,7 +183,7 @@ def _check(values: dict[str, Any]) -> float:
     return h
 
 
-def _volume_correction(values: dict[str, Any]) -> float:
+def _volume_correction(values: Mapping[str, Any]) -> float:
     """The default kappa: COLLAPSE_VOLUME_CORRECTION where its premise holds."""
     h0 = values["aspect"] * values["half_width"]
     strain = values["rho"] * values["gravity"] * h0 / values["E"]
@@ -190,7 +192,7 @@ def _volume_correction(values: dict[str, Any]) -> float:
     return 0.0
 
 
-def _model(values: dict[str, Any]) -> Model:
+def _model(values: Mapping[str, Any]) -> Model:
     """Walls (rough floor, smooth symmetry wall) and the Mohr-Coulomb/DP soil."""
     phi = values["phi"]
     floor_phi = phi if values["floor_friction"] is None else values["floor_friction"]
@@ -240,7 +242,7 @@ def _front_recorder(h: float, symmetric: bool):
     return record_front
 
 
-def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
+def _metrics(values: Mapping[str, Any], h: float, stop: AtRest | None):
     """The summary metrics of a finished run (see METRICS)."""
     L0, a = values["half_width"], values["aspect"]
     H0 = a * L0
@@ -288,7 +290,7 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
 
 
 def build(
-    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
+    values: Values, out: Path | None = None, progress=None, resume: bool = False
 ) -> SceneRun:
     """Build the column-collapse simulation."""
     h = _check(values)
@@ -316,7 +318,7 @@ def collapse_simulation(
     particles: Particles,
     model: Model,
     mesher: AlphaShapeMesher,
-    values: dict[str, Any],
+    values: Mapping[str, Any],
     out: Path | None,
     progress=None,
     resume: bool = False,
@@ -334,12 +336,12 @@ def collapse_simulation(
         checkpoint_dir=out,
         checkpoint_every=values["checkpoint_every"] if out is not None else 0,
         progress=progress,
-        meta={"scene": "column-collapse", "parameters": values},
+        meta={"scene": "column-collapse", "parameters": dict(values)},
     )
 
 
 def run_control(
-    values: dict[str, Any], H0: float
+    values: Mapping[str, Any], H0: float
 ) -> tuple[dict[str, Any], AtRest | None]:
     """``run`` keywords (``t_end``, the at-rest stop) of a column of height H0."""
     run_kwargs: dict[str, Any] = {"t_end": values["t_end"]}

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -105,7 +106,7 @@ def collapse_time(times: np.ndarray, runout: np.ndarray, tol: float) -> float:
     return float(times[min(k, times.size - 1)])
 
 
-def rest_warnings(sim_: Simulation, values: dict[str, Any], stop: AtRest | None):
+def rest_warnings(sim_: Simulation, values: Mapping[str, Any], stop: AtRest | None):
     """One warning if the run reached ``t_end`` before the at-rest rule stopped it.
 
     Also issued as a :class:`UserWarning` (the CLI prints it on stderr).  None

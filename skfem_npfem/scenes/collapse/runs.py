@@ -1,7 +1,7 @@
 """Runs of the column-collapse scene for the axisymmetric and 3D geometries.
 
 :func:`build_geometry` turns resolved scene values
-(:mod:`.collapse_geometry`) into a :class:`~skfem_npfem.scenes.base.SceneRun`
+(:mod:`.geometry`) into a :class:`~skfem_npfem.scenes.base.SceneRun`
 with the same time loop as the plane-strain scene: adaptive time step (halved
 on a solver failure), VTU output and checkpoints, and the stop at rest.  A
 callback records per step the run-out and the height of the main body on the
@@ -10,7 +10,7 @@ step record, :func:`~.methods.with_method` the stress roughness
 records.
 
 :data:`COLUMN_COLLAPSE` is the scene registered as ``column-collapse``: the
-plane-strain scene of :mod:`.column_collapse` extended by the ``geometry``
+plane-strain scene of :mod:`.plane_strain` extended by the ``geometry``
 parameters; plane strain runs the plane-strain build unchanged.
 """
 
@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -33,6 +34,7 @@ from ...step.stages import Step
 from ..base import Scene, SceneRun
 from ..common import fidelity_from, solver_from
 from ..methods import with_method
+from ..params import Values
 from ..scenery import Scenery, box, number, time_label
 from .box_column import box_column
 from .cylinder import ColumnSetup, cylinder_column, mass_quantile, radial_front
@@ -112,7 +114,7 @@ def bare_method(geometry: str) -> dict[str, Any]:
     return bare
 
 
-def column_setup(values: dict[str, Any]) -> ColumnSetup:
+def column_setup(values: Mapping[str, Any]) -> ColumnSetup:
     """Particles, model and remesher of a resolved axisymmetric or 3D column.
 
     The node-mass rule, the stabilisation and the volume correction
@@ -138,7 +140,7 @@ def column_setup(values: dict[str, Any]) -> ColumnSetup:
     return replace(setup, model=replace(setup.model, **fidelity))
 
 
-def _column_setup(values: dict[str, Any]) -> ColumnSetup:
+def _column_setup(values: Mapping[str, Any]) -> ColumnSetup:
     geo = values["geometry"]
     soil = {
         k: values[k]
@@ -179,7 +181,7 @@ def _front(geo: str, x: np.ndarray, mass: np.ndarray, symmetric: bool) -> float:
     return 0.5 * (hi - lo)
 
 
-def _recorder(values: dict[str, Any], h: float):
+def _recorder(values: Mapping[str, Any], h: float):
     """Callback storing the run-out and the height of the main body on each record.
 
     (The stress roughness is recorded by :func:`~.methods.with_method`, as for
@@ -210,7 +212,7 @@ def _recorder(values: dict[str, Any], h: float):
     return record
 
 
-def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
+def _metrics(values: Mapping[str, Any], h: float, stop: AtRest | None):
     """The summary metrics of a finished run (GEOMETRY_METRICS and the shared)."""
     geo = values["geometry"]
     cyl = geo in CYLINDRICAL
@@ -265,7 +267,7 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
 
 
 def build_geometry(
-    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
+    values: Values, out: Path | None = None, progress=None, resume: bool = False
 ) -> SceneRun:
     """Build an axisymmetric or 3D column-collapse run (resolved values)."""
     setup = column_setup(values)
@@ -313,7 +315,7 @@ def with_geometries(plane: Scene) -> GeometryScene:
     """The plane-strain column-collapse scene extended by ``geometry``."""
 
     def build(
-        values: dict[str, Any],
+        values: Values,
         out: Path | None = None,
         progress=None,
         resume: bool = False,

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Mapping
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -73,7 +74,7 @@ def axis_count(fine: float, h: float, length: float, ratio: float) -> float:
     return n_fine + 1 + grown_count(max(length - n_fine * h, 0.0), h, ratio)
 
 
-def interface_adhesion(values: dict[str, Any]) -> float:
+def interface_adhesion(values: Mapping[str, Any]) -> float:
     """Interface strength (Pa) of the ``interface`` choice."""
     choice = values["interface"]
     if choice == "smooth":
@@ -104,7 +105,7 @@ def penetration_warnings(
     return [msg]
 
 
-def locking_warnings(values: dict[str, Any]) -> list[str]:
+def locking_warnings(values: Mapping[str, Any]) -> list[str]:
     """A warning when FEM-remap runs with P1 elements, which lock here.
 
     Tresca flow is isochoric, and constant-strain triangles cannot deform at

@@ -21,6 +21,7 @@ References (weightless soil): Prandtl ``q/c = 2 + pi``; Mohr-Coulomb
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -54,7 +55,7 @@ from ..limit_mode import (
 )
 from ..limits import SPACING as SPACING_RANGE
 from ..methods import METHOD_METRICS, method_params, with_method
-from ..params import POSITIVE, Param
+from ..params import POSITIVE, Param, Values
 from .mesh import (
     DEFAULT_DOMAIN,
     DEFAULT_SPACING,
@@ -264,7 +265,7 @@ METRICS = {
 }
 
 
-def soil_material(values: dict[str, Any]) -> tuple[Material, float]:
+def soil_material(values: Mapping[str, Any]) -> tuple[Material, float]:
     """The soil material and its friction angle (0 for Tresca)."""
     name = values["material"]
     c, phi = values["c"], values["phi"]
@@ -289,7 +290,7 @@ def soil_material(values: dict[str, Any]) -> tuple[Material, float]:
     return mat, phi
 
 
-def plateau_rule(values: dict[str, Any]) -> PlateauRule:
+def plateau_rule(values: Mapping[str, Any]) -> PlateauRule:
     """The stepping and stop rule from the resolved parameters."""
     b = values["half_width"]
     settlement = values["settlement"]
@@ -311,10 +312,9 @@ def plateau_rule(values: dict[str, Any]) -> PlateauRule:
 
 
 def build(
-    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
+    values: Values, out: Path | None = None, progress=None, resume: bool = False
 ) -> SceneRun:
     """Build the strip-footing simulation (or its limit analysis)."""
-    resolve_defaults(values)
     check_limit_method(values)
     mesh = soil_mesh(values)
     mat, phi = soil_material(values)
@@ -338,7 +338,7 @@ def build(
         rule.first_increment,
         writer=make_writer(out, resume),
         progress=progress,
-        meta={"scene": "strip-footing", "parameters": values},
+        meta={"scene": "strip-footing", "parameters": dict(values)},
     )
 
     def record(sim_: Simulation, p: Particles, res) -> bool:
@@ -386,7 +386,7 @@ def build(
     )
 
 
-def locking_note(values: dict[str, Any], phi: float) -> str:
+def locking_note(values: Mapping[str, Any], phi: float) -> str:
     """Why the run's load is inflated by volumetric locking ("" if it is not).
 
     Constant-strain triangles (fem-remap, P1) carry about one incompressibility
@@ -408,7 +408,7 @@ def locking_note(values: dict[str, Any], phi: float) -> str:
 
 
 def footing_limit(
-    values: dict[str, Any],
+    values: Mapping[str, Any],
     mesh: MeshTri,
     mat: Material,
     particles: Particles,
@@ -470,4 +470,5 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=footing_scenery,
+    derive=resolve_defaults,
 )
