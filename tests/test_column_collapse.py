@@ -11,8 +11,9 @@ import pytest
 from skfem_npfem.cli import main
 from skfem_npfem.errors import CheckpointError, ParameterError
 from skfem_npfem.io import load_checkpoint, read_pvd, read_step, save_checkpoint
+from skfem_npfem.laws import lube2005_runout as lube_runout
 from skfem_npfem.scenes import get_scene, run_scene
-from skfem_npfem.scenes.collapse.plane_strain import SCENE, build, lube_runout
+from skfem_npfem.scenes.collapse.plane_strain import SCENE, build
 
 COARSE = {"spacing": 0.02}  # 11 x 21 = 231 particles at a = 2
 
@@ -284,7 +285,7 @@ def test_drucker_prager_variant_runs():
 def test_mass_front_is_a_mass_quantile():
     # 1001 equal masses evenly spread on [0, 1]: the 99 % mass front is at 0.99
     # (to the spacing 1e-3); half the 0.5 %-99.5 % width of [-1, 1] is 0.99.
-    from skfem_npfem.scenes.collapse.plane_strain import mass_front
+    from skfem_npfem.scenes.collapse.runout import mass_front
 
     x = np.column_stack([np.linspace(0, 1, 1001), np.zeros(1001)])
     m = np.ones(1001)

@@ -56,7 +56,7 @@ from _common import ROOT
 from skfem_npfem.baseline.reporting import save_png, write_result
 from skfem_npfem.baseline.study import run_cases, study_arguments, study_folders
 from skfem_npfem.io import write_bytes
-from skfem_npfem.scenes.collapse.plane_strain import (
+from skfem_npfem.scenes.collapse.params import (
     COLLAPSE_STABILISATION,
     COLLAPSE_VOLUME_CORRECTION,
 )

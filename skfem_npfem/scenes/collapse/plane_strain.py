@@ -56,9 +56,10 @@ from ...materials import DruckerPrager, MohrCoulomb
 from ...mesh.smoothing import nodal_integration
 from ...mesh.sources import AlphaShapeMesher, main_body
 from ...particles import Particles
-from ...run.simulation import AtRest, Simulation
+from ...run.rest import AtRest
+from ...run.simulation import Simulation
 from ...step.model import Model
-from ...step.stages import Step
+from ...step.records import Step
 from ..base import Scene, SceneRun
 from ..common import check_soil, fidelity_from, make_writer, solver_from
 from ..limits import check_size

@@ -16,7 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from ...run.simulation import AtRest, Simulation
+from ...run.rest import AtRest
+from ...run.simulation import Simulation
 
 __all__ = [
     "DETACHED_WARNING",

@@ -29,8 +29,9 @@ from ...constants import GRAVITY
 from ...laws import lajeunesse2004_runout, lube2004_runout
 from ...laws import lube2005_runout as lube_runout
 from ...mesh.sources import main_body
-from ...run.simulation import AtRest, Simulation
-from ...step.stages import Step
+from ...run.rest import AtRest
+from ...run.simulation import Simulation
+from ...step.records import Step
 from ..base import Scene, SceneRun
 from ..common import fidelity_from, solver_from
 from ..methods import with_method

@@ -24,6 +24,7 @@ compares the three curves.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -413,8 +414,6 @@ def penetration_scenery(p: dict, folder: Path | None = None) -> Scenery:
 
 def _saved_curve(folder: Path, B: float, su: float) -> np.ndarray | None:
     """``[w, q]`` rows of a finished run's summary (None without one)."""
-    import json
-
     try:
         data = json.loads((folder / "summary.json").read_text())
         c = np.array(data["metrics"]["curve"], dtype=float).reshape(-1, 2)

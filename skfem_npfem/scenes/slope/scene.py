@@ -43,7 +43,8 @@ from ...mesh.regions import CrossSection, fill_regions
 from ...mesh.smoothing import nodal_integration
 from ...mesh.sources import AlphaShapeMesher, FixedMesh
 from ...particles import Particles
-from ...run.simulation import AtRest, Simulation
+from ...run.rest import AtRest
+from ...run.simulation import Simulation
 from ..base import Scene, SceneRun
 from ..common import elastic_params, fidelity_params, make_writer, solver_params
 from ..limit_mode import LIMIT_METRICS, analysis_param
