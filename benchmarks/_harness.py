@@ -58,7 +58,7 @@ def add_method_argument(ap) -> None:
 
 def method_overrides(geometry: str, method: str) -> dict:
     """``column-collapse`` overrides that select ``method`` for ``geometry``."""
-    from skfem_npfem.scenes.collapse_runs import bare_method
+    from skfem_npfem.scenes.collapse.runs import bare_method
 
     if method not in METHODS:
         raise ValueError(f"method {method!r}: expected one of {METHODS}")

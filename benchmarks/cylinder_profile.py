@@ -55,8 +55,8 @@ import _harness as harness
 
 import skfem_npfem.step.conic as conic
 from skfem_npfem.scenes import get_scene
-from skfem_npfem.scenes.collapse_runs import build_geometry
-from skfem_npfem.scenes.cylinder import SEED
+from skfem_npfem.scenes.collapse.cylinder import SEED
+from skfem_npfem.scenes.collapse.runs import build_geometry
 
 CHILD = r"""
 import dataclasses, hashlib, json, pickle, sys, time

@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """The seed granular column (r0 = 3.9 cm, h0 = 7.8 cm), axisymmetric or 3D, per step.
 
-Builds the column with :func:`skfem_npfem.scenes.cylinder.cylinder_column` and
+Builds the column with :func:`skfem_npfem.scenes.collapse.cylinder.cylinder_column` and
 writes one JSON line per step: time, normalised time t / sqrt(h0 / g), status,
 IPM iterations, step wall time, the radial 99 % mass front, the top height,
 kinetic energy, mass and mesh-volume change, and the Lode parameter of the
@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from skfem_npfem.run.simulation import Simulation, voigt_to_tensor
-from skfem_npfem.scenes.cylinder import SEED, cylinder_column, radial_front
+from skfem_npfem.scenes.collapse.cylinder import SEED, cylinder_column, radial_front
 
 HERE = Path(__file__).resolve().parent
 

@@ -45,8 +45,8 @@ import _harness as harness
 import numpy as np
 
 from skfem_npfem.scenes import get_scene
-from skfem_npfem.scenes.collapse_runs import build_geometry
-from skfem_npfem.scenes.cylinder import SEED, radial_front
+from skfem_npfem.scenes.collapse.cylinder import SEED, radial_front
+from skfem_npfem.scenes.collapse.runs import build_geometry
 
 VARIANTS = {
     "base": {"strength_floor": 0.0},

@@ -141,7 +141,7 @@ def case_size(name: str) -> int:
         return (nx + 1) * (ny + 1) * (nz + 1)
     if c["kind"] == "cylinder3d":
         return cylinder_lattice(c["nr"])[0].shape[0]
-    from skfem_npfem.scenes.strip_footing import graded_coordinates
+    from skfem_npfem.scenes.footing.strip import graded_coordinates
 
     return len(graded_coordinates(1.0, c["spacing"], 5.0, 1.15)) ** 2
 

@@ -147,17 +147,6 @@ def scenes_markdown() -> str:
                 f"| `{p.name}` | {_format_default(p)} | {p.unit} | "
                 f"{p.help} | {p.allowed()} |"
             )
-        if s.renamed:
-            lines += [
-                "",
-                "Renamed parameters (the old names still work, with a deprecation "
-                "message): "
-                + "; ".join(
-                    f"`{r.old}` is `{r.new}`" + (f" ({r.how})" if r.how else "")
-                    for r in s.renamed
-                )
-                + ".",
-            ]
         lines += ["", "| metric | meaning |", "|---|---|"]
         lines += [f"| `{k}` | {v} |" for k, v in s.metrics_doc.items()]
         lines.append("")

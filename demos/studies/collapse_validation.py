@@ -215,7 +215,7 @@ def run_case(
     p = sim.particles
     s = {
         "scene": SCENE,
-        "parameters": values,
+        "parameters": dict(values),
         "metrics": srun.metrics(sim),
         "solver": sim.summary(),
         "wall_time_total": time.perf_counter() - start,

@@ -222,7 +222,7 @@ def markdown(rows: list[dict], summary: dict) -> str:
         "NumericalError whose hint said 'reduce dt'. The step now refuses it "
         "with `ParameterError: invalid mesh=...degenerate element...`. "
         "Near-degenerate elements are fine (the sliver cases).",
-        "* **nu = 0 metric (elastic_column.py).** `sigma_h_rel_l2` was NaN "
+        "* **nu = 0 metric (scenes/elastic/column.py).** `sigma_h_rel_l2` was NaN "
         "(the exact s_h is 0); it is now normalised by |s_v| in that case.",
         "",
         "## Observations",

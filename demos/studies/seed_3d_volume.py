@@ -46,7 +46,7 @@ from _common import ROOT, WORK
 
 from skfem_npfem.mesh.delaunay import alpha_shape
 from skfem_npfem.scenes import get_scene
-from skfem_npfem.scenes.collapse_runs import CYLINDER_FIDELITY
+from skfem_npfem.scenes.collapse.runs import CYLINDER_FIDELITY
 
 R0 = 0.039
 OUT = ROOT / "docs" / "seed_column"

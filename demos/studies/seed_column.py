@@ -76,7 +76,7 @@ from _common import ROOT, benchmark
 from _reporting import save_png
 
 from skfem_npfem.laws import lube2004_runout
-from skfem_npfem.scenes.collapse_runs import bare_method
+from skfem_npfem.scenes.collapse.runs import bare_method
 
 R0, H0, G, RHO = 0.039, 0.078, 9.81, 1800.0
 T_SCALE = math.sqrt(H0 / G)
@@ -85,7 +85,7 @@ SNAPSHOTS = (0.0, 1.0, 2.0, 3.0)
 TABLES_TITLE = "Seed-column study: tables"
 
 #: The cases measured with the paper's bare method pin it
-#: (:func:`skfem_npfem.scenes.collapse_runs.bare_method`: no stabilisation, no
+#: (:func:`skfem_npfem.scenes.collapse.runs.bare_method`: no stabilisation, no
 #: volume correction, the alpha factor 1.3, in 3D the buried slivers dropped),
 #: so that they reproduce their committed rows; a ``-stab`` case pins the
 #: full residual, the stabilisation mode of that time.

@@ -3,7 +3,7 @@
 
 The cylindrical geometries of ``column-collapse`` default to N-PFEM's stress
 stabilisation and volume correction (``CYLINDER_FIDELITY`` in
-:mod:`skfem_npfem.scenes.collapse_runs`).  This study measures what those
+:mod:`skfem_npfem.scenes.collapse.runs`).  This study measures what those
 defaults buy and cost on the reference paper's seed column:
 
 * ``axi-*``: the axisymmetric column to rest at r0/18 (and r0/36) with the

@@ -63,7 +63,7 @@ from _reporting import (
 from _study import run_cases, study_arguments, study_folders
 
 from skfem_npfem.io import write_bytes
-from skfem_npfem.scenes.column_collapse import (
+from skfem_npfem.scenes.collapse.params import (
     COLLAPSE_STABILISATION,
     COLLAPSE_VOLUME_CORRECTION,
 )

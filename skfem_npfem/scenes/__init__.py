@@ -1,4 +1,14 @@
-"""Ready problems (scenes) shared by the API, the CLI, the demos and the tests."""
+"""Ready problems (scenes) shared by the API, the CLI, the demos and the tests.
+
+One folder per scene family: ``elastic/`` (``elastic-column``), ``footing/``
+(``strip-footing``, ``footing-penetration``, ``cone-penetration``),
+``collapse/`` (``column-collapse``) and ``slope/`` (``slope``).  What every
+family uses stays here, at the top: the scene framework (``base``), declared
+and read-only parameters (``params``), the size, memory and step-count checks
+(``limits``), the parameters and helpers the scenes share (``common``), the
+method of a run (``methods``), the ``analysis=limit`` mode (``limit_mode``)
+and the description of a scene's pictures (``scenery``).
+"""
 
 from __future__ import annotations
 
@@ -6,13 +16,12 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ParameterError
-from .base import Param, Scene
-from .collapse_runs import COLUMN_COLLAPSE
-from .cone import SCENE as CONE_PENETRATION
-from .elastic_column import SCENE as ELASTIC_COLUMN
-from .penetration import SCENE as FOOTING_PENETRATION
-from .slope import SCENE as SLOPE
-from .strip_footing import SCENE as STRIP_FOOTING
+from .base import Scene
+from .collapse import COLUMN_COLLAPSE
+from .elastic import ELASTIC_COLUMN
+from .footing import CONE_PENETRATION, FOOTING_PENETRATION, STRIP_FOOTING
+from .params import Param
+from .slope import SLOPE
 
 __all__ = ["SCENES", "Param", "Scene", "get_scene", "run_scene"]
 

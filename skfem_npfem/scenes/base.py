@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import math
 import time
-import warnings
 from collections.abc import Callable, Mapping
 from contextlib import nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .. import __version__
 from ..errors import CheckpointError, ParameterError, RunInterrupted
 from ..io import (
     RunFolder,
@@ -28,16 +28,9 @@ from ..io import (
     write_json,
 )
 from .limits import check_steps
-from .params import Param, Renamed, parse_value
+from .params import Param, Values
 
-__all__ = [
-    "DEFAULT_CHECKPOINT_EVERY",
-    "Param",
-    "Renamed",
-    "Scene",
-    "SceneRun",
-    "parse_value",
-]
+__all__ = ["DEFAULT_CHECKPOINT_EVERY", "RESUME_MAY_CHANGE", "Scene", "SceneRun"]
 
 #: Steps between checkpoints of scenes that do not choose (``checkpoint_every``).
 DEFAULT_CHECKPOINT_EVERY = 20
@@ -76,15 +69,18 @@ class Scene:
     params : list of Param
         Parameters with defaults and units.
     build : callable
-        ``build(values: dict, out: Path | None, progress: bool | None) -> SceneRun``.
+        ``build(values: Values, out: Path | None, progress: bool | None) ->
+        SceneRun``: the run of resolved values (:meth:`resolve`).
     metrics_doc : dict
         Summary metric name -> description (with unit).
     scenery : callable or None
         ``scenery(parameters: dict, folder: Path | None) -> Scenery``: what a
         picture of a result shows besides the particles (floor, walls, outline,
         reference values, step labels); see :mod:`skfem_npfem.scenes.scenery`.
-    renamed : tuple of Renamed
-        Old parameter names that still work (with a ``FutureWarning``).
+    derive : callable or None
+        ``derive(values: dict) -> None``: the scene's one resolving function,
+        which fills the defaults derived from other parameters (e.g. a spacing
+        from a height) in place, before the run is built.
     """
 
     name: str
@@ -93,52 +89,30 @@ class Scene:
     build: Callable[..., SceneRun]
     metrics_doc: dict[str, str]
     scenery: Callable[..., Any] | None = None
-    renamed: tuple[Renamed, ...] = ()
+    derive: Callable[[dict[str, Any]], Any] | None = None
 
-    def translate(
-        self, overrides: Mapping[str, Any] | None, *, warn: bool = True
-    ) -> dict[str, Any]:
-        """``overrides`` with every old (renamed) name replaced by the new one.
+    def resolve(self, overrides: Mapping[str, Any] | None = None) -> Values:
+        """The values of a run: defaults, validated overrides, derived defaults.
 
-        Each old name given raises a ``FutureWarning`` naming its replacement
-        (``warn=False``: silently, e.g. for the saved parameters of a
-        checkpoint).  Giving both an old name and its replacement is an error.
+        The derived defaults are filled by :attr:`derive`; the values are
+        read-only from here on.
         """
+        values = self.checked(overrides)
+        if self.derive is not None:
+            self.derive(values)
+        return Values(values)
+
+    def checked(self, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
+        """Defaults updated with validated overrides (no derived defaults yet)."""
         if overrides is not None and not isinstance(overrides, Mapping):
             raise ParameterError(
                 "overrides",
                 overrides,
                 "a dict of parameter name -> value, e.g. {'E': 2e7}",
             )
-        out = dict(overrides or {})
-        by_name = {p.name: p for p in self.params}
-        for r in self.renamed:
-            if r.old not in out:
-                continue
-            value = out.pop(r.old)
-            if r.new in out:
-                raise ParameterError(
-                    r.old, value, f"not together with {r.new}, which replaces it"
-                )
-            new = r.apply(value, out, by_name[r.new])
-            if warn:
-                how = f" ({r.how})" if r.how else ""
-                warnings.warn(
-                    f"{self.name}: parameter {r.old} is deprecated, use {r.new}"
-                    f"{how}; {r.old}={value} runs as "
-                    + ", ".join(f"{k}={v:.6g}" for k, v in new.items()),
-                    FutureWarning,
-                    stacklevel=3,
-                )
-            out.update(new)
-        return out
-
-    def resolve(self, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
-        """Defaults updated with validated overrides (old names translated)."""
         by_name = {p.name: p for p in self.params}
         values = {p.name: p.default for p in self.params}
-        overrides = self.translate(overrides)
-        for key, val in overrides.items():
+        for key, val in (overrides or {}).items():
             if key not in by_name:
                 raise ParameterError(
                     "parameter",
@@ -202,7 +176,8 @@ class Scene:
                 # lets `skfem-npfem plot DIR` find the scene and its scales
                 write_json(
                     Path(out) / "scene.json",
-                    {"scene": self.name, "parameters": values} | folder.names(summary),
+                    {"scene": self.name, "parameters": dict(values)}
+                    | folder.names(summary),
                 )
                 opener = getattr(sim.writer, "open", None)
                 if callable(opener):
@@ -223,17 +198,15 @@ class Scene:
     def _result(
         self,
         srun: SceneRun,
-        values: dict[str, Any],
+        values: Values,
         start: float,
         interrupt: RunInterrupted | None = None,
     ) -> dict[str, Any]:
         """The summary of a finished (or interrupted) run."""
-        from .. import __version__
-
         sim = srun.simulation
         result = {
             "scene": self.name,
-            "parameters": values,
+            "parameters": dict(values),
             "metrics": srun.metrics(sim),
             "solver": sim.summary(),
             "wall_time_total": time.perf_counter() - start,
@@ -248,7 +221,7 @@ class Scene:
             )
         return result
 
-    def _resume_point(self, out: str | Path | None, values: dict[str, Any]) -> Path:
+    def _resume_point(self, out: str | Path | None, values: Values) -> Path:
         """The latest checkpoint of ``out``, checked against this scene and values."""
         if out is None:
             raise ParameterError("resume", True, "needs out (a folder)")
@@ -260,9 +233,8 @@ class Scene:
             )
         saved = meta.get("parameters")
         if saved is not None:
-            # A checkpoint of an older version may hold renamed parameters.
-            saved = to_jsonable(self.translate(saved, warn=False))
-            now = to_jsonable(values)
+            saved = to_jsonable(saved)
+            now = to_jsonable(dict(values))
             # A parameter the checkpointed version did not have yet, left at
             # its default now, is the behaviour that version had: not a change.
             defaults = to_jsonable({p.name: p.default for p in self.params})
@@ -302,7 +274,7 @@ def _check_not_past_end(sim: Any, run_kwargs: dict, checkpoint: Path) -> None:
         )
 
 
-def _check_step_count(sim: Any, run_kwargs: dict, values: dict[str, Any]) -> None:
+def _check_step_count(sim: Any, run_kwargs: dict, values: Values) -> None:
     """Refuse a run that plans more than :data:`~.limits.MAX_STEPS` steps."""
     t_end, steps = run_kwargs.get("t_end"), run_kwargs.get("steps")
     by_time = math.inf
@@ -340,7 +312,7 @@ RESUME_MAY_CHANGE = frozenset(
 )
 
 
-def _attach_checkpoints(sim: Any, out: str | Path | None, values: dict) -> None:
+def _attach_checkpoints(sim: Any, out: str | Path | None, values: Values) -> None:
     """Checkpoint into ``out`` unless the scene already chose a folder."""
     if out is None or sim.checkpoint_dir is not None:
         return

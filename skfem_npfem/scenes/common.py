@@ -8,6 +8,7 @@ The up-front size and step-count checks live in :mod:`.limits`
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -16,12 +17,9 @@ from ..io import ResultWriter, checkpoint_step
 from ..step.model import NODAL_MASS
 from ..step.solver import ACCURACY_PRESETS, LINEAR_SOLVERS, SolverOptions
 from ..step.stabilisation import STABILISATION_MODES
-from .base import Param
-from .limits import check_size, check_steps
+from .params import Param
 
 __all__ = [
-    "check_size",
-    "check_steps",
     "elastic_params",
     "make_writer",
     "solver_from",
@@ -100,7 +98,7 @@ def solver_params() -> list[Param]:
     ]
 
 
-def solver_from(values: dict[str, Any]) -> SolverOptions:
+def solver_from(values: Mapping[str, Any]) -> SolverOptions:
     """SolverOptions from resolved scene values."""
     return SolverOptions(
         linear_solver=values["linear_solver"],
@@ -209,7 +207,7 @@ def fidelity_params(
 
 
 def fidelity_from(
-    values: dict[str, Any],
+    values: Mapping[str, Any],
     stabilisation: float,
     volume_correction: float = 0.0,
     mode: str = "full",
@@ -258,7 +256,7 @@ def fidelity_from(
     return out
 
 
-def check_soil(values: dict[str, Any]) -> None:
+def check_soil(values: Mapping[str, Any]) -> None:
     """Psi <= phi, and a cohesionless Mohr-Coulomb K0 inside the yield cone.
 
     Raises

@@ -11,14 +11,15 @@ solve happens once, when the metrics are first asked for
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
 
 from ..errors import ParameterError
 from ..limit.analysis import LimitResult
-from .base import Param, SceneRun
+from .base import SceneRun
+from .params import Param
 
 __all__ = [
     "ANALYSES",
@@ -58,7 +59,7 @@ def analysis_param(incremental: str) -> Param:
     )
 
 
-def check_limit_method(values: dict[str, Any]) -> None:
+def check_limit_method(values: Mapping[str, Any]) -> None:
     """Refuse a baseline method together with ``analysis=limit``."""
     method = values.get("method", "npfem")
     if values.get("analysis") == "limit" and method != "npfem":

@@ -22,6 +22,7 @@ Every method reports the stress roughness of :mod:`skfem_npfem.metrics`
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -30,7 +31,8 @@ from ..baseline import SPFEM, TRANSFERS, FemRemap
 from ..baseline.operators import ELEMENTS
 from ..errors import ParameterError
 from ..metrics import stress_roughness
-from .base import Param, SceneRun
+from .base import SceneRun
+from .params import Param
 
 __all__ = [
     "METHODS",
@@ -201,7 +203,7 @@ _FROM_RECORDS = {
 }
 
 
-def with_method(values: dict[str, Any], srun: SceneRun) -> SceneRun:
+def with_method(values: Mapping[str, Any], srun: SceneRun) -> SceneRun:
     """Run a scene with the method of ``values`` (see the module notes).
 
     Raises

@@ -1,16 +1,17 @@
-"""Scene parameters: declared with unit, default and bounds, parsed from text, renamed.
+"""Scene parameters: declared with unit, default and bounds, parsed from text.
 
 A :class:`Param` checks a value (strings as typed on the command line are
 parsed first, :func:`parse_value`) and says what is allowed in the message of
-its :class:`~skfem_npfem.errors.ParameterError`; a :class:`Renamed` keeps an
-old parameter name working with a warning.
+its :class:`~skfem_npfem.errors.ParameterError`.  The values of a run, with
+their derived defaults filled in once, are a read-only :class:`Values`.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -18,7 +19,7 @@ import numpy as np
 from ..errors import ParameterError
 from .limits import MAGNITUDES
 
-__all__ = ["POSITIVE", "Param", "Renamed", "parse_value"]
+__all__ = ["POSITIVE", "Param", "Values", "parse_value"]
 
 #: Bounds of a parameter that must be a finite number > 0 (``Param(..., **POSITIVE)``).
 POSITIVE = {"lo": 0, "lo_open": True}
@@ -156,36 +157,59 @@ def parse_value(param: Param, text: str) -> Any:
     return t
 
 
-@dataclass(frozen=True)
-class Renamed:
-    """An old parameter name that still works, with a deprecation message.
+class Values(Mapping[str, Any]):
+    """The parameter values of a run: checked, derived defaults filled, read-only.
 
-    Attributes
+    A scene resolves its values once, before its run is built
+    (:meth:`Scene.resolve <skfem_npfem.scenes.base.Scene.resolve>`); the
+    stages read them (``values["dt"]`` or ``values.dt``) and none writes one.
+    ``dict(values)`` is the plain dict of the summary and the checkpoints.
+
+    Parameters
     ----------
-    old : str
-        The old name.
-    new : str
-        The parameter that replaces it.
-    how : str
-        How the old value maps onto the new parameter(s), for the message
-        (e.g. "rho = gamma / gravity"); empty: the same value.
-    convert : callable or None
-        ``convert(value, given) -> dict`` of new parameter values from the old
-        (checked) value and the other given values; None: ``{new: value}``.
-    param : Param or None
-        How the old value is checked (None: as the new parameter).
+    data : mapping
+        Parameter name -> value (copied).
+
+    Examples
+    --------
+    >>> v = Values({"spacing": 0.5, "dt": None})
+    >>> v.spacing, v["dt"], dict(v)
+    (0.5, None, {'spacing': 0.5, 'dt': None})
+    >>> v["dt"] = 0.01
+    Traceback (most recent call last):
+    ...
+    TypeError: 'Values' object does not support item assignment
     """
 
-    old: str
-    new: str
-    how: str = ""
-    convert: Callable[[Any, Mapping[str, Any]], dict[str, Any]] | None = None
-    param: Param | None = None
+    __slots__ = ("_data",)
 
-    def apply(self, value: Any, given: Mapping[str, Any], new: Param) -> dict:
-        """New parameter values for the old ``value`` (checked)."""
-        checker = self.param if self.param is not None else new
-        v = checker.check(value)
-        if self.convert is None:
-            return {self.new: v}
-        return self.convert(v, given)
+    def __init__(self, data: Mapping[str, Any]) -> None:
+        object.__setattr__(self, "_data", MappingProxyType(dict(data)))
+
+    def __getitem__(self, key: str) -> Any:
+        return self._data[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._data)
+
+    def __len__(self) -> int:
+        return len(self._data)
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("_"):
+            raise AttributeError(name)
+        try:
+            return self._data[name]
+        except KeyError:
+            raise AttributeError(
+                f"no parameter {name!r} (parameters: {', '.join(self._data)})"
+            ) from None
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError(f"{type(self).__name__} is read-only ({name})")
+
+    def __reduce__(self) -> tuple[type, tuple[dict[str, Any]]]:
+        return type(self), (dict(self._data),)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({dict(self._data)!r})"

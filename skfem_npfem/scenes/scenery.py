@@ -54,13 +54,16 @@ class Scenery:
         floor and axes in metres (the quarter cylinder looks at its two
         symmetry planes, where the interior of the column is).
     field_names : dict of str to str
-        What a field is called in this scene when :data:`skfem_npfem.viz.plot.FIELDS`
+        What a field is called in this scene when :data:`skfem_npfem.viz.loading.FIELDS`
         does not say it right (axisymmetry: ``stress_zz`` is the hoop stress).
     runout_reference : float or None
         Lube et al. (2005) final run-out, m from x = 0 (the collapse; Lube et
         al. 2004's run-out radius for an axisymmetric collapse).
     runout_label : str
         Legend text of the reference run-out (before its value).
+    front : callable or None
+        ``front(points, mass) -> float``: the run-out of a step (the collapse:
+        its 99 % mass front), m, drawn as a line (None: none drawn).
     symmetric : bool
         Collapse against the wall at x = 0 (run-out measured from it).
     tau : float or None
@@ -91,6 +94,7 @@ class Scenery:
     view: tuple[float, float, float] | None = None
     runout_reference: float | None = None
     runout_label: str = "reference run-out"
+    front: Callable[[np.ndarray, np.ndarray], float] | None = None
     symmetric: bool = True
     tau: float | None = None
     load_curve: np.ndarray | None = None

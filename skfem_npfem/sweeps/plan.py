@@ -202,7 +202,7 @@ def plan_runs(
             raise ParameterError("cases", varied, f"distinct runs ({name} twice)")
         seen[name] = varied
         overrides = {**fixed_v, **varied}
-        runs.append(Run(name, varied, overrides, scene.resolve(overrides)))
+        runs.append(Run(name, varied, overrides, dict(scene.resolve(overrides))))
     return runs
 
 

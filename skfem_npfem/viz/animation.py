@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -22,7 +23,10 @@ def write_animation(
     if kind == "mp4":
         try:
             import imageio.v2 as imageio
-            import imageio_ffmpeg  # noqa: F401 (the mp4 writer needs it)
+
+            if importlib.util.find_spec("imageio_ffmpeg") is None:
+                # the mp4 writer needs it
+                raise ImportError("No module named 'imageio_ffmpeg'")
         except ImportError as err:
             raise NpfemError(
                 f"MP4 output needs imageio and imageio-ffmpeg ({err}); "

@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from ..io import atomic_path
+from ..scenes.scenery import Scenery
 from .render import Step, Style
-from .scenery import Scenery, mass_front
 
 __all__ = ["Frames2D", "View", "load_settlement_figure", "mechanism_figure"]
 
@@ -358,8 +358,8 @@ class Frames2D:
         from matplotlib.patches import Polygon, Rectangle
 
         ax, sc = self.ax, self.sc
-        if sc.runout_reference is not None and step.mass is not None:
-            front = mass_front(step.points, step.mass, sc.symmetric)
+        if sc.front is not None and step.mass is not None:
+            front = sc.front(step.points, step.mass)
             self.dynamic.append(
                 ax.axvline(
                     front,

@@ -31,14 +31,8 @@ from ..constants import GRAVITY
 from ..errors import CheckpointError, ParameterError
 from ..io import check_writable_dir, read_pvd
 from .animation import write_animation
-from .colours import (  # noqa: F401
-    _EPS_P_FLOOR,
-    _PLASTIC_QUANTILE,
-    _SAMPLE,
-    _STRESS_INDEX,
-    _UNITS,
+from .colours import (
     _extend,
-    _robust_range,
     _style,
 )
 from .figures import Frames2D, crop, load_settlement_figure
@@ -53,15 +47,12 @@ from .render import (
     import_pyvista,
 )
 from .scenery import scenery
-from .snapshots import (  # noqa: F401
-    _frame_indices,
-    _pick_snapshots,
+from .snapshots import (
     _time_label,
     _time_unit,
-    _TimeUnit,
 )
 
-__all__ = ["FIELDS", "plot_results"]
+__all__ = ["plot_results"]
 
 _ANIMATIONS = ("gif", "mp4", "none")
 _GRAVITY = GRAVITY

@@ -14,14 +14,11 @@ import math
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from ..constants import GRAVITY
 from ..scenes import SCENES
-from ..scenes.column_collapse import mass_front as _front
 from ..scenes.scenery import Scenery, number, time_label
 
-__all__ = ["Scenery", "mass_front", "scenery"]
+__all__ = ["scenery"]
 
 
 def scenery(folder: str | Path) -> Scenery:
@@ -43,8 +40,3 @@ def scenery(folder: str | Path) -> Scenery:
         s.tau = math.sqrt(aspect * length / g)
         s.label = time_label(s.tau)
     return s
-
-
-def mass_front(x: np.ndarray, mass: np.ndarray, symmetric: bool) -> float:
-    """The collapse's run-out: the 99 % mass front (see the scene's notes)."""
-    return float(_front(np.asarray(x)[:, :2], np.asarray(mass), symmetric))

@@ -17,7 +17,8 @@ import pytest
 
 import skfem_npfem as npfem
 from skfem_npfem.laws import prandtl_nc
-from skfem_npfem.scenes.strip_footing import PARAMS, soil_mesh
+from skfem_npfem.scenes.footing.mesh import soil_mesh
+from skfem_npfem.scenes.footing.strip import PARAMS
 
 #: Largest |N/N_c - 1| at the coarse spacing 0.125 b, block 5 b: the O(h)
 #: discretisation error of the mixed program (measured -3.9 % at phi = 35).

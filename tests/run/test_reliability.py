@@ -246,7 +246,7 @@ def test_tiny_values_are_refused_in_one_line(argv, name, says):
 
 def _soft_column(E: float, rotation: bool = True):
     """One static step of the scene's column at Young's modulus E (unchecked)."""
-    from skfem_npfem.scenes.elastic_column import column_mesh
+    from skfem_npfem.scenes.elastic.column import column_mesh
 
     mesh = column_mesh(2, 1.0, 4.0, 0.125)
     mat = LinearElastic(E, 0.3, 2000.0)

@@ -10,7 +10,7 @@ from skfem_npfem.materials import LinearElastic
 from skfem_npfem.mesh.sources import AlphaShapeMesher, main_body
 from skfem_npfem.particles import Particles
 from skfem_npfem.run.simulation import AtRest, Simulation
-from skfem_npfem.scenes.column_collapse import initial_particles, lattice
+from skfem_npfem.scenes.collapse.plane_strain import initial_particles, lattice
 from skfem_npfem.step.model import Model
 from skfem_npfem.step.records import StepState
 from skfem_npfem.step.stages import StepRecord, advance

@@ -25,7 +25,7 @@ from skfem_npfem.materials import LinearElastic
 from skfem_npfem.mesh.axisymmetric import axisymmetric_integration
 from skfem_npfem.mesh.smoothing import nodal_integration
 from skfem_npfem.particles import Particles
-from skfem_npfem.scenes.cylinder import (
+from skfem_npfem.scenes.collapse.cylinder import (
     SEED,
     cylinder_column,
     half_section_lattice,

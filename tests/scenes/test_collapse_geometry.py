@@ -20,10 +20,10 @@ from skfem import MeshTet, MeshTri
 
 import skfem_npfem as npfem
 from skfem_npfem.cli import main
+from skfem_npfem.laws import lube2004_runout
 from skfem_npfem.metrics import roughness_index
 from skfem_npfem.scenes import get_scene
-from skfem_npfem.scenes.collapse_runs import lube2004_runout
-from skfem_npfem.scenes.sizing import lattice_particles
+from skfem_npfem.scenes.collapse.sizing import lattice_particles
 from skfem_npfem.viz.scenery import scenery
 
 R0, H0, RHO = 0.039, 0.078, 1800.0

@@ -11,8 +11,9 @@ import pytest
 from skfem_npfem.cli import main
 from skfem_npfem.errors import CheckpointError, ParameterError
 from skfem_npfem.io import load_checkpoint, read_pvd, read_step, save_checkpoint
+from skfem_npfem.laws import lube2005_runout as lube_runout
 from skfem_npfem.scenes import get_scene, run_scene
-from skfem_npfem.scenes.column_collapse import SCENE, build, lube_runout
+from skfem_npfem.scenes.collapse.plane_strain import SCENE, build
 
 COARSE = {"spacing": 0.02}  # 11 x 21 = 231 particles at a = 2
 
@@ -284,7 +285,7 @@ def test_drucker_prager_variant_runs():
 def test_mass_front_is_a_mass_quantile():
     # 1001 equal masses evenly spread on [0, 1]: the 99 % mass front is at 0.99
     # (to the spacing 1e-3); half the 0.5 %-99.5 % width of [-1, 1] is 0.99.
-    from skfem_npfem.scenes.column_collapse import mass_front
+    from skfem_npfem.scenes.collapse.runout import mass_front
 
     x = np.column_stack([np.linspace(0, 1, 1001), np.zeros(1001)])
     m = np.ones(1001)
@@ -295,34 +296,3 @@ def test_mass_front_is_a_mass_quantile():
     x3 = np.vstack([x, [[50.0, 0.0]]])
     m3 = np.append(m, 5.0)
     assert abs(mass_front(x3, m3, True) - mass_front(x, m, True)) < 0.01
-
-
-def test_half_width_is_the_name_and_length_still_works(tmp_path):
-    """One vocabulary: ``width`` is a full width, ``half_width`` a half width.
-
-    The collapse's half-width L0 was ``length``; the old name still runs the
-    same column, with a deprecation message, also when resuming a checkpoint
-    written with it.
-    """
-    params = {p.name for p in SCENE.params}
-    assert "half_width" in params and "length" not in params
-    values = {"spacing": 0.04, "t_end": 0.02, "rest_fraction": 0.0}
-    with pytest.warns(FutureWarning, match="parameter length is deprecated"):
-        old = get_scene("column-collapse").resolve({**values, "length": "0.2"})
-    new = get_scene("column-collapse").resolve({**values, "half_width": 0.2})
-    assert old == new
-    with pytest.warns(FutureWarning):
-        box = get_scene("column-collapse").resolve({"geometry": "box", "length": 0.2})
-    assert box["half_width"] == 0.2
-    with pytest.warns(FutureWarning), pytest.raises(ParameterError) as info:
-        get_scene("column-collapse").resolve({"geometry": "axisymmetric", "length": 1})
-    assert info.value.name == "half_width"
-    # A checkpoint whose saved parameters say "length" resumes.
-    first = run_scene("column-collapse", {**values, "t_end": 0.01}, out=tmp_path)
-    [path] = sorted(tmp_path.glob("checkpoint_*.npz"))
-    p, meta = load_checkpoint(path)
-    saved = dict(meta["parameters"])
-    saved["length"] = saved.pop("half_width")
-    save_checkpoint(path, p, {**meta, "parameters": saved})
-    more = run_scene("column-collapse", values, out=tmp_path, resume=True)
-    assert more["solver"]["steps"] > first["solver"]["steps"]

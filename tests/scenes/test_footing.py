@@ -22,7 +22,7 @@ import pytest
 from skfem_npfem import ParameterError, get_scene, run_scene
 from skfem_npfem.cli import main
 from skfem_npfem.io import checkpoint_path
-from skfem_npfem.scenes.plateau import PlateauRule, doubling_change
+from skfem_npfem.scenes.footing.plateau import PlateauRule, doubling_change
 
 TOL = 1e-3  # the scene's default plateau_tol
 
@@ -244,7 +244,7 @@ def test_fem_remap_p1_load_is_called_locking_inflated_not_a_lower_estimate():
     load, while the load (q/c = 6.6 here after 4 steps, 15.5 at the default
     caps) already exceeds Prandtl's exact 2 + pi.
     """
-    from skfem_npfem.scenes.strip_footing import locking_note
+    from skfem_npfem.scenes.footing.strip import locking_note
 
     with warnings.catch_warnings(record=True):
         warnings.simplefilter("always")
@@ -268,10 +268,7 @@ def test_fem_remap_p1_load_is_called_locking_inflated_not_a_lower_estimate():
 
 
 def test_density_is_rho_and_gravity_as_in_the_other_scenes():
-    """strip-footing took a unit weight ``gamma``, the other scenes rho, gravity.
-
-    ``gamma`` still works, with a deprecation message, as rho = gamma / g.
-    """
+    """strip-footing takes the density rho and gravity, as the other scenes do."""
     names = {
         s: {p.name for p in get_scene(s).params}
         for s in ("strip-footing", "column-collapse", "elastic-column")
@@ -280,11 +277,7 @@ def test_density_is_rho_and_gravity_as_in_the_other_scenes():
         assert {"rho", "gravity"} <= params and "gamma" not in params
     heavy = {"material": "mohr-coulomb", "c": 0, "phi": 30, "spacing": 0.25}
     heavy |= {"steps": 2, "plateau_tol": 0}
-    with pytest.warns(FutureWarning, match="parameter gamma is deprecated, use rho"):
-        old = run_scene("strip-footing", {**heavy, "gamma": "18000"})
-    assert old["parameters"]["rho"] == 18000 / 9.81
     new = run_scene("strip-footing", {**heavy, "rho": 18000 / 9.81})
-    assert new["metrics"]["bearing_factor"] == old["metrics"]["bearing_factor"]
     # N_gamma = q / (rho g b): the same load on the Moon is 6 times lighter.
     moon = run_scene("strip-footing", {**heavy, "rho": 18000 / 9.81, "gravity": 1.635})
     q_ratio = moon["metrics"]["q_ult"] / new["metrics"]["q_ult"]
@@ -292,5 +285,5 @@ def test_density_is_rho_and_gravity_as_in_the_other_scenes():
     assert moon["metrics"]["bearing_factor"] == pytest.approx(
         new["metrics"]["bearing_factor"], rel=1e-6
     )
-    with pytest.raises(ParameterError, match="not together with rho"):
-        get_scene("strip-footing").resolve({"gamma": 1.0, "rho": 2.0})
+    with pytest.raises(ParameterError, match="has parameters"):
+        get_scene("strip-footing").resolve({"gamma": 1.0})

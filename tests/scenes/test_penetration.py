@@ -119,7 +119,7 @@ def test_footing_penetration_keeps_particles_out_to_w_equal_b():
 
 
 def test_penetration_warning_past_half_a_spacing():
-    from skfem_npfem.scenes.penetration import penetration_warnings
+    from skfem_npfem.scenes.footing.penetration_common import penetration_warnings
 
     assert penetration_warnings(SCENE, 0.049, 0.1, 0.025) == []
     with pytest.warns(UserWarning, match="0.51 spacings inside the body"):

@@ -248,3 +248,24 @@ def test_parameter_help_says_what_each_scene_does():
     # K0: why the collapse keeps 0.5 and the footing follows phi.
     assert "not recomputed from phi" in params["column-collapse"]["K0"].help
     assert "1 - sin phi" in params["strip-footing"]["K0"].help
+
+
+def test_resolved_values_are_read_only_with_derived_defaults_filled():
+    # Each scene resolves its derived defaults once, before its run is built;
+    # the stages read the values and none can write one.
+    slope = get_scene("slope").resolve({})
+    assert slope["spacing"] == slope.spacing == 10.0 / 10
+    assert slope["dt"] is not None and slope["t_end"] is not None
+    footing = get_scene("strip-footing").resolve({"analysis": "limit"})
+    assert footing["spacing"] is not None and footing["domain"] is not None
+    column = get_scene("column-collapse").resolve({"geometry": "box"})
+    assert column["depth"] is not None
+    for values in (slope, footing, column):
+        with pytest.raises(TypeError):
+            values["spacing"] = 1.0  # type: ignore[index]
+        with pytest.raises(AttributeError):
+            values.spacing = 1.0  # type: ignore[misc]
+    # The summary's parameters are the resolved values, as a plain dict.
+    given = {"analysis": "limit", "spacing": 2.0}
+    summary = run_scene("slope", given)
+    assert summary["parameters"] == dict(get_scene("slope").resolve(given))

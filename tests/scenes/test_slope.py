@@ -244,7 +244,7 @@ def test_mechanism_is_saved_with_the_run_and_drawn_by_plot(tmp_path):
     """The scene writes the mechanism's data when it owns its folder; the
     drawing is the viz layer's (``skfem-npfem plot``), not the scene's."""
     pytest.importorskip("matplotlib")
-    from skfem_npfem.viz.plot import plot_mechanism
+    from skfem_npfem.viz.mechanism import plot_mechanism
 
     out = tmp_path / "slope"
     s = npfem.run_scene("slope", {**GRIFFITHS_LANE, "spacing": 2.0}, out=out)

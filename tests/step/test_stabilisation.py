@@ -174,7 +174,7 @@ def test_the_scene_refuses_the_stabilisation_with_another_method():
 
 def test_scene_defaults_stabilise_npfem_only():
     scene = get_scene("column-collapse")
-    from skfem_npfem.scenes.column_collapse import COLLAPSE_STABILISATION
+    from skfem_npfem.scenes.collapse.params import COLLAPSE_STABILISATION
 
     npfem = scene.build(scene.resolve({"spacing": 0.05}), out=None, progress=False)
     assert npfem.simulation.model.stabilisation == COLLAPSE_STABILISATION

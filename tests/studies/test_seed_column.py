@@ -184,8 +184,8 @@ def test_3d_volume_record_is_consistent():
     # docs/seed_column/volume_3d.json: the mesh at rest over sum(m)/rho is the
     # run's volume change (the same record, rounded to 4 digits), and the
     # r0/12 cases ran with the scene's 3D default and the one before.
-    from skfem_npfem.scenes.collapse_runs import CYLINDER_FIDELITY
-    from skfem_npfem.scenes.cylinder import GEOMETRY_ALPHA
+    from skfem_npfem.scenes.collapse.cylinder import GEOMETRY_ALPHA
+    from skfem_npfem.scenes.collapse.runs import CYLINDER_FIDELITY
 
     path = ROOT / "docs" / "seed_column" / "volume_3d.json"
     cases = json.loads(path.read_text())["cases"]
@@ -215,7 +215,7 @@ def test_bare_method_switches_the_cylindrical_defaults_off(geometry):
     # the buried slivers -- while the same scene without them has the
     # defaults of CYLINDER_FIDELITY.
     from skfem_npfem.scenes import get_scene
-    from skfem_npfem.scenes.collapse_runs import CYLINDER_FIDELITY, bare_method
+    from skfem_npfem.scenes.collapse.runs import CYLINDER_FIDELITY, bare_method
 
     scene = get_scene("column-collapse")
     base = {"geometry": geometry, "spacing": 0.039 / 4}

@@ -20,12 +20,10 @@ ImageSequence = pytest.importorskip("PIL.ImageSequence")
 
 from skfem_npfem.errors import CheckpointError, NpfemError, ParameterError  # noqa: E402
 from skfem_npfem.io import ResultWriter  # noqa: E402
-from skfem_npfem.viz.plot import (  # noqa: E402
-    FIELDS,
-    _frame_indices,
-    _style,
-    plot_results,
-)
+from skfem_npfem.viz.colours import _style  # noqa: E402
+from skfem_npfem.viz.loading import FIELDS  # noqa: E402
+from skfem_npfem.viz.plot import plot_results  # noqa: E402
+from skfem_npfem.viz.snapshots import _frame_indices  # noqa: E402
 
 pytestmark = pytest.mark.viz
 

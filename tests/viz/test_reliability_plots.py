@@ -21,8 +21,8 @@ pytest.importorskip("PIL")
 
 from skfem_npfem.cli import main
 from skfem_npfem.io import ResultWriter, write_checkpoint
+from skfem_npfem.laws import lube2005_runout as lube_runout
 from skfem_npfem.particles import Particles
-from skfem_npfem.scenes.column_collapse import lube_runout
 from skfem_npfem.viz.colours import _robust_range, _style
 from skfem_npfem.viz.figures import Frames2D, crop, load_settlement_figure
 from skfem_npfem.viz.loading import _load
@@ -172,7 +172,7 @@ def footing_dir(tmp_path_factory) -> Path:
         "material": "tresca",
         "c": 1e4,
         "phi": 0.0,
-        "gamma": 0.0,
+        "rho": 0.0,
         "half_width": b,
         "domain": domain,
     }

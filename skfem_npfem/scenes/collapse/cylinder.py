@@ -36,16 +36,16 @@ from typing import Any
 
 import numpy as np
 
-from ..boundary import RigidWall, floor, wall_x
-from ..constants import GRAVITY
-from ..errors import ParameterError
-from ..materials import DruckerPrager
-from ..mesh.axisymmetric import AxisymmetricMohrCoulomb, axisymmetric_integration
-from ..mesh.smoothing import nodal_integration
-from ..mesh.sources import AlphaShapeMesher
-from ..particles import Particles
-from ..step.model import Model
-from ..step.solver import SolverOptions
+from ...boundary import RigidWall, floor, wall_x
+from ...constants import GRAVITY
+from ...errors import ParameterError
+from ...materials import DruckerPrager
+from ...mesh.axisymmetric import AxisymmetricMohrCoulomb, axisymmetric_integration
+from ...mesh.smoothing import nodal_integration
+from ...mesh.sources import AlphaShapeMesher
+from ...particles import Particles
+from ...step.model import Model
+from ...step.solver import SolverOptions
 
 __all__ = [
     "GEOMETRIES",
@@ -245,7 +245,7 @@ class ColumnSetup:
     """A ready column problem: particles, model, remesher and time step.
 
     Built by :func:`cylinder_column` or, for the 3D slab,
-    :func:`~skfem_npfem.scenes.box_column.box_column`.
+    :func:`~skfem_npfem.scenes.collapse.box_column.box_column`.
 
     Attributes
     ----------

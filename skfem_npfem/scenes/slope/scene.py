@@ -32,43 +32,32 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..constants import GRAVITY
-from ..mesh.regions import CrossSection
-from ..mesh.smoothing import nodal_integration
-from ..mesh.sources import AlphaShapeMesher, FixedMesh
-from ..particles import Particles
-from ..run.simulation import AtRest, Simulation
-from .base import Param, Scene, SceneRun
-from .common import elastic_params, fidelity_params, make_writer, solver_params
-from .limit_mode import LIMIT_METRICS, analysis_param
-from .params import POSITIVE
-from .scenery import Scenery, number
-from .slope_runout import (  # noqa: F401
-    deposit_factor_of_safety,
-    deposit_slopes,
+from ...constants import GRAVITY
+from ...mesh.regions import CrossSection, fill_regions
+from ...mesh.smoothing import nodal_integration
+from ...mesh.sources import AlphaShapeMesher, FixedMesh
+from ...particles import Particles
+from ...run.rest import AtRest
+from ...run.simulation import Simulation
+from ..base import Scene, SceneRun
+from ..common import elastic_params, fidelity_params, make_writer, solver_params
+from ..limit_mode import LIMIT_METRICS, analysis_param
+from ..params import POSITIVE, Param, Values
+from ..scenery import Scenery, number
+from .runout import (
     runout_metrics,
-    save_mechanism,
 )
-from .slope_section import (  # noqa: F401
-    _area,
-    _dedupe,
-    _surface_height,
-    parametric_section,
-    section_materials,
-    section_of,
-    supports,
-)
-from .slope_stages import (  # noqa: F401
-    factor_of_safety,
+from .section import check_section, section_of
+from .stages import (
     flow_model,
     fos_metrics,
     initial_stress,
-    reduced_strength_flow,
     slope_body,
 )
 
@@ -258,16 +247,40 @@ def base_metrics(
     }
 
 
+def resolve_values(values: dict[str, Any]) -> None:
+    """The slope's derived defaults, in place: ``spacing``, ``dt``, ``t_end``.
+
+    The spacing defaults to H/10 (a section file: its tallest region / 20);
+    ``dt`` to ``0.02 sqrt(H/g)`` and ``t_end`` to ``15 sqrt(H/g)`` with the
+    height H of the section filled at that spacing.  A section too large for
+    the machine, or with regions too thin for the spacing, is refused here.
+
+    Parameters
+    ----------
+    values : dict
+        The checked parameter values (defaults and overrides).
+    """
+    sec, default_h = section_of(values)
+    h = values["spacing"] if values["spacing"] is not None else default_h
+    values["spacing"] = h
+    check_section(sec, h, values)
+    if values["dt"] is None or values["t_end"] is None:
+        H = float(np.ptp(fill_regions(sec.regions, h)[0][:, 1]))
+        if values["dt"] is None:
+            values["dt"] = 0.02 * math.sqrt(H / GRAVITY)
+        if values["t_end"] is None:
+            values["t_end"] = 15 * math.sqrt(H / GRAVITY)
+
+
 def build(
-    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
+    values: Values, out: Path | None = None, progress=None, resume: bool = False
 ) -> SceneRun:
     """Build the slope's staged run (or its limit analysis only).
 
     Parameters
     ----------
-    values : dict
-        The scene's parameter values (``dt`` and ``t_end`` filled in when
-        unset).
+    values : Values
+        The scene's resolved parameter values (:func:`resolve_values`).
     out : Path, optional
         Output folder.
     progress : callable, optional
@@ -284,10 +297,6 @@ def build(
     body = slope_body(values)
     pts, material, fixed = body.pts, body.material, body.fixed
     H = float(np.ptp(pts[:, 1]))
-    if values["dt"] is None:
-        values["dt"] = 0.02 * math.sqrt(H / GRAVITY)
-    if values["t_end"] is None:
-        values["t_end"] = 15 * math.sqrt(H / GRAVITY)
     limit_only = values["analysis"] == "limit"
     state: dict[str, Any] = {}
     if limit_only:
@@ -315,7 +324,7 @@ def build(
         max_displacement=values["max_displacement"],
         writer=make_writer(out, resume),
         progress=progress,
-        meta={"scene": "slope", "parameters": values},
+        meta={"scene": "slope", "parameters": dict(values)},
     )
     toe_crest = _toe_and_crest(body.sec, values)
 
@@ -333,7 +342,7 @@ def build(
     return SceneRun(sim, {"t_end": values["t_end"], "stop": stop}, metrics)
 
 
-def _toe_and_crest(sec: CrossSection, values: dict[str, Any]):
+def _toe_and_crest(sec: CrossSection, values: Mapping[str, Any]):
     """Toe and crest points of the section (parametric: exact; file: estimated)."""
     if not values["geometry"]:
         H, D = values["height"], values["foundation_depth"]
@@ -372,4 +381,5 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=slope_scenery,
+    derive=resolve_values,
 )

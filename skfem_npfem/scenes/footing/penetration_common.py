@@ -1,7 +1,7 @@
 """What the penetration scenes share: graded lattices, interfaces, reports.
 
-The footing (:mod:`~skfem_npfem.scenes.penetration`) and the cone
-(:mod:`~skfem_npfem.scenes.cone`) build their soil on a graded lattice (its
+The footing (:mod:`~skfem_npfem.scenes.footing.penetration`) and the cone
+(:mod:`~skfem_npfem.scenes.footing.cone`) build their soil on a graded lattice (its
 growth is the strip footing's too), turn
 the ``interface`` choice into an adhesion, warn about what makes a run's
 loads doubtful, and the cone reads its steady factor off the curve.
@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Mapping
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -73,7 +74,7 @@ def axis_count(fine: float, h: float, length: float, ratio: float) -> float:
     return n_fine + 1 + grown_count(max(length - n_fine * h, 0.0), h, ratio)
 
 
-def interface_adhesion(values: dict[str, Any]) -> float:
+def interface_adhesion(values: Mapping[str, Any]) -> float:
     """Interface strength (Pa) of the ``interface`` choice."""
     choice = values["interface"]
     if choice == "smooth":
@@ -104,7 +105,7 @@ def penetration_warnings(
     return [msg]
 
 
-def locking_warnings(values: dict[str, Any]) -> list[str]:
+def locking_warnings(values: Mapping[str, Any]) -> list[str]:
     """A warning when FEM-remap runs with P1 elements, which lock here.
 
     Tresca flow is isochoric, and constant-strain triangles cannot deform at

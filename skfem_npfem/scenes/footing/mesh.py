@@ -9,17 +9,16 @@ move down at unit pseudo-speed.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 from skfem import MeshTri
 
-from ..errors import ParameterError
-from ..mesh.smoothing import nodal_integration
-from ..particles import Particles
-from .common import (
-    check_size,
-)
+from ...errors import ParameterError
+from ...mesh.smoothing import nodal_integration
+from ...particles import Particles
+from ..limits import check_size
 from .penetration_common import grow_axis, grown_count
 
 #: Default element size under the footing and block size / b (incremental).
@@ -55,7 +54,7 @@ def graded_count(b: float, h: float, length: float, ratio: float) -> float:
     return n_fine + 1 + grown_count(max(length - n_fine * h, 0.0), h, ratio)
 
 
-def soil_mesh(values: dict[str, Any]) -> MeshTri:
+def soil_mesh(values: Mapping[str, Any]) -> MeshTri:
     """The graded ``domain*b`` square block, surface at ``y = domain*b``."""
     b, h = values["half_width"], values["spacing"]
     if h > b / 2:
@@ -69,7 +68,7 @@ def soil_mesh(values: dict[str, Any]) -> MeshTri:
 
 
 def soil_particles(
-    values: dict[str, Any], mesh: MeshTri, phi: float
+    values: Mapping[str, Any], mesh: MeshTri, phi: float
 ) -> tuple[Particles, np.ndarray]:
     """Particles at the mesh nodes with the geostatic stress; the footing mask.
 
@@ -100,7 +99,7 @@ def soil_particles(
     return particles.replace(v_prescribed=vp), foot
 
 
-def unit_weight(values: dict[str, Any]) -> float:
+def unit_weight(values: Mapping[str, Any]) -> float:
     """Unit weight ``gamma = rho g`` of the soil, N/m^3 (0: weightless)."""
     return values["rho"] * values["gravity"]
 

@@ -10,14 +10,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..constants import GRAVITY
-from ..errors import CheckpointError
-from ..io import latest_checkpoint, load_checkpoint
-from ..laws import prandtl_nc
-from .footing_mesh import (
+from ...constants import GRAVITY
+from ...errors import CheckpointError
+from ...io import latest_checkpoint, load_checkpoint
+from ...laws import prandtl_nc
+from ..scenery import Scenery, box, number
+from .mesh import (
     resolve_defaults,
 )
-from .scenery import Scenery, box, number
 
 __all__ = ["footing_scenery", "saved_load_curve"]
 
@@ -42,10 +42,8 @@ def footing_scenery(p: dict, folder: Path | None = None) -> Scenery:
     s.footing = (0.0, b, L)
     s.label = s.settlement_label
     c, phi = number(p, "c", 0.0), number(p, "phi", 0.0)
-    # unit weight rho g (a result of an older version: its parameter gamma)
-    gamma = number(p, "gamma", 0.0) or number(p, "rho", 0.0) * (
-        number(p, "gravity", GRAVITY) or GRAVITY
-    )
+    # unit weight rho g
+    gamma = number(p, "rho", 0.0) * (number(p, "gravity", GRAVITY) or GRAVITY)
     if p.get("material") == "tresca":
         phi = 0.0
     if gamma == 0 and c and c > 0:

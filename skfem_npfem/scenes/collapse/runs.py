@@ -1,7 +1,7 @@
 """Runs of the column-collapse scene for the axisymmetric and 3D geometries.
 
 :func:`build_geometry` turns resolved scene values
-(:mod:`.collapse_geometry`) into a :class:`~skfem_npfem.scenes.base.SceneRun`
+(:mod:`.geometry`) into a :class:`~skfem_npfem.scenes.base.SceneRun`
 with the same time loop as the plane-strain scene: adaptive time step (halved
 on a solver failure), VTU output and checkpoints, and the stop at rest.  A
 callback records per step the run-out and the height of the main body on the
@@ -10,7 +10,7 @@ step record, :func:`~.methods.with_method` the stress roughness
 records.
 
 :data:`COLUMN_COLLAPSE` is the scene registered as ``column-collapse``: the
-plane-strain scene of :mod:`.column_collapse` extended by the ``geometry``
+plane-strain scene of :mod:`.plane_strain` extended by the ``geometry``
 parameters; plane strain runs the plane-strain build unchanged.
 """
 
@@ -18,48 +18,48 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..constants import GRAVITY
-from ..laws import lajeunesse2004_runout, lube2004_runout
-from ..laws import lube2005_runout as lube_runout
-from ..mesh.sources import main_body
-from ..run.simulation import AtRest, Simulation
-from ..step.stages import Step
-from .base import Scene, SceneRun
+from ...constants import GRAVITY
+from ...laws import lajeunesse2004_runout, lube2004_runout
+from ...laws import lube2005_runout as lube_runout
+from ...mesh.sources import main_body
+from ...run.rest import AtRest
+from ...run.simulation import Simulation
+from ...step.records import Step
+from ..base import Scene, SceneRun
+from ..common import fidelity_from, solver_from
+from ..methods import with_method
+from ..params import Values
+from ..scenery import Scenery, box, number, time_label
 from .box_column import box_column
-from .collapse_geometry import (
+from .cylinder import ColumnSetup, cylinder_column, mass_quantile, radial_front
+from .geometry import (
     CYLINDRICAL,
     GEOMETRY_PARAMS,
     GeometryScene,
     metrics_doc,
 )
-from .column_collapse import (
-    COLLAPSE_VOLUME_CORRECTION,
-    VOLUME_CORRECTION_STRAIN,
-    collapse_scenery,
-    collapse_simulation,
+from .params import COLLAPSE_VOLUME_CORRECTION, VOLUME_CORRECTION_STRAIN
+from .plane_strain import SCENE as PLANE_STRAIN
+from .plane_strain import collapse_scenery, collapse_simulation, run_control
+from .runout import (
     collapse_time,
     detached_fraction,
     detached_warnings,
+    picture_front,
     rest_warnings,
-    run_control,
 )
-from .column_collapse import SCENE as PLANE_STRAIN
-from .common import fidelity_from, solver_from
-from .cylinder import ColumnSetup, cylinder_column, mass_quantile, radial_front
-from .methods import with_method
-from .scenery import Scenery, box, number, time_label
 
 __all__ = [
     "COLUMN_COLLAPSE",
     "bare_method",
     "build_geometry",
-    "lube2004_runout",
     "with_geometries",
 ]
 
@@ -76,7 +76,7 @@ MASS_BASIS = {
 #: measurements on the seed column (docs/seed_column.md, "Smooth and
 #: volume-keeping by default" and "The 3D default to rest").  The 3D quarter
 #: goes with the alpha-shape factor 2.0
-#: (:data:`~skfem_npfem.scenes.cylinder.GEOMETRY_ALPHA`).  The reference
+#: (:data:`~skfem_npfem.scenes.collapse.cylinder.GEOMETRY_ALPHA`).  The reference
 #: paper's bare method is ``--set stabilisation=0 --set volume_correction=0``.
 CYLINDER_FIDELITY = {
     "axisymmetric": (100.0, "full", COLLAPSE_VOLUME_CORRECTION),
@@ -115,7 +115,7 @@ def bare_method(geometry: str) -> dict[str, Any]:
     return bare
 
 
-def column_setup(values: dict[str, Any]) -> ColumnSetup:
+def column_setup(values: Mapping[str, Any]) -> ColumnSetup:
     """Particles, model and remesher of a resolved axisymmetric or 3D column.
 
     The node-mass rule, the stabilisation and the volume correction
@@ -141,7 +141,7 @@ def column_setup(values: dict[str, Any]) -> ColumnSetup:
     return replace(setup, model=replace(setup.model, **fidelity))
 
 
-def _column_setup(values: dict[str, Any]) -> ColumnSetup:
+def _column_setup(values: Mapping[str, Any]) -> ColumnSetup:
     geo = values["geometry"]
     soil = {
         k: values[k]
@@ -182,7 +182,7 @@ def _front(geo: str, x: np.ndarray, mass: np.ndarray, symmetric: bool) -> float:
     return 0.5 * (hi - lo)
 
 
-def _recorder(values: dict[str, Any], h: float):
+def _recorder(values: Mapping[str, Any], h: float):
     """Callback storing the run-out and the height of the main body on each record.
 
     (The stress roughness is recorded by :func:`~.methods.with_method`, as for
@@ -213,7 +213,7 @@ def _recorder(values: dict[str, Any], h: float):
     return record
 
 
-def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
+def _metrics(values: Mapping[str, Any], h: float, stop: AtRest | None):
     """The summary metrics of a finished run (GEOMETRY_METRICS and the shared)."""
     geo = values["geometry"]
     cyl = geo in CYLINDRICAL
@@ -268,7 +268,7 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
 
 
 def build_geometry(
-    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
+    values: Values, out: Path | None = None, progress=None, resume: bool = False
 ) -> SceneRun:
     """Build an axisymmetric or 3D column-collapse run (resolved values)."""
     setup = column_setup(values)
@@ -316,7 +316,7 @@ def with_geometries(plane: Scene) -> GeometryScene:
     """The plane-strain column-collapse scene extended by ``geometry``."""
 
     def build(
-        values: dict[str, Any],
+        values: Values,
         out: Path | None = None,
         progress=None,
         resume: bool = False,
@@ -337,7 +337,6 @@ def with_geometries(plane: Scene) -> GeometryScene:
         metrics_doc=metrics_doc(plane.metrics_doc),
         plane_names=names,
         scenery=geometry_scenery,
-        renamed=plane.renamed,
     )
 
 
@@ -380,6 +379,7 @@ def geometry_scenery(p: dict, folder: Path | None = None) -> Scenery:
     s.field_names = dict(AXISYMMETRIC_FIELDS)
     s.runout_reference = r0 * (1.0 + lube2004_runout(h0 / r0))
     s.runout_label = "Lube et al. 2004: r\u221e"
+    s.front = picture_front
     s.tau = math.sqrt(h0 / g)
     s.label = time_label(s.tau, "h0")
     return s

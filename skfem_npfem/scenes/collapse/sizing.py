@@ -10,11 +10,15 @@ first.  :func:`lattice_particles` counts the lattices of
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 __all__ = ["lattice_particles"]
 
 
-def lattice_particles(geometry: str, values: dict, spacing: float) -> float:
+def lattice_particles(
+    geometry: str, values: Mapping[str, Any], spacing: float
+) -> float:
     """Particles of a column's lattice (estimated without building it).
 
     ``values`` holds ``radius`` and ``height`` (cylindrical geometries) or

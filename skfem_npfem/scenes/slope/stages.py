@@ -1,6 +1,6 @@
 """The slope scene's stages: particles, initial stresses, factor of safety, run-out.
 
-:mod:`.slope` builds the run from them.
+:mod:`.scene` builds the run from them.
 
 Stage 1 (:func:`initial_stress`) switches gravity on in one elastic static
 step or sets ``K0`` stresses; stage 2 (:func:`factor_of_safety`,
@@ -12,6 +12,7 @@ by the run-out's factor (:func:`reduced_strength_flow`).
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -19,19 +20,19 @@ from typing import Any
 import numpy as np
 from skfem import MeshTri
 
-from ..boundary import Contacts
-from ..constants import GRAVITY
-from ..limit.safety import SafetyResult, reduced_strength, strength_reduction
-from ..materials import LinearElastic, Material
-from ..mesh.regions import CrossSection, fill_regions
-from ..mesh.smoothing import nodal_integration
-from ..step.conic import solve_step
-from ..step.model import Model
-from ..step.program import ConeInput
-from .common import fidelity_from, solver_from
-from .limit_mode import limit_metrics
-from .slope_runout import save_mechanism
-from .slope_section import _surface_height, section_materials, section_of, supports
+from ...boundary import Contacts
+from ...constants import GRAVITY
+from ...limit.safety import SafetyResult, reduced_strength, strength_reduction
+from ...materials import LinearElastic, Material
+from ...mesh.regions import CrossSection, fill_regions
+from ...mesh.smoothing import nodal_integration
+from ...step.conic import solve_step
+from ...step.model import Model
+from ...step.program import ConeInput
+from ..common import fidelity_from, solver_from
+from ..limit_mode import limit_metrics
+from .runout import save_mechanism
+from .section import _surface_height, section_materials, section_of, supports
 
 __all__ = [
     "SlopeBody",
@@ -45,7 +46,7 @@ __all__ = [
 
 
 def initial_stress(
-    values: dict[str, Any],
+    values: Mapping[str, Any],
     mesh: MeshTri,
     mats: list[Material],
     material: np.ndarray,
@@ -55,7 +56,7 @@ def initial_stress(
 
     Parameters
     ----------
-    values : dict
+    values : mapping
         The scene's parameter values (``initial_stress``: gravity or k0, ``K0``).
     mesh : MeshTri
         The particles' mesh.
@@ -108,7 +109,7 @@ def initial_stress(
 
 
 def factor_of_safety(
-    values: dict[str, Any],
+    values: Mapping[str, Any],
     mesh: MeshTri,
     mats: list[Material],
     material: np.ndarray,
@@ -171,19 +172,20 @@ class SlopeBody:
     mats: list[Material]
 
 
-def slope_body(values: dict[str, Any]) -> SlopeBody:
+def slope_body(values: Mapping[str, Any]) -> SlopeBody:
     """The section of ``values`` (parametric or a file) filled at the spacing.
 
     Parameters
     ----------
-    values : dict
+    values : mapping
         The scene's parameter values.
 
     Returns
     -------
     SlopeBody
     """
-    sec, h = section_of(values)
+    sec, _ = section_of(values)
+    h = values["spacing"]
     pts, tri, region = fill_regions(sec.regions, h)
     names = list(sec.materials)
     material = np.array([names.index(sec.regions[r].material) for r in region])
@@ -194,7 +196,7 @@ def slope_body(values: dict[str, Any]) -> SlopeBody:
 
 
 def fos_metrics(
-    values: dict[str, Any], body: SlopeBody, state: dict[str, Any], out: Path | None
+    values: Mapping[str, Any], body: SlopeBody, state: dict[str, Any], out: Path | None
 ) -> dict[str, Any]:
     """Stage 2 once: the factor of safety's metrics, kept in ``state``.
 
@@ -204,7 +206,7 @@ def fos_metrics(
 
     Parameters
     ----------
-    values : dict
+    values : mapping
         The scene's parameter values.
     body : SlopeBody
         The slope's particles and mesh.
@@ -245,7 +247,7 @@ def fos_metrics(
 
 
 def flow_model(
-    values: dict[str, Any],
+    values: Mapping[str, Any],
     body: SlopeBody,
     state: dict[str, Any],
     out: Path | None,
@@ -260,7 +262,7 @@ def flow_model(
 
     Parameters
     ----------
-    values : dict
+    values : mapping
         The scene's parameter values.
     body : SlopeBody
         The slope's section and particles.

@@ -24,32 +24,35 @@ compares the three curves.
 
 from __future__ import annotations
 
+import json
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from skfem import MeshTri
 
-from ..boundary import RigidBody
-from ..errors import ParameterError
-from ..laws import prandtl_nc
-from ..materials import Tresca
-from ..mesh.smoothing import nodal_integration
-from ..mesh.sources import AlphaShapeMesher
-from ..particles import Particles
-from ..run.simulation import Simulation
-from ..step.model import Model
-from .base import Param, Scene, SceneRun
-from .common import (
-    check_size,
+from ...boundary import RigidBody
+from ...errors import ParameterError
+from ...laws import prandtl_nc
+from ...materials import Tresca
+from ...mesh.smoothing import nodal_integration
+from ...mesh.sources import AlphaShapeMesher
+from ...particles import Particles
+from ...run.simulation import Simulation
+from ...step.model import Model
+from ..base import Scene, SceneRun
+from ..common import (
     fidelity_from,
     fidelity_params,
     make_writer,
     solver_from,
     solver_params,
 )
-from .methods import METHOD_METRICS, method_params, with_method
-from .params import POSITIVE
+from ..limits import check_size
+from ..methods import METHOD_METRICS, method_params, with_method
+from ..params import POSITIVE, Param, Values
+from ..scenery import Scenery, box, number
 from .penetration_common import (
     axis_count,
     graded_axis,
@@ -57,7 +60,6 @@ from .penetration_common import (
     locking_warnings,
     penetration_warnings,
 )
-from .scenery import Scenery, box, number
 
 __all__ = [
     "INTERFACES",
@@ -184,12 +186,12 @@ METRICS = {
 }
 
 
-def _penetration(values: dict[str, Any]) -> float:
+def _penetration(values: Mapping[str, Any]) -> float:
     w = values["penetration"]
     return values["width"] if w is None else w
 
 
-def _geometry(values: dict[str, Any]) -> tuple[float, float, float, float]:
+def _geometry(values: Mapping[str, Any]) -> tuple[float, float, float, float]:
     """``(B, half width of the soil, depth of the soil, final penetration)``."""
     B = values["width"]
     return (
@@ -200,7 +202,7 @@ def _geometry(values: dict[str, Any]) -> tuple[float, float, float, float]:
     )
 
 
-def check(values: dict[str, Any]) -> float:
+def check(values: Mapping[str, Any]) -> float:
     """Refuse bad combinations before anything is built; return ``dt``."""
     B, half, depth, w = _geometry(values)
     h = values["spacing"]
@@ -229,7 +231,7 @@ def check(values: dict[str, Any]) -> float:
     return dt
 
 
-def soil(values: dict[str, Any]) -> tuple[Particles, np.ndarray, MeshTri]:
+def soil(values: Mapping[str, Any]) -> tuple[Particles, np.ndarray, MeshTri]:
     """The graded lattice as particles, and each particle's spacing."""
     B, half, depth, w = _geometry(values)
     h, ratio = values["spacing"], values["grading"]
@@ -255,7 +257,7 @@ def soil(values: dict[str, Any]) -> tuple[Particles, np.ndarray, MeshTri]:
     return p, spacing, mesh
 
 
-def footing_body(values: dict[str, Any]) -> RigidBody:
+def footing_body(values: Mapping[str, Any]) -> RigidBody:
     """The footing at time 0: resting on the surface, moving down at ``speed``."""
     B, _, depth, w = _geometry(values)
     height = w + B
@@ -274,7 +276,7 @@ def footing_body(values: dict[str, Any]) -> RigidBody:
 
 
 def build(
-    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
+    values: Values, out: Path | None = None, progress=None, resume: bool = False
 ) -> SceneRun:
     """Build the footing-penetration simulation."""
     dt = check(values)
@@ -300,7 +302,7 @@ def build(
         dt,
         writer=make_writer(out, resume),
         progress=progress,
-        meta={"scene": "footing-penetration", "parameters": values},
+        meta={"scene": "footing-penetration", "parameters": dict(values)},
     )
     t_end = w / values["speed"]
     surface = particles.x[:, 1] >= particles.x[:, 1].max() - 1e-9
@@ -412,8 +414,6 @@ def penetration_scenery(p: dict, folder: Path | None = None) -> Scenery:
 
 def _saved_curve(folder: Path, B: float, su: float) -> np.ndarray | None:
     """``[w, q]`` rows of a finished run's summary (None without one)."""
-    import json
-
     try:
         data = json.loads((folder / "summary.json").read_text())
         c = np.array(data["metrics"]["curve"], dtype=float).reshape(-1, 2)

@@ -2,7 +2,7 @@
 
 ``column-collapse --set geometry=plane-strain|axisymmetric|quarter-cylinder|box``:
 
-* ``plane-strain`` (default): :mod:`skfem_npfem.scenes.column_collapse`,
+* ``plane-strain`` (default): :mod:`skfem_npfem.scenes.collapse.plane_strain`,
   unchanged (the same particles, steps and metrics);
 * ``axisymmetric``: a cylindrical column as the ``(r, z)`` half-section of
   :mod:`skfem_npfem.mesh.axisymmetric` (masses and volumes of the full ring);
@@ -13,7 +13,7 @@
   (:mod:`.box_column`).
 
 The cylindrical geometries default to the reference paper's seed column
-(:data:`~skfem_npfem.scenes.cylinder.SEED`: ``r0 = 3.9`` cm, ``h0 = 7.8`` cm,
+(:data:`~skfem_npfem.scenes.collapse.cylinder.SEED`: ``r0 = 3.9`` cm, ``h0 = 7.8`` cm,
 the soil of the plane-strain defaults, ``dt = 2`` ms, Drucker-Prager matched to
 Mohr-Coulomb in triaxial compression, spacing ``r0/18``).  Two of ``radius``,
 ``height`` and ``aspect`` fix the third; the defaults fill ``radius`` first,
@@ -23,21 +23,23 @@ explicitly, is refused (``aspect`` with both ``radius`` and ``height``,
 above ``r0/4`` or a run whose estimated memory exceeds the machine's
 (:func:`~.limits.check_size` with the particle count of :mod:`.sizing`).
 :class:`GeometryScene` is a scene whose :meth:`~GeometryScene.resolve` knows
-which parameters were given; :mod:`.collapse_runs` builds the runs.
+which parameters were given; :mod:`.runs` builds the runs.
 """
 
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from ..errors import ParameterError
-from .base import Param, Scene
+from ...errors import ParameterError
+from ..base import Scene
+from ..common import check_soil
+from ..limits import LENGTH, check_size
+from ..params import Param, Values
 from .box_column import DEPTH_SPACINGS
-from .common import check_soil
 from .cylinder import GEOMETRY_ALPHA, SEED, SEED_DIVISIONS
-from .limits import LENGTH, check_size
 from .sizing import lattice_particles
 
 __all__ = [
@@ -308,7 +310,7 @@ def _material(values: dict[str, Any], given: frozenset[str]) -> None:
         values["dp_match"] = "plane-strain" if geo == "box" else "compression"
 
 
-def _check_values(values: dict[str, Any]) -> None:
+def _check_values(values: Mapping[str, Any]) -> None:
     """Material and time-integration checks (as the plane-strain scene's)."""
     check_soil(values)
     if values["geometry"] == "box":
@@ -341,9 +343,8 @@ class GeometryScene(Scene):
     #: Names of the plane-strain scene's parameters.
     plane_names: frozenset[str] = frozenset()
 
-    def resolve(self, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
+    def resolve(self, overrides: Mapping[str, Any] | None = None) -> Values:
         """Defaults updated with validated overrides, then the geometry rules."""
-        overrides = self.translate(overrides)
-        values = super().resolve(overrides)
+        values = self.checked(overrides)
         finalize(values, frozenset(overrides or {}), self.plane_names)
-        return values
+        return Values(values)

@@ -11,11 +11,13 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
-from ..run.simulation import AtRest, Simulation
+from ...run.rest import AtRest
+from ...run.simulation import Simulation
 
 __all__ = [
     "DETACHED_WARNING",
@@ -24,6 +26,7 @@ __all__ = [
     "detached_warnings",
     "front",
     "mass_front",
+    "picture_front",
     "rest_warnings",
 ]
 
@@ -45,6 +48,13 @@ def mass_front(x: np.ndarray, mass: np.ndarray, symmetric: bool) -> float:
     if symmetric:
         return quantile(0.99)
     return 0.5 * (quantile(0.995) - quantile(0.005))
+
+
+def picture_front(
+    points: np.ndarray, mass: np.ndarray, symmetric: bool = True
+) -> float:
+    """:func:`mass_front` of a picture's step: its points' (x, y) and masses."""
+    return float(mass_front(np.asarray(points)[:, :2], np.asarray(mass), symmetric))
 
 
 def front(x: np.ndarray, body: np.ndarray, symmetric: bool) -> tuple[float, float]:
@@ -97,7 +107,7 @@ def collapse_time(times: np.ndarray, runout: np.ndarray, tol: float) -> float:
     return float(times[min(k, times.size - 1)])
 
 
-def rest_warnings(sim_: Simulation, values: dict[str, Any], stop: AtRest | None):
+def rest_warnings(sim_: Simulation, values: Mapping[str, Any], stop: AtRest | None):
     """One warning if the run reached ``t_end`` before the at-rest rule stopped it.
 
     Also issued as a :class:`UserWarning` (the CLI prints it on stderr).  None

@@ -9,23 +9,23 @@ gravity switch-on the top oscillates with the first oedometric period
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from skfem import MeshTet, MeshTri
 
-from ..constants import GRAVITY
-from ..errors import ParameterError
-from ..materials import LinearElastic
-from ..mesh.smoothing import nodal_integration
-from ..mesh.sources import FixedMesh
-from ..particles import Particles
-from ..run.simulation import Simulation
-from ..step.model import Model
-from .base import Param, Scene, SceneRun
-from .common import (
-    check_size,
+from ...constants import GRAVITY
+from ...errors import ParameterError
+from ...materials import LinearElastic
+from ...mesh.smoothing import nodal_integration
+from ...mesh.sources import FixedMesh
+from ...particles import Particles
+from ...run.simulation import Simulation
+from ...step.model import Model
+from ..base import Scene, SceneRun
+from ..common import (
     elastic_params,
     fidelity_from,
     fidelity_params,
@@ -33,9 +33,10 @@ from .common import (
     solver_from,
     solver_params,
 )
-from .limits import SPACING
-from .methods import METHOD_METRICS, method_params, with_method
-from .scenery import Scenery, box, number
+from ..limits import SPACING, check_size
+from ..methods import METHOD_METRICS, method_params, with_method
+from ..params import Param, Values
+from ..scenery import Scenery, box, number
 
 PARAMS = [
     Param("dim", 2, "-", "spatial dimension (2: plane strain, 3: 3D)", int, (2, 3)),
@@ -102,7 +103,7 @@ def column_mesh(dim: int, width: float, height: float, spacing: float):
 MAX_ELASTIC_STRAIN = 60.0
 
 
-def check_values(values: dict[str, Any]) -> None:
+def check_values(values: Mapping[str, Any]) -> None:
     """Refuse a column too coarse, too big or too soft for its own weight."""
     dim, H, W, h = values["dim"], values["height"], values["width"], values["spacing"]
     if h > H / 4:
@@ -128,7 +129,7 @@ def check_values(values: dict[str, Any]) -> None:
 
 
 def build(
-    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
+    values: Values, out: Path | None = None, progress=None, resume: bool = False
 ) -> SceneRun:
     """Build the elastic column simulation."""
     check_values(values)
@@ -159,7 +160,7 @@ def build(
         values["dt"],
         writer=make_writer(out, resume),
         progress=progress,
-        meta={"scene": "elastic-column", "parameters": values},
+        meta={"scene": "elastic-column", "parameters": dict(values)},
     )
     top = np.isclose(x[:, -1], H)
 

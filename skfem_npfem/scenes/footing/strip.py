@@ -7,7 +7,7 @@ the surface particles at ``x <= b`` down; it is smooth (horizontal motion free)
 or rough (horizontal motion fixed).  The footing pressure is the sum of the
 vertical reactions over ``b``.
 
-Settlement steps (:mod:`~skfem_npfem.scenes.plateau`): ``steps`` equal steps
+Settlement steps (:mod:`~skfem_npfem.scenes.footing.plateau`): ``steps`` equal steps
 reach ``settlement``; the run then goes on with growing increments until the
 load curve is flat (the load changes by at most ``plateau_tol`` while the
 settlement doubles) or a cap (``max_settlement``, ``max_steps``) stops it with a
@@ -21,23 +21,24 @@ References (weightless soil): Prandtl ``q/c = 2 + pi``; Mohr-Coulomb
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from skfem import MeshTri
 
-from ..errors import ParameterError
-from ..laws import prandtl_nc
-from ..limit.analysis import limit_analysis
-from ..materials import DruckerPrager, Material, MohrCoulomb, Tresca
-from ..mesh.smoothing import nodal_integration
-from ..mesh.sources import FixedMesh
-from ..particles import Particles
-from ..run.simulation import Simulation
-from ..step.model import Model
-from .base import Param, Renamed, Scene, SceneRun
-from .common import (
+from ...errors import ParameterError
+from ...laws import prandtl_nc
+from ...limit.analysis import limit_analysis
+from ...materials import DruckerPrager, Material, MohrCoulomb, Tresca
+from ...mesh.smoothing import nodal_integration
+from ...mesh.sources import FixedMesh
+from ...particles import Particles
+from ...run.simulation import Simulation
+from ...step.model import Model
+from ..base import Scene, SceneRun
+from ..common import (
     elastic_params,
     fidelity_from,
     fidelity_params,
@@ -45,30 +46,28 @@ from .common import (
     solver_from,
     solver_params,
 )
-from .footing_mesh import (  # noqa: F401
-    DEFAULT_DOMAIN,
-    DEFAULT_SPACING,
-    LIMIT_DOMAIN,
-    LIMIT_SPACING,
-    graded_coordinates,
-    graded_count,
-    resolve_defaults,
-    soil_mesh,
-    soil_particles,
-    unit_weight,
-)
-from .footing_scenery import footing_scenery, saved_load_curve  # noqa: F401
-from .limit_mode import (
+from ..limit_mode import (
     LIMIT_METRICS,
     analysis_param,
     check_limit_method,
     limit_metrics,
     limit_scene_run,
 )
-from .limits import SPACING as SPACING_RANGE
-from .methods import METHOD_METRICS, method_params, with_method
-from .params import POSITIVE
+from ..limits import SPACING as SPACING_RANGE
+from ..methods import METHOD_METRICS, method_params, with_method
+from ..params import POSITIVE, Param, Values
+from .mesh import (
+    DEFAULT_DOMAIN,
+    DEFAULT_SPACING,
+    LIMIT_DOMAIN,
+    LIMIT_SPACING,
+    resolve_defaults,
+    soil_mesh,
+    soil_particles,
+    unit_weight,
+)
 from .plateau import PlateauRule
+from .scenery import footing_scenery
 
 MATERIALS = ("tresca", "mohr-coulomb", "drucker-prager")
 
@@ -266,7 +265,7 @@ METRICS = {
 }
 
 
-def soil_material(values: dict[str, Any]) -> tuple[Material, float]:
+def soil_material(values: Mapping[str, Any]) -> tuple[Material, float]:
     """The soil material and its friction angle (0 for Tresca)."""
     name = values["material"]
     c, phi = values["c"], values["phi"]
@@ -291,13 +290,7 @@ def soil_material(values: dict[str, Any]) -> tuple[Material, float]:
     return mat, phi
 
 
-def _rho_from_gamma(gamma: float, given: dict[str, Any]) -> dict[str, float]:
-    """The old ``gamma`` (N/m^3) as the density at the given or default gravity."""
-    gravity = _GRAVITY.check(given.get("gravity", _GRAVITY.default))
-    return {"rho": gamma / gravity}
-
-
-def plateau_rule(values: dict[str, Any]) -> PlateauRule:
+def plateau_rule(values: Mapping[str, Any]) -> PlateauRule:
     """The stepping and stop rule from the resolved parameters."""
     b = values["half_width"]
     settlement = values["settlement"]
@@ -319,10 +312,9 @@ def plateau_rule(values: dict[str, Any]) -> PlateauRule:
 
 
 def build(
-    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
+    values: Values, out: Path | None = None, progress=None, resume: bool = False
 ) -> SceneRun:
     """Build the strip-footing simulation (or its limit analysis)."""
-    resolve_defaults(values)
     check_limit_method(values)
     mesh = soil_mesh(values)
     mat, phi = soil_material(values)
@@ -346,7 +338,7 @@ def build(
         rule.first_increment,
         writer=make_writer(out, resume),
         progress=progress,
-        meta={"scene": "strip-footing", "parameters": values},
+        meta={"scene": "strip-footing", "parameters": dict(values)},
     )
 
     def record(sim_: Simulation, p: Particles, res) -> bool:
@@ -394,7 +386,7 @@ def build(
     )
 
 
-def locking_note(values: dict[str, Any], phi: float) -> str:
+def locking_note(values: Mapping[str, Any], phi: float) -> str:
     """Why the run's load is inflated by volumetric locking ("" if it is not).
 
     Constant-strain triangles (fem-remap, P1) carry about one incompressibility
@@ -416,7 +408,7 @@ def locking_note(values: dict[str, Any], phi: float) -> str:
 
 
 def footing_limit(
-    values: dict[str, Any],
+    values: Mapping[str, Any],
     mesh: MeshTri,
     mat: Material,
     particles: Particles,
@@ -471,9 +463,6 @@ def load_curve(sim: Simulation) -> list[list[float]]:
     ]
 
 
-_GRAVITY = next(p for p in PARAMS if p.name == "gravity")
-
-
 SCENE = Scene(
     name="strip-footing",
     description=__doc__.strip().splitlines()[0].split(": ", 1)[1],
@@ -481,13 +470,5 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=footing_scenery,
-    renamed=(
-        Renamed(
-            "gamma",
-            "rho",
-            "with gravity, as in the other scenes: rho = gamma / gravity",
-            _rho_from_gamma,
-            Param("gamma", 0.0, "N/m^3", "unit weight", float, lo=0),
-        ),
-    ),
+    derive=resolve_defaults,
 )

@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ParameterError
+from ...errors import ParameterError
 
 __all__ = ["BEND", "PlateauRule", "doubling_change"]
 

@@ -28,30 +28,32 @@ penetration, ``N_c = (q_c - sigma_0)/s_u = 1.25 + 1.84 ln I_r``.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..boundary import RigidBody, wall_x
-from ..errors import ParameterError
-from ..laws import teh_houlsby_nc
-from ..loads import surface_load
-from ..mesh.axisymmetric import AxisymmetricMohrCoulomb
-from ..mesh.sources import AlphaShapeMesher
-from ..particles import Particles
-from ..run.simulation import Simulation
-from ..step.model import Model
-from .base import Param, Scene, SceneRun
-from .common import (
-    check_size,
+from ...boundary import RigidBody, wall_x
+from ...errors import ParameterError
+from ...laws import teh_houlsby_nc
+from ...loads import surface_load
+from ...mesh.axisymmetric import AxisymmetricMohrCoulomb
+from ...mesh.sources import AlphaShapeMesher
+from ...particles import Particles
+from ...run.simulation import Simulation
+from ...step.model import Model
+from ..base import Scene, SceneRun
+from ..common import (
     fidelity_from,
     fidelity_params,
     make_writer,
     solver_from,
     solver_params,
 )
-from .params import POSITIVE
+from ..limits import check_size
+from ..params import POSITIVE, Param, Values
+from ..scenery import Scenery, box, number
 from .penetration_common import (
     Steady,
     axis_count,
@@ -60,7 +62,6 @@ from .penetration_common import (
     penetration_warnings,
     steady_factor,
 )
-from .scenery import Scenery, box, number
 
 __all__ = ["INTERFACES", "SCENE", "Steady", "cone_body", "steady_factor"]
 
@@ -247,7 +248,7 @@ METRICS = {
 }
 
 
-def _sizes(values: dict[str, Any]) -> dict[str, float]:
+def _sizes(values: Mapping[str, Any]) -> dict[str, float]:
     """Lengths of the set-up, m: D, spacing, push, tip depth, soil, radius."""
     D = values["diameter"]
     h = values["spacing"] if values["spacing"] is not None else D / 12
@@ -282,7 +283,7 @@ def _heights(g: dict[str, float], ratio: float) -> np.ndarray:
     return np.unique(np.concatenate([below, fine, above]).round(12))
 
 
-def check(values: dict[str, Any]) -> float:
+def check(values: Mapping[str, Any]) -> float:
     """Refuse bad combinations before anything is built; return ``dt``."""
     g = _sizes(values)
     D, h = g["D"], g["h"]
@@ -313,7 +314,7 @@ def check(values: dict[str, Any]) -> float:
     return dt
 
 
-def cone_body(values: dict[str, Any]) -> RigidBody:
+def cone_body(values: Mapping[str, Any]) -> RigidBody:
     """The cone with its shaft at time 0, wished in place, moving down."""
     g = _sizes(values)
     R = g["D"] / 2
@@ -331,7 +332,7 @@ def cone_body(values: dict[str, Any]) -> RigidBody:
     )
 
 
-def soil_points(values: dict[str, Any], body: RigidBody) -> tuple[np.ndarray, ...]:
+def soil_points(values: Mapping[str, Any], body: RigidBody) -> tuple[np.ndarray, ...]:
     """Particle positions round the cone and each one's lattice spacing.
 
     A graded lattice without the points inside the cone or closer to it
@@ -370,7 +371,7 @@ def _lattice_gap(x: np.ndarray, rs: np.ndarray, zs: np.ndarray) -> np.ndarray:
 
 
 def build(
-    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
+    values: Values, out: Path | None = None, progress=None, resume: bool = False
 ) -> SceneRun:
     """Build the cone-penetration simulation."""
     dt = check(values)
@@ -419,7 +420,7 @@ def build(
         dt,
         writer=make_writer(out, resume),
         progress=progress,
-        meta={"scene": "cone-penetration", "parameters": values},
+        meta={"scene": "cone-penetration", "parameters": dict(values)},
     )
     area = math.pi * D**2 / 4
 

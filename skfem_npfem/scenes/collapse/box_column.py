@@ -22,10 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from ..boundary import RigidWall, floor, wall_x
-from ..errors import ParameterError
-from ..mesh.sources import AlphaShapeMesher
-from ..step.solver import SolverOptions
+from ...boundary import RigidWall, floor, wall_x
+from ...errors import ParameterError
+from ...mesh.sources import AlphaShapeMesher
+from ...step.solver import SolverOptions
 from .cylinder import ColumnSetup, column_model, column_particles
 
 __all__ = ["DEPTH_SPACINGS", "box_column", "box_lattice", "box_walls"]
@@ -96,7 +96,7 @@ def box_column(
     ----------
     v : dict
         Soil, time-step and lattice values (the keys of
-        :data:`~skfem_npfem.scenes.cylinder.SEED`).
+        :data:`~skfem_npfem.scenes.collapse.cylinder.SEED`).
     length, height, depth, spacing : float
         ``L0``, ``H0``, ``W`` and the lattice spacing, m.
     symmetric : bool

@@ -6,26 +6,31 @@ The parametric shape or a user's file, its materials, supports and surface.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
-from ..materials import Material, MohrCoulomb, Tresca
-from ..mesh.regions import (
+from ...materials import Material, MohrCoulomb, Tresca
+from ...mesh.regions import (
     CrossSection,
     Region,
     check_regions,
     read_cross_section,
 )
-from .common import (
-    check_size,
-)
+from ..limits import check_size
 
-__all__ = ["parametric_section", "section_materials", "section_of", "supports"]
+__all__ = [
+    "check_section",
+    "parametric_section",
+    "section_materials",
+    "section_of",
+    "supports",
+]
 
 
 # -- geometry -------------------------------------------------------------------
-def parametric_section(values: dict[str, Any]) -> CrossSection:
+def parametric_section(values: Mapping[str, Any]) -> CrossSection:
     """The slope of the parameters as a one-region cross-section."""
     H, D = values["height"], values["foundation_depth"]
     crest = values["crest_length"]
@@ -54,8 +59,12 @@ def _dedupe(poly: np.ndarray) -> np.ndarray:
     return poly[keep]
 
 
-def section_of(values: dict[str, Any]) -> tuple[CrossSection, float]:
-    """The cross-section (file or parametric) and the spacing."""
+def section_of(values: Mapping[str, Any]) -> tuple[CrossSection, float]:
+    """The cross-section (file or parametric) and its default spacing.
+
+    The default spacing is H/10 (a file: its tallest region / 20); the
+    spacing of a run is ``values["spacing"]`` once resolved.
+    """
     if values["geometry"]:
         sec = read_cross_section(values["geometry"])
         heights = [float(np.ptp(r.polygon[:, 1])) for r in sec.regions]
@@ -63,12 +72,14 @@ def section_of(values: dict[str, Any]) -> tuple[CrossSection, float]:
     else:
         sec = parametric_section(values)
         default_h = values["height"] / 10
-    h = values["spacing"] if values["spacing"] is not None else default_h
-    values["spacing"] = h
+    return sec, default_h
+
+
+def check_section(sec: CrossSection, h: float, values: Mapping[str, Any]) -> None:
+    """Refuse a section too large for the machine at spacing ``h``, or too thin."""
     area = sum(abs(_area(r.polygon)) for r in sec.regions)
     check_size(area / h**2, 2, values, advice="use a larger spacing")
     check_regions(sec.regions, h)
-    return sec, h
 
 
 def _area(poly: np.ndarray) -> float:
@@ -77,7 +88,7 @@ def _area(poly: np.ndarray) -> float:
 
 
 def section_materials(
-    sec: CrossSection, values: dict[str, Any], flow: bool = False
+    sec: CrossSection, values: Mapping[str, Any], flow: bool = False
 ) -> list[Material]:
     """One material per name of the section (scene values as defaults)."""
     mats = []

@@ -7,20 +7,21 @@ own factor of safety (a second limit analysis of the deposit).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from skfem import MeshTri
 
-from ..constants import GRAVITY
-from ..limit.safety import strength_reduction
-from ..mesh.smoothing import nodal_integration
-from ..run.simulation import Simulation
-from .common import (
+from ...constants import GRAVITY
+from ...limit.safety import strength_reduction
+from ...mesh.smoothing import nodal_integration
+from ...run.simulation import Simulation
+from ..common import (
     solver_from,
 )
-from .slope_section import (
+from .section import (
     _surface_height,
 )
 
@@ -36,7 +37,7 @@ def save_mechanism(folder: Path, pts, tri, res, volumes) -> None:
     """``mechanism.npz`` in ``folder``: the mechanism's data.
 
     ``skfem-npfem plot`` draws it as ``plots/mechanism.png``
-    (:func:`skfem_npfem.viz.plot.plot_mechanism`).
+    (:func:`skfem_npfem.viz.mechanism.plot_mechanism`).
     """
     lim = res.limit
     np.savez(
@@ -114,7 +115,7 @@ def deposit_slopes(
     return np.degrees(np.arctan(np.abs(b[has])))
 
 
-def deposit_factor_of_safety(sim: Simulation, values: dict[str, Any]) -> float:
+def deposit_factor_of_safety(sim: Simulation, values: Mapping[str, Any]) -> float:
     """Factor of safety of the final deposit with the run-out's strengths.
 
     A second limit analysis, on the alpha-shape mesh of the particles at the

@@ -41,50 +41,49 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Mapping
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..boundary import floor, wall_x
-from ..constants import GRAVITY
-from ..errors import ParameterError
-from ..laws import lube2005_runout as lube_runout
-from ..materials import DruckerPrager, MohrCoulomb
-from ..mesh.smoothing import nodal_integration
-from ..mesh.sources import AlphaShapeMesher, main_body
-from ..particles import Particles
-from ..run.simulation import AtRest, Simulation
-from ..step.model import Model
-from ..step.stages import Step
-from .base import Renamed, Scene, SceneRun
-from .collapse_params import (  # noqa: F401
+from ...boundary import floor, wall_x
+from ...constants import GRAVITY
+from ...errors import ParameterError
+from ...laws import lube2005_runout as lube_runout
+from ...materials import DruckerPrager, MohrCoulomb
+from ...mesh.smoothing import nodal_integration
+from ...mesh.sources import AlphaShapeMesher, main_body
+from ...particles import Particles
+from ...run.rest import AtRest
+from ...run.simulation import Simulation
+from ...step.model import Model
+from ...step.records import Step
+from ..base import Scene, SceneRun
+from ..common import check_soil, fidelity_from, make_writer, solver_from
+from ..limits import check_size
+from ..methods import with_method
+from ..params import Values
+from ..scenery import Scenery, box, number, time_label
+from .params import (
     COLLAPSE_STABILISATION,
     COLLAPSE_VOLUME_CORRECTION,
-    MATERIALS,
     MAX_STIFFNESS_RATIO,
     MAX_STRENGTH_RATIO,
     METRICS,
     PARAMS,
     VOLUME_CORRECTION_STRAIN,
 )
-from .collapse_runout import (
+from .runout import (
     collapse_time,
     detached_fraction,
     detached_warnings,
     front,
     mass_front,
+    picture_front,
     rest_warnings,
 )
-from .common import (
-    check_size,
-    check_soil,
-    fidelity_from,
-    make_writer,
-    solver_from,
-)
-from .methods import with_method
-from .scenery import Scenery, box, number, time_label
 
 
 def lattice(x0: float, x1: float, height: float, spacing: float) -> np.ndarray:
@@ -135,7 +134,7 @@ def initial_particles(
     return p.replace(wall_force=wall_force)
 
 
-def _check(values: dict[str, Any]) -> float:
+def _check(values: Mapping[str, Any]) -> float:
     """Refuse inconsistent values; return the particle spacing h."""
     L0, H0 = values["half_width"], values["aspect"] * values["half_width"]
     h = values["spacing"] if values["spacing"] is not None else L0 / 22.0
@@ -185,7 +184,7 @@ def _check(values: dict[str, Any]) -> float:
     return h
 
 
-def _volume_correction(values: dict[str, Any]) -> float:
+def _volume_correction(values: Mapping[str, Any]) -> float:
     """The default kappa: COLLAPSE_VOLUME_CORRECTION where its premise holds."""
     h0 = values["aspect"] * values["half_width"]
     strain = values["rho"] * values["gravity"] * h0 / values["E"]
@@ -194,7 +193,7 @@ def _volume_correction(values: dict[str, Any]) -> float:
     return 0.0
 
 
-def _model(values: dict[str, Any]) -> Model:
+def _model(values: Mapping[str, Any]) -> Model:
     """Walls (rough floor, smooth symmetry wall) and the Mohr-Coulomb/DP soil."""
     phi = values["phi"]
     floor_phi = phi if values["floor_friction"] is None else values["floor_friction"]
@@ -244,7 +243,7 @@ def _front_recorder(h: float, symmetric: bool):
     return record_front
 
 
-def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
+def _metrics(values: Mapping[str, Any], h: float, stop: AtRest | None):
     """The summary metrics of a finished run (see METRICS)."""
     L0, a = values["half_width"], values["aspect"]
     H0 = a * L0
@@ -292,7 +291,7 @@ def _metrics(values: dict[str, Any], h: float, stop: AtRest | None):
 
 
 def build(
-    values: dict[str, Any], out: Path | None = None, progress=None, resume: bool = False
+    values: Values, out: Path | None = None, progress=None, resume: bool = False
 ) -> SceneRun:
     """Build the column-collapse simulation."""
     h = _check(values)
@@ -320,7 +319,7 @@ def collapse_simulation(
     particles: Particles,
     model: Model,
     mesher: AlphaShapeMesher,
-    values: dict[str, Any],
+    values: Mapping[str, Any],
     out: Path | None,
     progress=None,
     resume: bool = False,
@@ -338,12 +337,12 @@ def collapse_simulation(
         checkpoint_dir=out,
         checkpoint_every=values["checkpoint_every"] if out is not None else 0,
         progress=progress,
-        meta={"scene": "column-collapse", "parameters": values},
+        meta={"scene": "column-collapse", "parameters": dict(values)},
     )
 
 
 def run_control(
-    values: dict[str, Any], H0: float
+    values: Mapping[str, Any], H0: float
 ) -> tuple[dict[str, Any], AtRest | None]:
     """``run`` keywords (``t_end``, the at-rest stop) of a column of height H0."""
     run_kwargs: dict[str, Any] = {"t_end": values["t_end"]}
@@ -359,9 +358,8 @@ def run_control(
 def collapse_scenery(p: dict, folder: Path | None = None) -> Scenery:
     """The plane-strain collapse's scenery: rough floor, symmetry wall, Lube 2005."""
     s = Scenery(scene="column-collapse")
-    # (results of an older version name the half-width "length")
     a = number(p, "aspect")
-    L0 = number(p, "half_width") or number(p, "length")
+    L0 = number(p, "half_width")
     if a is None or L0 is None:
         return s
     H0, g = a * L0, number(p, "gravity", GRAVITY) or GRAVITY
@@ -372,14 +370,11 @@ def collapse_scenery(p: dict, folder: Path | None = None) -> Scenery:
         s.walls.append((0.0, 1, "smooth wall (symmetry plane)"))
     s.runout_reference = L0 * (1.0 + lube_runout(a))
     s.runout_label = "Lube et al. 2005: L\u221e"
+    s.front = partial(picture_front, symmetric=s.symmetric)
     s.tau = math.sqrt(H0 / g)
     s.label = time_label(s.tau)
     return s
 
-
-#: Parameters renamed for one vocabulary across the scenes (``width`` is a
-#: full width, ``half_width`` a half width); the old names still work.
-RENAMED = (Renamed("length", "half_width", "the same value: L0"),)
 
 SCENE = Scene(
     name="column-collapse",
@@ -388,5 +383,4 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=collapse_scenery,
-    renamed=RENAMED,
 )

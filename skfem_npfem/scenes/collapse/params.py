@@ -7,18 +7,18 @@ constants here, so that studies and tests can refer to them.
 
 from __future__ import annotations
 
-from ..constants import GRAVITY
-from .base import Param
-from .collapse_runout import (
-    DETACHED_WARNING,
-)
-from .common import (
+from ...constants import GRAVITY
+from ..common import (
     elastic_params,
     fidelity_params,
     solver_params,
 )
-from .limits import SPACING
-from .methods import METHOD_METRICS, METHOD_PARAMS
+from ..limits import SPACING
+from ..methods import METHOD_METRICS, METHOD_PARAMS
+from ..params import Param
+from .runout import (
+    DETACHED_WARNING,
+)
 
 __all__ = [
     "COLLAPSE_STABILISATION",
