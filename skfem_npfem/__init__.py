@@ -26,8 +26,7 @@ names by what a user does (the API reference follows it).
 
 from __future__ import annotations
 
-__version__ = "0.1.0"
-
+from ._version import __version__
 from .boundary import (
     BodyOfRevolution,
     Contacts,

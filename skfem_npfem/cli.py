@@ -27,7 +27,7 @@ import sys
 import warnings
 from collections.abc import Sequence
 
-from . import __version__
+from ._version import __version__
 from .errors import NpfemError, ParameterError, RunInterrupted
 from .io import dumps
 from .run.control import end_line

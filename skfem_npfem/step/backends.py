@@ -30,6 +30,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+import clarabel
 import numpy as np
 import scipy.sparse as sp
 
@@ -121,8 +122,6 @@ def mkl_available() -> bool:
     if folder is None:
         return False
     os.environ.setdefault("MKL_PARDISO_PATH", str(folder))
-    import clarabel
-
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.direct_solve_method = "mkl"

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ..errors import NpfemError
 from ..io import atomic_path
@@ -387,8 +388,6 @@ class Renderer:
     @staticmethod
     def _spacing(steps: dict[int, Step]) -> float:
         """Median nearest-neighbour distance of the particles (first step)."""
-        from scipy.spatial import cKDTree
-
         p = steps[min(steps)].points
         if len(p) < 2:
             return 0.0
