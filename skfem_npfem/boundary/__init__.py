@@ -2,9 +2,10 @@
 
 * :mod:`.contacts` -- :class:`Contacts`, the contact candidates of a step;
 * :mod:`.protocol` -- :class:`Boundary`, what a step needs of any boundary
-  (elements it spans, contact rows, particles put back, record keys), the
-  step's nodes as the rows see them (:class:`ContactNodes`) and the functions
-  that ask every boundary of a list;
+  (lagged-force columns, elements it spans, contact rows, particles put back,
+  record keys) and the step's nodes as the rows see them
+  (:class:`ContactNodes`); the step asks them in
+  :mod:`skfem_npfem.step.boundary_jobs`;
 * :mod:`.walls` -- :class:`RigidWall` (a fixed plane, with :func:`floor` and
   :func:`wall_x`), its contact rows and projection, and :class:`Walls`, a
   model's walls as one boundary;

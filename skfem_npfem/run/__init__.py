@@ -1,7 +1,11 @@
 """The time loop.
 
-:class:`Simulation` (output, checkpoints, resume, progress) and run control
-(signals, progress lines), and the solver statistics of a run.
+* :mod:`.simulation` -- :class:`Simulation`: adaptive steps, callbacks, output
+  and checkpoints as steps finish, resume;
+* :mod:`.rest` -- :class:`AtRest`, the stop rule of a flow that came to rest;
+* :mod:`.control` -- progress lines and SIGINT/SIGTERM handling;
+* :mod:`.statistics` -- the solver statistics of a run (a summary's ``solver``
+  block).
 """
 
 from .rest import AtRest
