@@ -24,12 +24,13 @@ from ..materials import Material
 from ..step.conic import check_step_data
 from ..step.families import cutoff, yield_cones
 from ..step.program import ConeInput, Program
-from ..step.solver import ACCEPTED, SolverOptions, hint, solve_clarabel
+from ..step.solver import ACCEPTED, SolverOptions, solve_clarabel
 
 __all__ = [
     "LimitProgram",
     "assemble",
     "dof_map",
+    "limit_hint",
     "scaling",
     "solve",
     "static_program",
@@ -310,9 +311,36 @@ def solve(
     P_hat = sp.csc_matrix((lp.nsig + 1, lp.nsig + 1))
     res = solve_clarabel(P_hat, q_hat, A_hat, row * lp.b, lp.cones, options, d)
     if res.status not in ACCEPTED:
-        if res.status in ("DualInfeasible", "AlmostDualInfeasible"):
-            why = "the multiplier is unbounded: no collapse mechanism (check supports)"
-        else:
-            why = hint(res.status, False)
-        raise SolverError(res.status, None, res.iterations, why)
+        raise SolverError(res.status, None, res.iterations, limit_hint(res.status))
     return res, col * res.x, lam_star * row * res.z
+
+
+def limit_hint(status: str) -> str:
+    """What a user can try when a limit program fails with ``status``.
+
+    A limit program has no time or load steps (the step's hints name them):
+    it is one cone program on the initial mesh, so the advice is about its
+    supports, its strengths and the solver.
+
+    Examples
+    --------
+    >>> limit_hint("DualInfeasible")[:30]
+    'the multiplier is unbounded: n'
+    """
+    if status in ("DualInfeasible", "AlmostDualInfeasible"):
+        return "the multiplier is unbounded: no collapse mechanism (check supports)"
+    if status in ("PrimalInfeasible", "AlmostPrimalInfeasible"):
+        return (
+            "no stress field carries the dead load alone (multiplier 0): the body "
+            "collapses under its fixed loads; check strengths (c, phi) and supports"
+        )
+    if status in ("MaxIterations", "MaxTime"):
+        return (
+            "raise max_iter/time_limit, or use a coarser spacing (fewer cones); "
+            "limit analysis has no steps to shorten"
+        )
+    return (
+        "limit analysis has no steps to shorten: check the materials for "
+        "extreme ratios (c against rho g times the size, steep friction "
+        "cones), try a coarser or finer spacing, or linear_solver='qdldl'"
+    )

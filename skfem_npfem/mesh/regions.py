@@ -52,12 +52,23 @@ __all__ = [
     "Region",
     "check_regions",
     "fill_regions",
+    "implausible_values",
     "point_in_polygon",
     "read_cross_section",
+    "region_thickness",
 ]
 
 #: Keys a material of a geometry file may have.
 MATERIAL_KEYS = ("c", "phi", "psi", "rho", "E", "nu")
+#: Physical ranges of a material's properties: (low, high, low open, high open, what).
+MATERIAL_RANGES = {
+    "c": (0.0, math.inf, False, True, "a cohesion >= 0 (Pa)"),
+    "phi": (0.0, 90.0, False, True, "a friction angle in [0, 90) (degrees)"),
+    "psi": (0.0, 90.0, False, True, "a dilation angle in [0, 90) (degrees)"),
+    "rho": (0.0, math.inf, True, True, "a density > 0 (kg/m^3)"),
+    "E": (0.0, math.inf, True, True, "a Young's modulus > 0 (Pa)"),
+    "nu": (-1.0, 0.5, True, True, "a Poisson's ratio in (-1, 0.5)"),
+}
 #: Allowed supports.
 BASES, SIDES = ("fixed", "rollers"), ("rollers", "free")
 
@@ -192,6 +203,104 @@ def check_regions(regions: list[Region], spacing: float) -> None:
                     f"regions that do not overlap (it overlaps regions[{i}]); "
                     "neighbouring regions share edges",
                 )
+    _check_supported(regions, spacing)
+
+
+def _edge_samples(poly: np.ndarray, step: float) -> np.ndarray:
+    """Points inside the edges of a polygon (no vertex), ``step`` apart at most."""
+    a, b = poly, np.roll(poly, -1, axis=0)
+    n = np.maximum(1, np.ceil(np.linalg.norm(b - a, axis=1) / step)).astype(int)
+    k = np.repeat(np.arange(len(a)), n)
+    t = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + 0.5) / np.repeat(n, n)
+    return a[k] + t[:, None] * (b[k] - a[k])
+
+
+def _check_supported(regions: list[Region], spacing: float) -> None:
+    """Refuse a region that neither rests on the base nor shares an edge with one.
+
+    Two regions are neighbours when they share a stretch of edge (touching at a
+    corner only is a hinge, not a support); a region is supported when a chain
+    of neighbours leads to a region with an edge on the base (the section's
+    lowest ``y``).  Anything else floats: no stress field carries its weight,
+    and its limit analysis or strength reduction could not end.
+    """
+    allp = np.concatenate([r.polygon for r in regions])
+    tol = 1e-9 * max(float(np.ptp(allp)), spacing)
+    base = float(allp[:, 1].min())
+    samples = [_edge_samples(r.polygon, spacing / 4) for r in regions]
+    ends = [(r.polygon, np.roll(r.polygon, -1, axis=0)) for r in regions]
+    held = np.array([bool(np.any(np.abs(s[:, 1] - base) < tol)) for s in samples])
+    n = len(regions)
+    touch = np.zeros((n, n), bool)
+    for i in range(n):
+        for j in range(n):
+            if i != j:
+                touch[i, j] = bool(
+                    np.any(_segment_distance(samples[i], *ends[j]) < tol)
+                )
+    touch |= touch.T
+    for _ in range(n):
+        held = held | (touch & held[None, :]).any(axis=1)
+    if held.all():
+        return
+    k = int(np.flatnonzero(~held)[0])
+    others = [j for j in range(n) if j != k]
+    gap = ""
+    if others:
+        dist = [float(_segment_distance(samples[k], *ends[j]).min()) for j in others]
+        j = others[int(np.argmin(dist))]
+        gap = f"; it is {min(dist):.4g} m from the nearest region, regions[{j}]"
+    raise ParameterError(
+        f"regions[{k}]",
+        f"material {regions[k].material!r}",
+        "a region that rests on the base (the lowest y of the section) or shares "
+        "a stretch of edge with a region that does; this one floats, so nothing "
+        f"carries its weight{gap}",
+    )
+
+
+def region_thickness(region: Region, spacing: float) -> float:
+    """Thickness of a region: the diameter of the largest circle inside it.
+
+    Measured on a lattice of step ``spacing / 8`` (a layer of thickness t
+    gives t to within an eighth of a spacing, from below).
+
+    Parameters
+    ----------
+    region : Region
+        The region.
+    spacing : float
+        The section's spacing (the region's own, if it has one, is used).
+
+    Returns
+    -------
+    float
+        The thickness, m.
+
+    Examples
+    --------
+    >>> square = np.array([[0.0, 0.0], [40.0, 0.0], [40.0, 2.0], [0.0, 2.0]])
+    >>> abs(region_thickness(Region("clay", square), 1.0) - 2.0) <= 1.0 / 8
+    True
+    """
+    h = spacing if region.spacing is None else region.spacing
+    poly = region.polygon
+    lo, hi = poly.min(axis=0), poly.max(axis=0)
+    step = h / 8
+    gx = np.arange(lo[0] + step / 2, hi[0], step)
+    gy = np.arange(lo[1] + step / 2, hi[1], step)
+    grid = np.column_stack([g.ravel() for g in np.meshgrid(gx, gy)])
+    grid = grid[point_in_polygon(grid, poly)]
+    if not grid.size:
+        return 0.0
+    a, b = poly, np.roll(poly, -1, axis=0)
+    dist = np.concatenate(
+        [
+            _segment_distance(g, a, b)
+            for g in np.array_split(grid, 1 + len(grid) // 4096)
+        ]
+    )
+    return 2 * float(dist.max())
 
 
 def fill_regions(
@@ -280,22 +389,89 @@ def _materials(mats: object) -> dict[str, dict[str, float]]:
     for name, props in mats.items():
         if not isinstance(props, dict):
             raise ParameterError(f"materials.{name}", props, "an object of properties")
-        bad = sorted(set(props) - set(MATERIAL_KEYS))
-        if bad:
-            raise ParameterError(
-                f"materials.{name}",
-                bad[0],
-                "properties among " + ", ".join(MATERIAL_KEYS),
-            )
         for key, val in props.items():
+            where = f"materials.{name}.{key}"
+            if key not in MATERIAL_KEYS:
+                raise ParameterError(
+                    where, val, "no such property: one of " + ", ".join(MATERIAL_KEYS)
+                )
             if (
                 isinstance(val, bool)
                 or not isinstance(val, int | float)
                 or not math.isfinite(val)
             ):
-                raise ParameterError(f"materials.{name}.{key}", val, "a finite number")
+                raise ParameterError(where, val, "a finite number")
+            lo, hi, lo_open, hi_open, what = MATERIAL_RANGES[key]
+            if (
+                val < lo
+                or val > hi
+                or (lo_open and val == lo)
+                or (hi_open and val == hi)
+            ):
+                raise ParameterError(where, val, what)
         materials[name] = {k: float(v) for k, v in props.items()}
     return materials
+
+
+def implausible_values(materials: dict[str, dict[str, float]]) -> list[str]:
+    """One line for every material property that looks like a unit mistake.
+
+    The file's units are SI (Pa, kg/m^3) and degrees; a value that is valid
+    but implausible for a soil or rock most likely came in other units: a
+    density ``rho`` outside 500-3000 kg/m^3 (a unit weight in kN/m^3, or
+    t/m^3), a cohesion ``c`` below 100 Pa with a friction angle below 5
+    degrees (kPa meant: such a soil hardly stands), a friction or dilation
+    angle between 0 and 1 degree (radians meant; 0 is a purely cohesive
+    soil), a Young's modulus ``E`` below 100 kPa (MPa meant).
+
+    Parameters
+    ----------
+    materials : dict
+        Material name -> properties, as in :class:`CrossSection`.
+
+    Returns
+    -------
+    list of str
+        The messages (empty when every value is plausible), each naming the
+        property's place in the file (``materials.fill.phi``).
+
+    Examples
+    --------
+    >>> implausible_values({"fill": {"rho": 20.0}})[0][:38]
+    'materials.fill.rho = 20: a density in '
+    >>> implausible_values({"clay": {"c": 20000.0, "phi": 10.0, "rho": 1900.0}})
+    []
+    """
+    out = []
+    for name, props in materials.items():
+        rho, c, phi = props.get("rho"), props.get("c"), props.get("phi")
+        if rho is not None and not 500 <= rho <= 3000:
+            out.append(
+                f"materials.{name}.rho = {rho:g}: a density in kg/m^3 is expected "
+                "(soils and rocks 500-3000); a unit weight in kN/m^3 is about "
+                f"rho g / 1000, so {rho:g} kN/m^3 would be rho = {rho * 1e3 / 9.81:.0f}"
+            )
+        if c is not None and c < 100 and (phi is None or phi < 5):
+            out.append(
+                f"materials.{name}.c = {c:g}: a cohesion in Pa is expected, and "
+                f"below 100 Pa with a friction angle below 5 degrees a soil "
+                f"hardly stands (kPa meant? {c:g} kPa is c = {c * 1e3:g})"
+            )
+        for key in ("phi", "psi"):
+            val = props.get(key)
+            if val is not None and 0 < val < 1:
+                out.append(
+                    f"materials.{name}.{key} = {val:g}: an angle in degrees is "
+                    f"expected (radians meant? {val:g} rad is "
+                    f"{math.degrees(val):.1f} degrees)"
+                )
+        E = props.get("E")
+        if E is not None and E < 1e5:
+            out.append(
+                f"materials.{name}.E = {E:g}: a Young's modulus in Pa is expected "
+                f"(soils 1e6-1e9; MPa meant? {E:g} MPa is E = {E * 1e6:g})"
+            )
+    return out
 
 
 def _region(k: int, r: object, materials: dict[str, dict[str, float]]) -> Region:
@@ -369,7 +545,7 @@ def read_cross_section(path: str | Path) -> CrossSection:
     for key, val in dict(data.get("supports", {})).items():
         allowed = {"base": BASES, "sides": SIDES}.get(key)
         if allowed is None:
-            raise ParameterError("supports", key, "keys base and sides")
+            raise ParameterError(f"supports.{key}", val, "keys base and sides")
         if val not in allowed:
             raise ParameterError(f"supports.{key}", val, "one of " + ", ".join(allowed))
         supports[key] = val

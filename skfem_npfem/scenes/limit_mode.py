@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
-from ..limit.analysis import LimitResult
+from ..limit.analysis import LimitResult, check_friction_angle
 from .base import SceneRun
 from .params import Param
 
@@ -60,12 +60,22 @@ def analysis_param(incremental: str) -> Param:
 
 
 def check_limit_method(values: Mapping[str, Any]) -> None:
-    """Refuse a baseline method together with ``analysis=limit``."""
+    """Refuse what ``analysis=limit`` cannot do, before anything is built.
+
+    A baseline method (limit analysis is one N-PFEM cone program), and a
+    friction angle above :data:`~skfem_npfem.limit.analysis.MAX_FRICTION_ANGLE`
+    (:func:`~skfem_npfem.limit.analysis.check_friction_angle`) when the
+    material uses it.
+    """
     method = values.get("method", "npfem")
-    if values.get("analysis") == "limit" and method != "npfem":
+    if values.get("analysis") != "limit":
+        return
+    if method != "npfem":
         raise ParameterError(
             "method", method, "npfem with analysis=limit (one N-PFEM cone program)"
         )
+    if values.get("material", "tresca") != "tresca" and values.get("phi") is not None:
+        check_friction_angle(values["phi"])
 
 
 def limit_metrics(

@@ -171,6 +171,13 @@ METRICS = {
     "factor_of_safety": "strength reduction factor at which the slope just "
     "carries its weight (limit analysis)",
     "fos_iterates": "list of [F, gravity multiplier] of every cone program",
+    "factor_of_safety_coarse": "the factor of safety again at twice the spacing "
+    "(a convergence hint; null when the section cannot be filled there)",
+    "fos_spacing_change": "(F - F at twice the spacing) / F: above 0.05 in size a "
+    "warning says F is not converged (refine the spacing)",
+    "warnings": "list of one-line warnings: implausible material values of a "
+    "section file (a unit mistake), regions thinner than 4 spacings, a factor "
+    "of safety that changes by more than 5 % at twice the spacing",
     "initial_equilibrium_residual": "|G s - f| / |f| on the free dofs of the "
     "initial stresses (null with analysis=limit)",
     "reduction": "strength reduction factor of the run-out (null without it)",
@@ -189,7 +196,8 @@ METRICS = {
     "run-out's strengths (a second limit analysis; >= 1: statically admissible)",
     "n_particles": "number of particles",
     "stage_wall_time": "seconds per stage: initial_stress, factor_of_safety (all "
-    "its cone programs), runout (the steps)",
+    "its cone programs), factor_of_safety_check (at twice the spacing), runout "
+    "(the steps)",
     **LIMIT_METRICS,
     "collapse_multiplier": "gravity multiplier of the unreduced strengths (the "
     "first program; capped at 1e3: a cohesionless slope that stands carries "
@@ -242,6 +250,7 @@ def base_metrics(
         "stage_wall_time": {
             "initial_stress": state.get("t_initial", 0.0),
             "factor_of_safety": state.get("t_fos", 0.0),
+            "factor_of_safety_check": state.get("t_fos_check", 0.0),
             "runout": float(sum(sum(r.timings.values()) for r in sim.records)),
         },
     }

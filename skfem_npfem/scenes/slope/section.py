@@ -6,17 +6,21 @@ The parametric shape or a user's file, its materials, supports and surface.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
+from ...limit.analysis import check_friction_angle
 from ...materials import Material, MohrCoulomb, Tresca
 from ...mesh.regions import (
     CrossSection,
     Region,
     check_regions,
+    implausible_values,
     read_cross_section,
+    region_thickness,
 )
 from ..limits import check_size
 
@@ -25,6 +29,7 @@ __all__ = [
     "parametric_section",
     "section_materials",
     "section_of",
+    "section_warnings",
     "supports",
 ]
 
@@ -75,11 +80,71 @@ def section_of(values: Mapping[str, Any]) -> tuple[CrossSection, float]:
     return sec, default_h
 
 
+#: Thinnest region, in spacings, whose factor of safety is converged: a weak
+#: layer 0.8 m thick under the two-layer example's fill gives F = 0.984 / 0.909
+#: / 0.894 at 1 / 2 / 4 spacings across it (docs/scenes.md, "Thin layers").
+MIN_SPACINGS = 4
+
+
 def check_section(sec: CrossSection, h: float, values: Mapping[str, Any]) -> None:
-    """Refuse a section too large for the machine at spacing ``h``, or too thin."""
+    """Refuse a section the run cannot do at spacing ``h``; warn on doubtful ones.
+
+    Refused: a section too large for the machine, regions that cannot be
+    meshed or that float (:func:`~skfem_npfem.mesh.regions.check_regions`),
+    a friction angle above what limit analysis solves
+    (:func:`~skfem_npfem.limit.analysis.check_friction_angle`).  Warned
+    (:func:`section_warnings`): implausible material values, regions thinner
+    than :data:`MIN_SPACINGS` spacings.
+    """
     area = sum(abs(_area(r.polygon)) for r in sec.regions)
     check_size(area / h**2, 2, values, advice="use a larger spacing")
     check_regions(sec.regions, h)
+    for name, props in sec.materials.items():
+        if values["material"] == "tresca" and not values["geometry"]:
+            continue
+        where = f"materials.{name}.phi" if values["geometry"] else "phi"
+        check_friction_angle(props.get("phi", values["phi"]), where)
+    for msg in section_warnings(sec, h, values):
+        warnings.warn(msg, stacklevel=2)
+
+
+def section_warnings(
+    sec: CrossSection, h: float, values: Mapping[str, Any]
+) -> list[str]:
+    """What to doubt in a section at spacing ``h``: one line each.
+
+    A file's implausible material values (a unit mistake:
+    :func:`~skfem_npfem.mesh.regions.implausible_values`), and every region
+    thinner than :data:`MIN_SPACINGS` spacings (its own spacing, if it has
+    one): its factor of safety is not converged.
+
+    Parameters
+    ----------
+    sec : CrossSection
+        The section.
+    h : float
+        The spacing of the run, m.
+    values : mapping
+        The scene's parameter values (``geometry``).
+
+    Returns
+    -------
+    list of str
+    """
+    out = implausible_values(sec.materials) if values["geometry"] else []
+    for k, r in enumerate(sec.regions):
+        hr = h if r.spacing is None else r.spacing
+        t = region_thickness(r, h)
+        if t < MIN_SPACINGS * hr:
+            out.append(
+                f"slope: regions[{k}] ({r.material!r}) is {t:.3g} m thick, "
+                f"{t / hr:.1f} spacings (fewer than {MIN_SPACINGS}): a factor of "
+                "safety that depends on it is not converged (a weak layer gave "
+                "F = 0.984 / 0.909 / 0.894 at 1 / 2 / 4 spacings across it); "
+                f"use spacing <= {t / MIN_SPACINGS:.3g}, or give the region "
+                'its own "spacing"'
+            )
+    return out
 
 
 def _area(poly: np.ndarray) -> float:
