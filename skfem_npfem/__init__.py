@@ -45,10 +45,8 @@ from .errors import (
 )
 from .io import ResultWriter, read_pvd, read_step
 from .limit import (
-    MAX_FRICTION_ANGLE,
     LimitResult,
     SafetyResult,
-    check_friction_angle,
     limit_analysis,
     reduced_strength,
     strength_reduction,
@@ -138,10 +136,8 @@ __all__ += [
 ]
 #: Limit analysis: collapse multipliers and factors of safety in one program.
 __all__ += [
-    "MAX_FRICTION_ANGLE",
     "LimitResult",
     "SafetyResult",
-    "check_friction_angle",
     "limit_analysis",
     "reduced_strength",
     "strength_reduction",

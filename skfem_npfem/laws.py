@@ -120,3 +120,28 @@ def teh_houlsby_nc(rigidity_index: float) -> float:
             "rigidity_index", rigidity_index, "a finite number > 0 (G/s_u)"
         )
     return 1.25 + 1.84 * math.log(rigidity_index)
+
+
+def prandtl_depth(phi_deg: float) -> float:
+    """Depth of Prandtl's mechanism under a smooth strip footing, in half-widths b.
+
+    The mechanism of :func:`prandtl_nc`: an active wedge under the footing
+    (apex ``b tan(45 + phi/2)`` deep), log-spiral fans ``r = r0 exp(theta tan
+    phi)`` about the footing's edges (``r0 = b / cos(45 + phi/2)``, ``theta``
+    from 0 to 90 degrees) and passive wedges.  The deepest point is on a fan,
+    at ``r0 exp(theta tan phi) sin(45 + phi/2 + theta)``, maximised over
+    ``theta``; it grows like ``exp(pi/2 tan phi)``: 6.0 b at 45 degrees,
+    11.6 b at 55, 18.6 b at 60, 91 b at 70.
+
+    Examples
+    --------
+    >>> round(prandtl_depth(0.0), 3), round(prandtl_depth(45.0), 2)
+    (1.414, 6.0)
+    """
+    f = math.radians(phi_deg)
+    a = math.pi / 4 + f / 2
+    r0 = 1.0 / math.cos(a)
+    # d/dtheta [exp(theta tan f) sin(a + theta)] = 0 at a + theta = 90 + phi,
+    # theta = 45 + phi/2: inside the fan for every phi.
+    theta = math.pi / 2 + f - a
+    return r0 * math.exp(theta * math.tan(f)) * math.sin(a + theta)

@@ -10,19 +10,12 @@ The step's operator and yield cones without elasticity, inertia or time:
   Mohr-Coulomb materials (:class:`SafetyResult`, :func:`reduced_strength`).
 """
 
-from .analysis import (
-    MAX_FRICTION_ANGLE,
-    LimitResult,
-    check_friction_angle,
-    limit_analysis,
-)
+from .analysis import LimitResult, limit_analysis
 from .safety import SafetyResult, reduced_strength, strength_reduction
 
 __all__ = [
-    "MAX_FRICTION_ANGLE",
     "LimitResult",
     "SafetyResult",
-    "check_friction_angle",
     "limit_analysis",
     "reduced_strength",
     "strength_reduction",

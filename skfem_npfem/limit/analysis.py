@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import copy
 import time
-import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -52,60 +51,11 @@ from .program import (
     static_program,
 )
 
-__all__ = [
-    "MAX_FRICTION_ANGLE",
-    "LimitResult",
-    "associated",
-    "check_friction_angle",
-    "limit_analysis",
-    "steep_cones",
-]
+__all__ = ["LimitResult", "associated", "limit_analysis"]
 
 #: Fraction of the largest dissipation density above which a point counts as
 #: plastic (interior-point duals are never exactly zero).
 PLASTIC_FRACTION = 1e-2
-
-#: Steepest friction angle (degrees) of a limit program.  Above it the
-#: nodal-integration program overestimates: the strip footing's N_c at its
-#: default spacing (B/10) is -1.7 % off (N_q - 1) cot phi at 45 degrees and
-#: -1.6 % at 50, but +8.3 % at 55, +68 % at 60 (status Solved) and x39 at 70
-#: (AlmostSolved); docs/validation.md ("Steep friction angles").
-MAX_FRICTION_ANGLE = 50.0
-
-
-def check_friction_angle(phi: float, name: str = "phi") -> None:
-    """Refuse a friction angle above :data:`MAX_FRICTION_ANGLE` for limit analysis.
-
-    Parameters
-    ----------
-    phi : float
-        Friction angle, degrees.
-    name : str
-        The parameter it came from (the message names it).
-
-    Raises
-    ------
-    ParameterError
-        When ``phi > MAX_FRICTION_ANGLE``.
-
-    Examples
-    --------
-    >>> check_friction_angle(50.0)
-    >>> check_friction_angle(60.0)
-    Traceback (most recent call last):
-    ...
-    skfem_npfem.errors.ParameterError: invalid phi=60.0: at most 50 degrees ...
-    """
-    if phi > MAX_FRICTION_ANGLE:
-        raise ParameterError(
-            name,
-            phi,
-            f"at most {MAX_FRICTION_ANGLE:g} degrees for limit analysis: steeper "
-            "friction cones make its collapse load wrong without a failed status "
-            "(the strip footing's N_c is +8.3 % at 55 degrees, +68 % at 60 and "
-            "x39 at 70); use the incremental analysis, or phi <= "
-            f"{MAX_FRICTION_ANGLE:g}",
-        )
 
 
 @dataclass
@@ -163,28 +113,6 @@ def associated(material: Material) -> Material:
     out = copy.copy(material)
     out.psi = out.phi
     return out
-
-
-def steep_cones(materials: list[Material]) -> list[str]:
-    """A line for every material steeper than :data:`MAX_FRICTION_ANGLE`.
-
-    :func:`limit_analysis` issues them as warnings (its collapse load is too
-    high there, with no failed status); the scenes refuse such a ``phi``
-    before they build anything (:func:`check_friction_angle`).
-
-    Examples
-    --------
-    >>> from skfem_npfem.materials import MohrCoulomb
-    >>> steep_cones([MohrCoulomb(1e7, 0.3, 2000.0, c=1e4, phi=30.0)])
-    []
-    """
-    return [
-        f"limit analysis: friction angle {m.phi:.4g} degrees above "
-        f"{MAX_FRICTION_ANGLE:g}: the collapse load comes out too high (the strip "
-        "footing's N_c is +8.3 % at 55 degrees, +68 % at 60)"
-        for m in materials
-        if getattr(m, "phi", 0.0) > MAX_FRICTION_ANGLE
-    ]
 
 
 def _strain_operator(operator: Any, materials: list[Material]) -> Any:
@@ -352,8 +280,7 @@ def limit_analysis(
     ------
     ParameterError
         For inconsistent shapes, an elastic material, or a reference load that
-        does no work on any velocity unknown.  (A friction angle above
-        :data:`MAX_FRICTION_ANGLE` is warned of: :func:`steep_cones`.)
+        does no work on any velocity unknown.
     SolverError
         When Clarabel does not solve the program.  ``DualInfeasible`` means an
         unbounded multiplier (no mechanism: e.g. every dof fixed);
@@ -366,8 +293,6 @@ def limit_analysis(
         raise ParameterError(
             "materials", materials, "plastic materials only (a yield cone each)"
         )
-    for msg in steep_cones(materials):
-        warnings.warn(msg, stacklevel=2)
     operator = _strain_operator(operator, materials)
     d, N = operator.dim, operator.n_nodes
     load, f0, fixed = _checked_loads(load, dead_load, fixed, N, d)

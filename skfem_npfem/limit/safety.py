@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import copy
 import math
-import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -17,7 +16,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..materials import Material
 from ..step.solver import SolverOptions
-from .analysis import LimitResult, associated, limit_analysis, steep_cones
+from .analysis import LimitResult, associated, limit_analysis
 
 __all__ = [
     "BISECTION_TOL",
@@ -139,19 +138,16 @@ def strength_reduction(
 
     def solve(F: float) -> LimitResult:
         mats = [reduced_strength(m, F) for m in materials]
-        with warnings.catch_warnings():
-            # An iterate may pass steep cones; only the answer's are reported.
-            warnings.filterwarnings("ignore", "limit analysis: friction angle")
-            return limit_analysis(
-                operator,
-                mats,
-                material,
-                load,
-                fixed=fixed,
-                tied=tied,
-                options=options,
-                max_multiplier=CAP,
-            )
+        return limit_analysis(
+            operator,
+            mats,
+            material,
+            load,
+            fixed=fixed,
+            tied=tied,
+            options=options,
+            max_multiplier=CAP,
+        )
 
     def interior(lam: float) -> bool:
         return FLOOR < lam < (1 - 1e-6) * CAP
@@ -200,8 +196,6 @@ def strength_reduction(
             if not (inside and lo < x_new < hi):
                 x_new = 0.5 * (lo + hi)
         x = x_new
-    for msg in steep_cones([reduced_strength(m, F) for m in materials]):
-        warnings.warn(f"{msg}; the factor of safety {F:.4g} is too high", stacklevel=2)
     return SafetyResult(
         factor_of_safety=F,
         limit=best if best is not None else res,

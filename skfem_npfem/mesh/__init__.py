@@ -11,5 +11,9 @@
   revolution, with the hoop strain;
 * :mod:`.operators` -- the strain operator of a step's mesh (plane or
   axisymmetric) and the particle spacing;
-* :mod:`.geometry` -- the tangents of unit normals (contact rows, rigid bodies).
+* :mod:`.geometry` -- the tangents of unit normals (contact rows, rigid bodies);
+* :mod:`.regions` -- cross-sections from polygons: checked regions, their
+  thickness, particles filling them and their mesh;
+* :mod:`.section_file` -- the JSON file of a cross-section, read and checked
+  (every error names its key), and its implausible values.
 """

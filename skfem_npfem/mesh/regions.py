@@ -3,43 +3,23 @@
 A cross-section is a list of simple, closed polygons (one per region, each
 with a material).  :func:`check_regions` refuses what cannot be meshed (open or
 self-intersecting polygons, overlapping regions, regions smaller than the
-spacing) with one :class:`~skfem_npfem.errors.ParameterError` each, and
+spacing, regions that float: neither on the base nor sharing an edge with a
+region that is) with one :class:`~skfem_npfem.errors.ParameterError` each,
+naming the region; :func:`region_thickness` measures how thick a region is;
 :func:`fill_regions` puts particles on the boundaries (spacing ``h`` along
 every edge, shared edges once) and on a lattice inside (kept at least
 ``h/2`` from the boundaries), triangulates them (Delaunay) and keeps the
 triangles whose centroid lies in a region.  A node on an edge shared by two
 regions takes the material of the first region listed.
 
-The geometry file of the ``slope`` scene (:func:`read_cross_section`) is JSON::
-
-    {
-      "materials": {
-        "clay": {"c": 10000, "phi": 20, "rho": 2000},
-        "sand": {"c": 0, "phi": 35, "rho": 1900, "E": 5e7, "nu": 0.3}
-      },
-      "regions": [
-        {"material": "clay", "polygon": [[0, 0], [40, 0], [40, 5], [0, 5], [0, 0]]},
-        {"material": "sand", "polygon": [[0, 5], [25, 5], [15, 15], [0, 15], [0, 5]]}
-      ],
-      "supports": {"base": "fixed", "sides": "rollers"}
-    }
-
-Lengths in m, stresses in Pa, angles in degrees, densities ``rho`` in kg/m^3 (the
-unit weight is ``rho g``). A region may give its own ``"spacing"`` (finer where
-asked: a thin layer, the zone where a slip is expected); edges it shares with
-coarser regions take its points. A material may also give ``E``, ``nu`` and ``psi``
-(defaults: the scene's). Polygons are closed: the last vertex repeats the first. The
-base is the lowest ``y`` of the section (``fixed``: both velocities zero;
-``rollers``: vertical only), the sides its smallest and largest ``x`` (``rollers``:
-horizontal velocity zero; ``free``: no support).
+The JSON file of a cross-section is read and checked by
+:mod:`.section_file`.
 """
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 from scipy.spatial import Delaunay, cKDTree
@@ -52,25 +32,9 @@ __all__ = [
     "Region",
     "check_regions",
     "fill_regions",
-    "implausible_values",
     "point_in_polygon",
-    "read_cross_section",
     "region_thickness",
 ]
-
-#: Keys a material of a geometry file may have.
-MATERIAL_KEYS = ("c", "phi", "psi", "rho", "E", "nu")
-#: Physical ranges of a material's properties: (low, high, low open, high open, what).
-MATERIAL_RANGES = {
-    "c": (0.0, math.inf, False, True, "a cohesion >= 0 (Pa)"),
-    "phi": (0.0, 90.0, False, True, "a friction angle in [0, 90) (degrees)"),
-    "psi": (0.0, 90.0, False, True, "a dilation angle in [0, 90) (degrees)"),
-    "rho": (0.0, math.inf, True, True, "a density > 0 (kg/m^3)"),
-    "E": (0.0, math.inf, True, True, "a Young's modulus > 0 (Pa)"),
-    "nu": (-1.0, 0.5, True, True, "a Poisson's ratio in (-1, 0.5)"),
-}
-#: Allowed supports.
-BASES, SIDES = ("fixed", "rollers"), ("rollers", "free")
 
 
 @dataclass
@@ -247,9 +211,14 @@ def _check_supported(regions: list[Region], spacing: float) -> None:
     others = [j for j in range(n) if j != k]
     gap = ""
     if others:
-        dist = [float(_segment_distance(samples[k], *ends[j]).min()) for j in others]
+        pts = np.concatenate([samples[k], regions[k].polygon])
+        dist = [float(_segment_distance(pts, *ends[j]).min()) for j in others]
         j = others[int(np.argmin(dist))]
-        gap = f"; it is {min(dist):.4g} m from the nearest region, regions[{j}]"
+        gap = (
+            f"; it touches regions[{j}] at a point only (a hinge)"
+            if min(dist) < tol
+            else f"; it is {min(dist):.4g} m from the nearest region, regions[{j}]"
+        )
     raise ParameterError(
         f"regions[{k}]",
         f"material {regions[k].material!r}",
@@ -263,7 +232,8 @@ def region_thickness(region: Region, spacing: float) -> float:
     """Thickness of a region: the diameter of the largest circle inside it.
 
     Measured on a lattice of step ``spacing / 8`` (a layer of thickness t
-    gives t to within an eighth of a spacing, from below).
+    gives t to within a sixteenth of a spacing, from below; exactly when the
+    layer is a whole number of eighths of a spacing thick).
 
     Parameters
     ----------
@@ -287,8 +257,8 @@ def region_thickness(region: Region, spacing: float) -> float:
     poly = region.polygon
     lo, hi = poly.min(axis=0), poly.max(axis=0)
     step = h / 8
-    gx = np.arange(lo[0] + step / 2, hi[0], step)
-    gy = np.arange(lo[1] + step / 2, hi[1], step)
+    gx = np.arange(lo[0], hi[0] + step / 2, step)
+    gy = np.arange(lo[1], hi[1] + step / 2, step)
     grid = np.column_stack([g.ravel() for g in np.meshgrid(gx, gy)])
     grid = grid[point_in_polygon(grid, poly)]
     if not grid.size:
@@ -379,174 +349,3 @@ def fill_regions(
     region = np.full(used.size, len(regions))
     np.minimum.at(region, new[tri].ravel(), np.repeat(owner, 3))
     return pts[used], new[tri].T, region
-
-
-def _materials(mats: object) -> dict[str, dict[str, float]]:
-    """The ``materials`` object of a cross-section file, checked."""
-    if not isinstance(mats, dict) or not mats:
-        raise ParameterError("materials", mats, "an object: name -> properties")
-    materials: dict[str, dict[str, float]] = {}
-    for name, props in mats.items():
-        if not isinstance(props, dict):
-            raise ParameterError(f"materials.{name}", props, "an object of properties")
-        for key, val in props.items():
-            where = f"materials.{name}.{key}"
-            if key not in MATERIAL_KEYS:
-                raise ParameterError(
-                    where, val, "no such property: one of " + ", ".join(MATERIAL_KEYS)
-                )
-            if (
-                isinstance(val, bool)
-                or not isinstance(val, int | float)
-                or not math.isfinite(val)
-            ):
-                raise ParameterError(where, val, "a finite number")
-            lo, hi, lo_open, hi_open, what = MATERIAL_RANGES[key]
-            if (
-                val < lo
-                or val > hi
-                or (lo_open and val == lo)
-                or (hi_open and val == hi)
-            ):
-                raise ParameterError(where, val, what)
-        materials[name] = {k: float(v) for k, v in props.items()}
-    return materials
-
-
-def implausible_values(materials: dict[str, dict[str, float]]) -> list[str]:
-    """One line for every material property that looks like a unit mistake.
-
-    The file's units are SI (Pa, kg/m^3) and degrees; a value that is valid
-    but implausible for a soil or rock most likely came in other units: a
-    density ``rho`` outside 500-3000 kg/m^3 (a unit weight in kN/m^3, or
-    t/m^3), a cohesion ``c`` below 100 Pa with a friction angle below 5
-    degrees (kPa meant: such a soil hardly stands), a friction or dilation
-    angle between 0 and 1 degree (radians meant; 0 is a purely cohesive
-    soil), a Young's modulus ``E`` below 100 kPa (MPa meant).
-
-    Parameters
-    ----------
-    materials : dict
-        Material name -> properties, as in :class:`CrossSection`.
-
-    Returns
-    -------
-    list of str
-        The messages (empty when every value is plausible), each naming the
-        property's place in the file (``materials.fill.phi``).
-
-    Examples
-    --------
-    >>> implausible_values({"fill": {"rho": 20.0}})[0][:38]
-    'materials.fill.rho = 20: a density in '
-    >>> implausible_values({"clay": {"c": 20000.0, "phi": 10.0, "rho": 1900.0}})
-    []
-    """
-    out = []
-    for name, props in materials.items():
-        rho, c, phi = props.get("rho"), props.get("c"), props.get("phi")
-        if rho is not None and not 500 <= rho <= 3000:
-            out.append(
-                f"materials.{name}.rho = {rho:g}: a density in kg/m^3 is expected "
-                "(soils and rocks 500-3000); a unit weight in kN/m^3 is about "
-                f"rho g / 1000, so {rho:g} kN/m^3 would be rho = {rho * 1e3 / 9.81:.0f}"
-            )
-        if c is not None and c < 100 and (phi is None or phi < 5):
-            out.append(
-                f"materials.{name}.c = {c:g}: a cohesion in Pa is expected, and "
-                f"below 100 Pa with a friction angle below 5 degrees a soil "
-                f"hardly stands (kPa meant? {c:g} kPa is c = {c * 1e3:g})"
-            )
-        for key in ("phi", "psi"):
-            val = props.get(key)
-            if val is not None and 0 < val < 1:
-                out.append(
-                    f"materials.{name}.{key} = {val:g}: an angle in degrees is "
-                    f"expected (radians meant? {val:g} rad is "
-                    f"{math.degrees(val):.1f} degrees)"
-                )
-        E = props.get("E")
-        if E is not None and E < 1e5:
-            out.append(
-                f"materials.{name}.E = {E:g}: a Young's modulus in Pa is expected "
-                f"(soils 1e6-1e9; MPa meant? {E:g} MPa is E = {E * 1e6:g})"
-            )
-    return out
-
-
-def _region(k: int, r: object, materials: dict[str, dict[str, float]]) -> Region:
-    """Region ``k`` of a cross-section file, checked (the polygon left open)."""
-    if not isinstance(r, dict) or "polygon" not in r or "material" not in r:
-        raise ParameterError(
-            f"regions[{k}]", r, "an object with 'material' and 'polygon'"
-        )
-    if r["material"] not in materials:
-        raise ParameterError(
-            f"regions[{k}].material",
-            r["material"],
-            "one of the materials of the file: " + ", ".join(materials),
-        )
-    try:
-        poly = np.asarray(r["polygon"], dtype=float)
-    except (TypeError, ValueError):
-        poly = np.zeros((0,))
-    if poly.ndim != 2 or poly.shape[1] != 2 or not np.all(np.isfinite(poly)):
-        raise ParameterError(
-            f"regions[{k}].polygon", r["polygon"], "a list of [x, y] vertices"
-        )
-    if len(poly) < 4 or not np.allclose(poly[0], poly[-1]):
-        raise ParameterError(
-            f"regions[{k}].polygon",
-            f"{len(poly)} vertices, from {poly[0].tolist() if len(poly) else None} "
-            f"to {poly[-1].tolist() if len(poly) else None}",
-            "a closed polygon: at least 3 vertices and the last one repeating "
-            "the first (this one is open)",
-        )
-    hr = r.get("spacing")
-    if hr is not None and not (
-        isinstance(hr, int | float)
-        and not isinstance(hr, bool)
-        and math.isfinite(hr)
-        and hr > 0
-    ):
-        raise ParameterError(f"regions[{k}].spacing", hr, "a length > 0 (m)")
-    return Region(r["material"], poly[:-1], hr)
-
-
-def read_cross_section(path: str | Path) -> CrossSection:
-    """Read and check the JSON geometry file (format in the module notes).
-
-    Raises
-    ------
-    ParameterError
-        For a file that cannot be read or parsed, a missing or unknown key, an
-        open polygon, a region whose material is not in ``materials``, or a
-        bad support.  Geometry checks that need the spacing are
-        :func:`check_regions`.
-    """
-    p = Path(path)
-    try:
-        data = json.loads(p.read_text())
-    except OSError as err:
-        raise ParameterError(
-            "geometry", str(path), f"a readable file ({err.strerror})"
-        ) from None
-    except json.JSONDecodeError as err:
-        raise ParameterError(
-            "geometry", str(path), f"a JSON file (line {err.lineno}: {err.msg})"
-        ) from None
-    if not isinstance(data, dict) or "regions" not in data or "materials" not in data:
-        raise ParameterError(
-            "geometry", str(path), "a JSON object with 'materials' and 'regions'"
-        )
-    materials = _materials(data["materials"])
-    regions = [_region(k, r, materials) for k, r in enumerate(data["regions"])]
-    supports = {"base": "fixed", "sides": "rollers"}
-    for key, val in dict(data.get("supports", {})).items():
-        allowed = {"base": BASES, "sides": SIDES}.get(key)
-        if allowed is None:
-            raise ParameterError(f"supports.{key}", val, "keys base and sides")
-        if val not in allowed:
-            raise ParameterError(f"supports.{key}", val, "one of " + ", ".join(allowed))
-        supports[key] = val
-    return CrossSection(regions, materials, supports)

@@ -14,11 +14,14 @@ import math
 
 import numpy as np
 import pytest
+from helpers import check_cli_error, run_cli
 
 import skfem_npfem as npfem
-from skfem_npfem.laws import prandtl_nc
+from skfem_npfem.laws import prandtl_depth, prandtl_nc
+from skfem_npfem.limit.program import limit_hint
 from skfem_npfem.scenes.footing.mesh import soil_mesh
 from skfem_npfem.scenes.footing.strip import PARAMS
+from skfem_npfem.scenes.limit_mode import MECHANISM_MARGIN, check_limit_method
 
 #: Largest |N/N_c - 1| at the coarse spacing 0.125 b, block 5 b: the O(h)
 #: discretisation error of the mixed program (measured -3.9 % at phi = 35).
@@ -150,3 +153,100 @@ def test_bad_input():
             "strip-footing",
             {"analysis": "limit", "method": "fem-remap", "spacing": 0.25},
         )
+
+
+# -- a block deep enough for the mechanism, and the hints of a failed program -----
+# Reproducer: ``strip-footing --set analysis=limit --set material=mohr-coulomb
+# --set phi=60`` finished with status Solved and N_c = 3123 against the exact
+# (N_q - 1) cot phi = 1855 (+68 %).  The cause: Prandtl's mechanism is 18.6 b
+# deep at 60 degrees and the default block 10 b, so its fixed base cuts the
+# mechanism off.  The scenes refuse such a block, and a failed limit program
+# advises on limit analysis, not on the load steps it does not have.
+STATUSES = (
+    "PrimalInfeasible",
+    "AlmostPrimalInfeasible",
+    "DualInfeasible",
+    "AlmostDualInfeasible",
+    "MaxIterations",
+    "MaxTime",
+    "NumericalError",
+    "InsufficientProgress",
+)
+
+
+@pytest.mark.parametrize("phi", [0.0, 30.0, 50.0, 60.0])
+def test_prandtl_depth_is_the_deepest_point_of_the_mechanism(phi):
+    """Against the fan sampled finely (the wedges are shallower than the fan)."""
+    f = math.radians(phi)
+    a = math.pi / 4 + f / 2
+    theta = np.linspace(0.0, math.pi / 2, 200001)
+    fan = np.exp(theta * math.tan(f)) * np.sin(a + theta) / math.cos(a)
+    assert prandtl_depth(phi) == pytest.approx(fan.max(), rel=1e-9)
+    assert prandtl_depth(phi) >= math.tan(a)  # the active wedge's apex
+
+
+def test_a_block_shallower_than_the_mechanism_overestimates():
+    """phi = 50: mechanism 8.1 b deep; a 5 b block is far off, a 10 b one is not."""
+    c, phi = 1.0e4, 50.0
+    mat = npfem.MohrCoulomb(1e8, 0.3, c=c, phi=phi)
+    err = {}
+    for domain in (5.0, MECHANISM_MARGIN * prandtl_depth(phi)):
+        mesh, fixed, foot, load = footing_problem(domain=domain)
+        res = npfem.limit_analysis(
+            mesh, [mat], np.zeros(mesh.p.shape[1], int), c * load,
+            fixed=fixed, tied=[2 * foot + 1],
+        )  # fmt: skip
+        assert res.status == "Solved"
+        err[domain] = res.multiplier / prandtl_nc(phi) - 1
+    shallow, deep = err.values()
+    assert shallow > 0.1
+    assert abs(deep) < COARSE_TOL
+
+
+@pytest.mark.parametrize("phi", [60.0, 70.0, 80.0, 85.0])
+def test_strip_footing_refuses_a_block_the_mechanism_does_not_fit(phi):
+    code, err = run_cli(
+        ["run", "strip-footing", "--set", "analysis=limit",
+         "--set", "material=mohr-coulomb", "--set", f"phi={phi:g}"]
+    )  # fmt: skip
+    need = MECHANISM_MARGIN * prandtl_depth(phi)
+    check_cli_error(code, err, "domain=10.0", f"at least {need:.3g} half-widths")
+
+
+def test_tresca_ignores_phi_and_is_not_refused():
+    values = npfem.get_scene("strip-footing").resolve(
+        {"analysis": "limit", "material": "tresca", "phi": 60.0}
+    )
+    check_limit_method(values)
+
+
+@pytest.mark.parametrize("status", STATUSES)
+def test_limit_hints_name_no_steps(status):
+    """A limit program has no time or load steps: its hints never name them."""
+    hint = limit_hint(status)
+    assert hint
+    for step_advice in ("dt", "load steps (more", "smaller load", "adaptive"):
+        assert step_advice not in hint
+
+
+def test_a_failed_limit_program_carries_the_limit_hint(monkeypatch):
+    """The hint of a failed program is :func:`limit_hint`'s (forced NumericalError)."""
+    import skfem_npfem.limit.program as program
+
+    real = program.solve_clarabel
+
+    def failing(*args, **kwargs):
+        res = real(*args, **kwargs)
+        res.status = "NumericalError"
+        return res
+
+    monkeypatch.setattr(program, "solve_clarabel", failing)
+    mesh, fixed, foot, load = footing_problem(spacing=0.5)
+    mat = npfem.MohrCoulomb(1e8, 0.3, c=1e4, phi=30.0)
+    with pytest.raises(npfem.SolverError) as err:
+        npfem.limit_analysis(
+            mesh, [mat], np.zeros(mesh.p.shape[1], int), 1e4 * load,
+            fixed=fixed, tied=[2 * foot + 1],
+        )  # fmt: skip
+    assert limit_hint("NumericalError") in str(err.value)
+    assert "load steps" not in str(err.value)

@@ -5,7 +5,7 @@ Plane strain.  The parametric section is a slope of ``height`` H and ``angle``
 ``crest_length`` long and a toe plain ``toe_length`` long on a foundation layer
 ``foundation_depth`` deep; or, with ``geometry=FILE``, the regions and
 materials of a cross-section file (JSON, format in
-:mod:`skfem_npfem.mesh.regions`, an example in
+:mod:`skfem_npfem.mesh.section_file`, an example in
 ``docs/examples/two_layer_slope.json``).  Particles fill the section at
 ``spacing``.  The base is fixed and the sides are on rollers.
 

@@ -12,16 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from ...limit.analysis import check_friction_angle
 from ...materials import Material, MohrCoulomb, Tresca
-from ...mesh.regions import (
-    CrossSection,
-    Region,
-    check_regions,
-    implausible_values,
-    read_cross_section,
-    region_thickness,
-)
+from ...mesh.regions import CrossSection, Region, check_regions, region_thickness
+from ...mesh.section_file import implausible_values, read_cross_section
 from ..limits import check_size
 
 __all__ = [
@@ -90,20 +83,14 @@ def check_section(sec: CrossSection, h: float, values: Mapping[str, Any]) -> Non
     """Refuse a section the run cannot do at spacing ``h``; warn on doubtful ones.
 
     Refused: a section too large for the machine, regions that cannot be
-    meshed or that float (:func:`~skfem_npfem.mesh.regions.check_regions`),
-    a friction angle above what limit analysis solves
-    (:func:`~skfem_npfem.limit.analysis.check_friction_angle`).  Warned
+    meshed or that float (:func:`~skfem_npfem.mesh.regions.check_regions`).
+    Warned
     (:func:`section_warnings`): implausible material values, regions thinner
     than :data:`MIN_SPACINGS` spacings.
     """
     area = sum(abs(_area(r.polygon)) for r in sec.regions)
     check_size(area / h**2, 2, values, advice="use a larger spacing")
     check_regions(sec.regions, h)
-    for name, props in sec.materials.items():
-        if values["material"] == "tresca" and not values["geometry"]:
-            continue
-        where = f"materials.{name}.phi" if values["geometry"] else "phi"
-        check_friction_angle(props.get("phi", values["phi"]), where)
     for msg in section_warnings(sec, h, values):
         warnings.warn(msg, stacklevel=2)
 
@@ -114,7 +101,7 @@ def section_warnings(
     """What to doubt in a section at spacing ``h``: one line each.
 
     A file's implausible material values (a unit mistake:
-    :func:`~skfem_npfem.mesh.regions.implausible_values`), and every region
+    :func:`~skfem_npfem.mesh.section_file.implausible_values`), and every region
     thinner than :data:`MIN_SPACINGS` spacings (its own spacing, if it has
     one): its factor of safety is not converged.
 
