@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import NpfemError, ParameterError
 from ..materials import Material
 from ..step.solver import SolverOptions
 from .analysis import LimitResult, associated, limit_analysis
@@ -132,8 +132,11 @@ def strength_reduction(
     Raises
     ------
     ParameterError
-        If a material has no ``c``/``phi`` or the iteration does not converge
-        within ``max_programs``.
+        If a material has no ``c``/``phi``.
+    NpfemError
+        If the iteration finds no ``F`` within ``max_programs`` programs (its
+        message says what usually causes it, not which argument to raise:
+        the scenes do not have one).
     """
 
     def solve(F: float) -> LimitResult:
@@ -160,11 +163,13 @@ def strength_reduction(
     width = math.log1p(max(tol, BISECTION_TOL))
     while True:
         if len(iterates) >= max_programs:
-            raise ParameterError(
-                "max_programs",
-                max_programs,
-                f"more programs (last F = {iterates[-1][0]:.6g}, "
-                f"multiplier {iterates[-1][1]:.6g})",
+            raise NpfemError(
+                f"strength reduction found no factor of safety in {max_programs} "
+                f"cone programs (last F = {iterates[-1][0]:.6g}, multiplier "
+                f"{iterates[-1][1]:.6g}): no reduction F brings the gravity "
+                "multiplier to 1, as for a body that its supports do not carry "
+                "(a region resting on nothing) or one whose multiplier jumps "
+                "between 0 and the cap; check the supports and regions"
             )
         res = solve(math.exp(x))
         lam = res.multiplier

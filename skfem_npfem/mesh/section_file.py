@@ -88,7 +88,9 @@ def _materials(mats: object) -> dict[str, dict[str, float]]:
     return materials
 
 
-def implausible_values(materials: dict[str, dict[str, float]]) -> list[str]:
+def implausible_values(
+    materials: dict[str, dict[str, float]], in_file: bool = True
+) -> list[str]:
     """One line for every material property that looks like a unit mistake.
 
     The file's units are SI (Pa, kg/m^3) and degrees; a value that is valid
@@ -103,6 +105,9 @@ def implausible_values(materials: dict[str, dict[str, float]]) -> list[str]:
     ----------
     materials : dict
         Material name -> properties, as in :class:`CrossSection`.
+    in_file : bool
+        The values come from a file: a message names ``materials.NAME.KEY``;
+        False: the key alone (a scene parameter).
 
     Returns
     -------
@@ -119,16 +124,17 @@ def implausible_values(materials: dict[str, dict[str, float]]) -> list[str]:
     """
     out = []
     for name, props in materials.items():
+        at = {k: f"materials.{name}.{k}" if in_file else k for k in MATERIAL_KEYS}
         rho, c, phi = props.get("rho"), props.get("c"), props.get("phi")
         if rho is not None and not 500 <= rho <= 3000:
             out.append(
-                f"materials.{name}.rho = {rho:g}: a density in kg/m^3 is expected "
+                f"{at['rho']} = {rho:g}: a density in kg/m^3 is expected "
                 "(soils and rocks 500-3000); a unit weight in kN/m^3 is about "
                 f"rho g / 1000, so {rho:g} kN/m^3 would be rho = {rho * 1e3 / 9.81:.0f}"
             )
         if c is not None and c < 100 and (phi is None or phi < 5):
             out.append(
-                f"materials.{name}.c = {c:g}: a cohesion in Pa is expected, and "
+                f"{at['c']} = {c:g}: a cohesion in Pa is expected, and "
                 f"below 100 Pa with a friction angle below 5 degrees a soil "
                 f"hardly stands (kPa meant? {c:g} kPa is c = {c * 1e3:g})"
             )
@@ -136,14 +142,14 @@ def implausible_values(materials: dict[str, dict[str, float]]) -> list[str]:
             val = props.get(key)
             if val is not None and 0 < val < 1:
                 out.append(
-                    f"materials.{name}.{key} = {val:g}: an angle in degrees is "
+                    f"{at[key]} = {val:g}: an angle in degrees is "
                     f"expected (radians meant? {val:g} rad is "
                     f"{math.degrees(val):.1f} degrees)"
                 )
         E = props.get("E")
         if E is not None and E < 1e5:
             out.append(
-                f"materials.{name}.E = {E:g}: a Young's modulus in Pa is expected "
+                f"{at['E']} = {E:g}: a Young's modulus in Pa is expected "
                 f"(soils 1e6-1e9; MPa meant? {E:g} MPa is E = {E * 1e6:g})"
             )
     return out

@@ -136,6 +136,19 @@ def test_strength_reduction_frictional_converges():
     )
 
 
+def test_strength_reduction_that_finds_no_factor_says_why():
+    """Out of programs: a message about the body, not an argument ``--set`` lacks."""
+    mesh, fixed, _foot, load = footing_problem(spacing=0.25)
+    mat = npfem.MohrCoulomb(1e8, 0.3, c=1.0, phi=30.0)
+    n = mesh.p.shape[1]
+    with pytest.raises(npfem.NpfemError) as err:
+        npfem.strength_reduction(
+            mesh, [mat], np.zeros(n, int), load, fixed=fixed, max_programs=1
+        )
+    assert not isinstance(err.value, npfem.ParameterError)
+    assert "in 1 cone programs" in str(err.value) and "supports" in str(err.value)
+
+
 def test_bad_input():
     """Clear errors: elastic materials, load shapes, limit with a baseline method."""
     mesh, _fixed, _foot, load = footing_problem(spacing=0.25)

@@ -121,6 +121,23 @@ def test_a_scene_run_warns_of_a_unit_mistake(tmp_path):
 
 
 @pytest.mark.parametrize(
+    "given, needle",
+    [({"rho": 20.0}, "rho = 20: "), ({"material": "tresca", "c": 5.0}, "c = 5: ")],
+)
+def test_a_parametric_slope_warns_of_a_unit_mistake_by_its_parameter(given, needle):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        npfem.get_scene("slope").resolve({**given, "spacing": 2.0})
+    assert any(str(w.message).startswith(needle) for w in caught)
+
+
+def test_a_plausible_parametric_slope_has_no_warning():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        npfem.get_scene("slope").resolve({"spacing": 1.0})
+
+
+@pytest.mark.parametrize(
     "key, value, where",
     [
         ("phi", 95, "materials.fill.phi"),

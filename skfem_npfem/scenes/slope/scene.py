@@ -176,8 +176,9 @@ METRICS = {
     "fos_spacing_change": "(F - F at twice the spacing) / F: above 0.05 in size a "
     "warning says F is not converged (refine the spacing)",
     "warnings": "list of one-line warnings: implausible material values of a "
-    "section file (a unit mistake), regions thinner than 4 spacings, a factor "
-    "of safety that changes by more than 5 % at twice the spacing",
+    "section file or of the parameters (a unit mistake), regions thinner than "
+    "4 spacings, a factor of safety that changes by more than 5 % at twice the "
+    "spacing",
     "initial_equilibrium_residual": "|G s - f| / |f| on the free dofs of the "
     "initial stresses (null with analysis=limit)",
     "reduction": "strength reduction factor of the run-out (null without it)",

@@ -100,8 +100,9 @@ def section_warnings(
 ) -> list[str]:
     """What to doubt in a section at spacing ``h``: one line each.
 
-    A file's implausible material values (a unit mistake:
-    :func:`~skfem_npfem.mesh.section_file.implausible_values`), and every region
+    Implausible material values (a unit mistake:
+    :func:`~skfem_npfem.mesh.section_file.implausible_values`) of a file or
+    of the parameters, and every region
     thinner than :data:`MIN_SPACINGS` spacings (its own spacing, if it has
     one): its factor of safety is not converged.
 
@@ -118,7 +119,13 @@ def section_warnings(
     -------
     list of str
     """
-    out = implausible_values(sec.materials) if values["geometry"] else []
+    if values["geometry"]:
+        out = implausible_values(sec.materials)
+    else:
+        props = {**sec.materials["soil"], "E": values["E"]}
+        if values["material"] == "tresca":
+            props.pop("phi")  # not a friction angle the user gave
+        out = implausible_values({"soil": props}, in_file=False)
     for k, r in enumerate(sec.regions):
         hr = h if r.spacing is None else r.spacing
         t = region_thickness(r, h)
