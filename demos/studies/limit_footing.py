@@ -106,13 +106,14 @@ fixed base cuts it off carries more than the exact N_c, with status `Solved`:
 | 50 | 8.1 b | 262.5 (-1.6 %) | |
 | 55 | 11.6 b | 676.9 (+8.3 %) | 618.1 (-1.1 %), block 14 b |
 | 60 | 18.6 b | 3123 (+68 %) | 1849 (-0.3 %), block 23 b |
+| 65 | 35.5 b | | 8185 (+2.3 %), block 43 b |
 | 70 | 91 b | 2.57e6 (x39, `AlmostSolved`) | |
 | 80 | 9.0e3 b | 2.95e7 (-98 %, `AlmostSolved`) | |
 
 So `strip-footing --set analysis=limit` refuses a block (`domain`) shallower
 than 1.2 times the mechanism's depth and names the `domain` that holds it
 (`scenes/limit_mode.py`, `MECHANISM_MARGIN`); the default 10 b holds it up to
-about 50 degrees.
+about 50 degrees, and the largest block it allows (50 b) up to about 66.
 """
 
 

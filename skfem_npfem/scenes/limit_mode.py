@@ -96,8 +96,22 @@ def check_limit_method(values: Mapping[str, Any]) -> None:
             f"mechanism reaches {prandtl_depth(phi):.3g} b deep, and a block whose "
             "fixed base cuts it off gives a collapse load too high with no failed "
             "status (N_c +8.3 % at 55 degrees, +68 % at 60 in a 10 b block); "
-            f"set domain={math.ceil(need)} (the mesh grows with it) or a smaller phi",
+            f"set domain={math.ceil(need)} where the scene allows it (the mesh "
+            f"grows with it), or phi <= {_steepest(domain):.1f} for this block",
         )
+
+
+def _steepest(domain: float) -> float:
+    """The largest phi (degrees) whose mechanism a block ``domain`` b deep holds."""
+    lo, hi = 0.0, 89.9
+    if MECHANISM_MARGIN * prandtl_depth(lo) > domain:
+        return 0.0
+    for _ in range(60):  # bisection: prandtl_depth grows with phi
+        mid = 0.5 * (lo + hi)
+        lo, hi = (
+            (mid, hi) if MECHANISM_MARGIN * prandtl_depth(mid) <= domain else (lo, mid)
+        )
+    return lo
 
 
 def limit_metrics(

@@ -226,6 +226,27 @@ def test_strip_footing_refuses_a_block_the_mechanism_does_not_fit(phi):
     check_cli_error(code, err, "domain=10.0", f"at least {need:.3g} half-widths")
 
 
+def test_the_refusal_names_a_block_and_a_phi_that_hold_the_mechanism():
+    """phi = 55 in a 10 b block: refused; in the block the message names, N_c holds."""
+    code, err = run_cli(
+        ["run", "strip-footing", "--set", "analysis=limit",
+         "--set", "material=mohr-coulomb", "--set", "phi=55"]
+    )  # fmt: skip
+    line = check_cli_error(code, err, "set domain=14", "phi <= 50.5 for this block")
+    assert (
+        MECHANISM_MARGIN * prandtl_depth(50.5)
+        <= 10
+        < MECHANISM_MARGIN * (prandtl_depth(50.6))
+    ), line
+    res = npfem.run_scene(
+        "strip-footing",
+        {"analysis": "limit", "material": "mohr-coulomb", "phi": 55.0,
+         "domain": 14.0, "spacing": 0.125},
+    )  # fmt: skip
+    assert res["metrics"]["limit_status"] == "Solved"
+    assert abs(res["metrics"]["bearing_factor"] / prandtl_nc(55.0) - 1) < COARSE_TOL
+
+
 def test_tresca_ignores_phi_and_is_not_refused():
     values = npfem.get_scene("strip-footing").resolve(
         {"analysis": "limit", "material": "tresca", "phi": 60.0}
