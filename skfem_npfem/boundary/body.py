@@ -64,8 +64,57 @@ _ON_CORNER = 1e-6
 _CORNER_MARGIN = 30.0
 
 
+class _Moving:
+    """What the rigid bodies share (2D and 3D): interface, motion, inside test."""
+
+    velocity: np.ndarray
+    friction_angle: float
+    adhesion: float | np.ndarray
+    name: str
+    reference: np.ndarray
+
+    @property
+    def mu(self) -> float:
+        """Coulomb friction coefficient ``tan(friction_angle)``."""
+        return math.tan(math.radians(self.friction_angle))
+
+    @property
+    def interface(self) -> str:
+        """``"smooth"``, ``"adhesion"`` or ``"coulomb"``."""
+        if np.max(self.adhesion) > 0:
+            return "adhesion"
+        return "coulomb" if self.friction_angle > 0 else "smooth"
+
+    @property
+    def dim(self) -> int:
+        """2 (plane strain or axisymmetric models) or 3: the velocity's size."""
+        return self.velocity.size
+
+    def displacement(self, t: float) -> np.ndarray:
+        """Displacement (d,) from time 0 to ``t``, m."""
+        return self.velocity * float(t)
+
+    def reference_at(self, t: float) -> np.ndarray:
+        """The moment's reference point (d,) at time ``t``."""
+        return self.reference + self.displacement(t)
+
+    def signed_distance(  # pragma: no cover - overridden
+        self, x: np.ndarray, t: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        raise NotImplementedError
+
+    def contains(self, x: np.ndarray, t: float) -> np.ndarray:
+        """Points (n, d) strictly inside the body at time ``t`` (n,) bool."""
+        dist, _, _ = self.signed_distance(x, t)
+        return dist < -_ON_OUTLINE * self.size
+
+    @property
+    def size(self) -> float:  # pragma: no cover - overridden
+        raise NotImplementedError
+
+
 @dataclass(frozen=True)
-class RigidBody:
+class RigidBody(_Moving):
     """A rigid polygon moving with a prescribed velocity (2D models).
 
     Parameters
@@ -115,50 +164,15 @@ class RigidBody:
     reference: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        try:
-            v = np.asarray(self.vertices, dtype=float)
-        except (TypeError, ValueError):
-            raise ParameterError(
-                "vertices", self.vertices, "an array (m, 2) of corners"
-            ) from None
-        if v.ndim != 2 or v.shape[1] != 2 or not np.all(np.isfinite(v)):
-            raise ParameterError(
-                "vertices",
-                getattr(v, "shape", v),
-                "a finite array (m, 2) of corners (2D models only)",
-            )
-        if v.shape[0] > 3 and np.allclose(v[0], v[-1]):
-            v = v[:-1]
-        area = 0.5 * float(
-            np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
-        )
-        size = float(np.ptp(v, axis=0).max()) if v.shape[0] else 0.0
-        if v.shape[0] < 3 or not abs(area) > 1e-12 * size**2:
-            raise ParameterError(
-                "vertices",
-                f"{v.shape[0]} corners enclosing an area of {abs(area):g} m^2",
-                "at least 3 corners enclosing a non-zero area",
-            )
-        if area < 0:
-            v = v[::-1]
+        v, ccw = _polygon("vertices", self.vertices, "corners", " (2D models only)")
         vel = _vector("velocity", self.velocity)
-        fa = self.friction_angle
-        if isinstance(fa, bool) or not (
-            isinstance(fa, int | float) and math.isfinite(fa) and 0.0 <= fa < 90.0
-        ):
-            raise ParameterError("friction_angle", fa, "degrees in [0, 90)")
-        ad = _adhesion(self.adhesion, v.shape[0] if area > 0 else -v.shape[0])
-        if fa > 0 and np.max(ad) > 0:
-            raise ParameterError(
-                "adhesion",
-                ad,
-                "0 when friction_angle > 0 (choose Coulomb friction or Tresca "
-                "adhesion)",
-            )
-        if not (isinstance(self.name, str) and self.name.isidentifier()):
-            raise ParameterError(
-                "name", self.name, "a word (letters, digits, _), e.g. 'footing'"
-            )
+        fa, ad = _interface(
+            self.friction_angle,
+            self.adhesion,
+            self.name,
+            "footing",
+            v.shape[0] if ccw else -v.shape[0],
+        )
         ref = (
             v.mean(axis=0)
             if self.reference is None
@@ -166,43 +180,18 @@ class RigidBody:
         )
         object.__setattr__(self, "vertices", v)
         object.__setattr__(self, "velocity", vel)
-        object.__setattr__(self, "friction_angle", float(fa))
+        object.__setattr__(self, "friction_angle", fa)
         object.__setattr__(self, "adhesion", ad)
         object.__setattr__(self, "reference", ref)
-
-    @property
-    def mu(self) -> float:
-        """Coulomb friction coefficient ``tan(friction_angle)``."""
-        return math.tan(math.radians(self.friction_angle))
-
-    @property
-    def interface(self) -> str:
-        """``"smooth"``, ``"adhesion"`` or ``"coulomb"``."""
-        if np.max(self.adhesion) > 0:
-            return "adhesion"
-        return "coulomb" if self.friction_angle > 0 else "smooth"
 
     @property
     def size(self) -> float:
         """Largest extent of the outline, m."""
         return float(np.ptp(self.vertices, axis=0).max())
 
-    def displacement(self, t: float) -> np.ndarray:
-        """Displacement (2,) from time 0 to ``t``, m."""
-        return self.velocity * float(t)
-
     def vertices_at(self, t: float) -> np.ndarray:
         """The outline's corners (m, 2) at time ``t``."""
         return self.vertices + self.displacement(t)
-
-    def reference_at(self, t: float) -> np.ndarray:
-        """The moment's reference point (2,) at time ``t``."""
-        return self.reference + self.displacement(t)
-
-    @property
-    def dim(self) -> int:
-        """2: a body of 2D models (plane strain or axisymmetric)."""
-        return 2
 
     def bounds_at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """Bounding box (lo, hi) of the outline at time ``t``, each (2,)."""
@@ -267,15 +256,69 @@ class RigidBody:
         d2 = np.sum((ap - s[..., None] * ab[None]) ** 2, axis=2)
         return self.adhesion[np.argmin(d2, axis=1)]
 
-    def contains(self, x: np.ndarray, t: float) -> np.ndarray:
-        """Points (n, 2) strictly inside the outline at time ``t`` (n,) bool."""
-        dist, _, _ = self.signed_distance(x, t)
-        return dist < -_ON_OUTLINE * self.size
+
+def _polygon(name: str, value, corners: str, note: str = "") -> tuple[np.ndarray, bool]:
+    """A closed polygon (m >= 3, 2) enclosing an area, stored counter-clockwise.
+
+    Returns the corners (a repeated closing corner dropped) and whether they
+    were given counter-clockwise.
+    """
+    try:
+        v = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(name, value, f"an array (m, 2) of {corners}") from None
+    if v.ndim != 2 or v.shape[1] != 2 or not np.all(np.isfinite(v)):
+        raise ParameterError(
+            name, getattr(v, "shape", v), f"a finite array (m, 2) of {corners}{note}"
+        )
+    if v.shape[0] > 3 and np.allclose(v[0], v[-1]):
+        v = v[:-1]
+    area = 0.5 * float(
+        np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
+    )
+    size = float(np.ptp(v, axis=0).max()) if v.shape[0] else 0.0
+    if v.shape[0] < 3 or not abs(area) > 1e-12 * size**2:
+        raise ParameterError(
+            name,
+            f"{v.shape[0]} corners enclosing an area of {abs(area):g} m^2",
+            "at least 3 corners enclosing a non-zero area",
+        )
+    return (v[::-1] if area < 0 else v), area > 0
+
+
+def _interface(
+    friction_angle, adhesion, name, example: str, edges: int = 0
+) -> tuple[float, float | np.ndarray]:
+    """The checked interface law of a body and its name.
+
+    ``edges``: the adhesion may be one stress per edge (as :func:`_adhesion`);
+    0: one stress (the 3D bodies).
+    """
+    fa = friction_angle
+    if isinstance(fa, bool) or not (
+        isinstance(fa, int | float) and math.isfinite(fa) and 0.0 <= fa < 90.0
+    ):
+        raise ParameterError("friction_angle", fa, "degrees in [0, 90)")
+    ad = _adhesion(adhesion, edges)
+    if fa > 0 and np.max(ad) > 0:
+        raise ParameterError(
+            "adhesion",
+            ad,
+            "0 when friction_angle > 0 (choose Coulomb friction or Tresca adhesion)",
+        )
+    if not (isinstance(name, str) and name.isidentifier()):
+        raise ParameterError(
+            "name", name, f"a word (letters, digits, _), e.g. {example!r}"
+        )
+    return float(fa), ad
 
 
 def _adhesion(value, m: int) -> float | np.ndarray:
-    """A finite stress >= 0, or one per edge (``m`` edges; ``-m``: reversed)."""
-    if np.ndim(value) == 0:
+    """A finite stress >= 0, or one per edge (``m`` edges; ``-m``: reversed).
+
+    ``m = 0``: one stress only.
+    """
+    if np.ndim(value) == 0 or not m:
         if isinstance(value, bool) or not (
             isinstance(value, int | float | np.floating)
             and math.isfinite(value)
@@ -300,14 +343,14 @@ def _adhesion(value, m: int) -> float | np.ndarray:
     return ad
 
 
-def _vector(name: str, value) -> np.ndarray:
-    """A finite 2-vector."""
+def _vector(name: str, value, what: str = "m or m/s", size: int = 2) -> np.ndarray:
+    """A finite vector of ``size`` components."""
     try:
         v = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
-        raise ParameterError(name, value, "a finite vector of size 2") from None
-    if v.shape != (2,) or not np.all(np.isfinite(v)):
-        raise ParameterError(name, value, "a finite vector of size 2 (m or m/s)")
+        raise ParameterError(name, value, f"a finite vector of size {size}") from None
+    if v.shape != (size,) or not np.all(np.isfinite(v)):
+        raise ParameterError(name, value, f"a finite vector of size {size} ({what})")
     return v
 
 

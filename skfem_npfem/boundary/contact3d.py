@@ -13,7 +13,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..mesh.geometry import tangents
-from .body import _ON_OUTLINE
+from .body import _ON_OUTLINE, _near
 from .contacts import Contacts
 from .plane import RigidPlane
 from .revolution import BodyOfRevolution
@@ -95,12 +95,6 @@ def face_tributary(
             w = 0.5 * np.abs(np.sum(cross * normal[node], axis=1)) / 3.0
         out += np.bincount(node, weights=w, minlength=x.shape[0])
     return out
-
-
-def _near3(body: SolidBody, x: np.ndarray, t: float, reach) -> np.ndarray:
-    lo, hi = body.bounds_at(t)
-    r = np.asarray(reach)[..., None] if np.ndim(reach) else reach
-    return np.flatnonzero(np.all((x > lo - r) & (x < hi + r), axis=1))
 
 
 def spanning_tetrahedra(
@@ -205,7 +199,7 @@ def solid_contacts(
         dU = body.velocity * dt
         reach = h + 2.0 * (speed + float(np.linalg.norm(body.velocity))) * dt
         reach = reach + gravity * dt**2
-        near = _near3(body, x, time, reach)
+        near = _near(body, x, time, reach)
         dist, normal, _ = body.signed_distance(x[near], time)
         keep = dist < reach[near]
         cand, dist, normal = near[keep], dist[keep], normal[keep]
