@@ -17,7 +17,7 @@ from ..io import ResultWriter, checkpoint_step
 from ..step.model import NODAL_MASS
 from ..step.solver import ACCURACY_PRESETS, LINEAR_SOLVERS, SolverOptions
 from ..step.stabilisation import STABILISATION_MODES
-from .params import Param
+from .params import POSITIVE, Param
 
 __all__ = [
     "elastic_params",
@@ -30,7 +30,7 @@ __all__ = [
 def elastic_params(E: float) -> list[Param]:
     """Young's modulus (default ``E``, Pa) and Poisson's ratio parameters."""
     return [
-        Param("E", E, "Pa", "Young's modulus", float, lo=0, lo_open=True),
+        Param("E", E, "Pa", "Young's modulus", float, **POSITIVE),
         Param(
             "nu",
             0.3,

@@ -32,7 +32,7 @@ from ..baseline.operators import ELEMENTS
 from ..errors import ParameterError
 from ..metrics import stress_roughness
 from .base import SceneRun
-from .params import Param
+from .params import POSITIVE, Param
 
 __all__ = [
     "METHODS",
@@ -163,8 +163,7 @@ def method_params(
                 "spfem only: explicit substep, at most the stable step (default "
                 "0.9 x the stable step of each step's mesh)",
                 float,
-                lo=0,
-                lo_open=True,
+                **POSITIVE,
             ),
         ]
     return params

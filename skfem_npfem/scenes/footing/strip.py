@@ -55,7 +55,7 @@ from ..limit_mode import (
 )
 from ..limits import SPACING as SPACING_RANGE
 from ..methods import METHOD_METRICS, method_params, with_method
-from ..params import POSITIVE, Param, Values
+from ..params import ANGLE, POSITIVE, Param, Values
 from .mesh import (
     DEFAULT_DOMAIN,
     DEFAULT_SPACING,
@@ -89,25 +89,9 @@ PARAMS = [
         float,
         lo=0,
     ),
+    Param("phi", 0.0, "deg", "friction angle (ignored by tresca)", float, **ANGLE),
     Param(
-        "phi",
-        0.0,
-        "deg",
-        "friction angle (ignored by tresca)",
-        float,
-        lo=0,
-        hi=90,
-        hi_open=True,
-    ),
-    Param(
-        "psi",
-        None,
-        "deg",
-        "dilation angle (default: phi, associated)",
-        float,
-        lo=0,
-        hi=90,
-        hi_open=True,
+        "psi", None, "deg", "dilation angle (default: phi, associated)", float, **ANGLE
     ),
     Param(
         "rho",
@@ -123,8 +107,7 @@ PARAMS = [
         "m/s^2",
         "gravitational acceleration (acts when rho > 0)",
         float,
-        lo=0,
-        lo_open=True,
+        **POSITIVE,
     ),
     Param(
         "K0",
