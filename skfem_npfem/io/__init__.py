@@ -22,8 +22,6 @@ from .checkpoints import (
     CHECKPOINT_FORMAT,
     checkpoint_path,
     checkpoint_step,
-    clear_run_files,
-    clear_temporaries,
     latest_checkpoint,
     load_checkpoint,
     read_checkpoint,
@@ -31,7 +29,6 @@ from .checkpoints import (
     write_checkpoint,
 )
 from .files import (
-    LOCK_NAME,
     atomic_path,
     check_writable_dir,
     dumps,
@@ -40,22 +37,18 @@ from .files import (
     write_bytes,
     write_json,
 )
-from .results import ResultWriter, read_pvd, read_step, step_time
-from .run_folder import RunFolder, finish_commits
+from .results import ResultWriter, read_pvd, read_step
+from .run_folder import RunFolder
 
 __all__ = [
     "CHECKPOINT_FORMAT",
-    "LOCK_NAME",
     "ResultWriter",
     "RunFolder",
     "atomic_path",
     "check_writable_dir",
     "checkpoint_path",
     "checkpoint_step",
-    "clear_run_files",
-    "clear_temporaries",
     "dumps",
-    "finish_commits",
     "folder_lock",
     "latest_checkpoint",
     "load_checkpoint",
@@ -63,7 +56,6 @@ __all__ = [
     "read_pvd",
     "read_step",
     "save_checkpoint",
-    "step_time",
     "to_jsonable",
     "write_bytes",
     "write_checkpoint",

@@ -37,6 +37,7 @@ from .params import POSITIVE, Param
 __all__ = [
     "METHODS",
     "METHOD_METRICS",
+    "METHOD_METRICS_NO_SPFEM",
     "METHOD_OPTIONS",
     "METHOD_PARAMS",
     "make_method",
@@ -189,6 +190,12 @@ METHOD_METRICS = {
     "stable_dt": "spfem: smallest stable explicit step of the run's meshes, s "
     "(null: other methods)",
     "explicit_dt": "spfem: largest explicit substep used, s (null: other methods)",
+}
+
+#: :data:`METHOD_METRICS` of a scene that does not offer spfem.
+METHOD_METRICS_NO_SPFEM = METHOD_METRICS | {
+    k: "spfem only: always null here (spfem is not available in this scene)"
+    for k in ("explicit_steps", "stable_dt", "explicit_dt")
 }
 
 #: Record keys summed (or reduced) into each method-specific metric.

@@ -55,6 +55,7 @@ from ..limits import check_size
 from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
 from .penetration_common import (
+    ALPHA,
     axis_count,
     graded_axis,
     interface_adhesion,
@@ -129,15 +130,7 @@ PARAMS = [
         str,
         INTERFACES,
     ),
-    Param(
-        "alpha",
-        0.5,
-        "-",
-        "adhesion factor (interface=adhesion): |t| <= alpha s_u",
-        float,
-        lo=0.0,
-        hi=1.0,
-    ),
+    ALPHA,
     Param(
         "penetration",
         None,

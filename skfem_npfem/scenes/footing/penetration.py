@@ -50,10 +50,11 @@ from ..common import (
     solver_params,
 )
 from ..limits import check_size
-from ..methods import METHOD_METRICS, method_params, with_method
+from ..methods import METHOD_METRICS_NO_SPFEM, method_params, with_method
 from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
 from .penetration_common import (
+    ALPHA,
     axis_count,
     graded_axis,
     interface_adhesion,
@@ -95,15 +96,7 @@ PARAMS = [
     ),
     Param("su", 1.0e3, "Pa", "undrained shear strength s_u", float, **POSITIVE),
     Param("interface", "smooth", "-", "footing-soil interface", str, INTERFACES),
-    Param(
-        "alpha",
-        0.5,
-        "-",
-        "adhesion factor (interface=adhesion): |t| <= alpha s_u",
-        float,
-        lo=0.0,
-        hi=1.0,
-    ),
+    ALPHA,
     Param(
         "penetration",
         None,
@@ -157,12 +150,7 @@ METRICS = {
     "the footing; method=fem-remap with P1 elements (they lock)",
     "curve": "list of [w/B, q/s_u] per step",
     "n_particles": "number of particles",
-    **METHOD_METRICS,
-    # spfem is not offered here: its metrics are always null.
-    **{
-        k: "spfem only: always null here (spfem is not available in this scene)"
-        for k in ("explicit_steps", "stable_dt", "explicit_dt")
-    },
+    **METHOD_METRICS_NO_SPFEM,
 }
 
 

@@ -20,6 +20,7 @@ from ...errors import ParameterError
 from ..params import Param
 
 __all__ = [
+    "ALPHA",
     "Steady",
     "axis_count",
     "graded_axis",
@@ -32,6 +33,17 @@ __all__ = [
     "penetration_warnings",
     "steady_factor",
 ]
+
+#: The ``alpha`` parameter of ``interface=adhesion`` (footing and cone).
+ALPHA = Param(
+    "alpha",
+    0.5,
+    "-",
+    "adhesion factor (interface=adhesion): |t| <= alpha s_u",
+    float,
+    lo=0.0,
+    hi=1.0,
+)
 
 
 def graded_axis(fine: float, h: float, length: float, ratio: float) -> np.ndarray:

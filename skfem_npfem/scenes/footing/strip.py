@@ -54,7 +54,7 @@ from ..limit_mode import (
     limit_scene_run,
 )
 from ..limits import SPACING as SPACING_RANGE
-from ..methods import METHOD_METRICS, method_params, with_method
+from ..methods import METHOD_METRICS_NO_SPFEM, method_params, with_method
 from ..params import ANGLE, POSITIVE, Param, Values
 from .mesh import (
     DEFAULT_DOMAIN,
@@ -238,12 +238,7 @@ METRICS = {
     "warnings": "list of one-line warnings (a cap stopped the run before the "
     "plateau; fem-remap P1 locking); the CLI prints each on stderr",
     "n_particles": "number of particles",
-    **METHOD_METRICS,
-    # spfem is not offered here: its metrics are always null.
-    **{
-        k: "spfem only: always null here (spfem is not available in this scene)"
-        for k in ("explicit_steps", "stable_dt", "explicit_dt")
-    },
+    **METHOD_METRICS_NO_SPFEM,
     **LIMIT_METRICS,
 }
 

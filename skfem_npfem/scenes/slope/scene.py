@@ -300,7 +300,7 @@ def build(
     particles = Particles.create(
         pts, masses, stress=sigma, fixed=fixed, material=material
     )
-    model = flow_model(values, body, state, out, run_out)
+    model = flow_model(values, body, state, run_out)
     source = (
         AlphaShapeMesher(body.h, values["alpha"]) if run_out else FixedMesh(body.mesh.t)
     )

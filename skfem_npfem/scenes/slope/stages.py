@@ -250,7 +250,6 @@ def flow_model(
     values: Mapping[str, Any],
     body: SlopeBody,
     state: dict[str, Any],
-    out: Path | None,
     run_out: bool,
 ) -> Model:
     """The dynamic model of stage 3, with the run-out's reduced strengths.
@@ -268,8 +267,6 @@ def flow_model(
         The slope's section and particles.
     state : dict
         The run's shared state.
-    out : Path or None
-        Output folder (for the mechanism).
     run_out : bool
         Whether stage 3 runs.
 
