@@ -229,34 +229,28 @@ class RigidBodies:
         body_ids = ids[sel] - self.first
         lambda_n, lambda_t = lambdas[0][sel], lambdas[1][sel]
         extra["dropped_elements"] = dropped
-        if self.dim == 3:
-            loads = solid_loads(
-                self.bodies, sub, body_ids, lambda_n, lambda_t, x, t_end
-            )
-            for k, (body, (force, moment)) in enumerate(
-                zip(self.bodies, loads, strict=True)
-            ):
-                disp = body.displacement(t_end)
-                for i, axis in enumerate("xyz"):
-                    extra[f"{body.name}_{axis}"] = float(disp[i])
-                    extra[f"{body.name}_force_{axis}"] = float(force[i])
-                    extra[f"{body.name}_moment_{axis}"] = float(moment[i])
-                extra[f"{body.name}_penetration"] = _depth(mark, k)
-            return
-        loads = body_loads(self.bodies, sub, body_ids, lambda_n, lambda_t, x, t_end)
+        loads = (solid_loads if self.dim == 3 else body_loads)(
+            self.bodies, sub, body_ids, lambda_n, lambda_t, x, t_end
+        )
         for k, (body, (force, moment)) in enumerate(
             zip(self.bodies, loads, strict=True)
         ):
             disp = body.displacement(t_end)
-            extra[f"{body.name}_x"] = float(disp[0])
-            extra[f"{body.name}_y"] = float(disp[1])
-            # A body of revolution takes no net radial force.
-            extra[f"{body.name}_force_x"] = (
-                0.0 if self.axisymmetric else float(force[0])
-            )
-            extra[f"{body.name}_force_y"] = float(force[1])
-            extra[f"{body.name}_moment"] = 0.0 if self.axisymmetric else moment
-            extra[f"{body.name}_penetration"] = _depth(mark, k)
+            if self.dim == 3:
+                for i, axis in enumerate("xyz"):
+                    extra[f"{body.name}_{axis}"] = float(disp[i])
+                    extra[f"{body.name}_force_{axis}"] = float(force[i])
+                    extra[f"{body.name}_moment_{axis}"] = float(moment[i])
+            else:
+                extra[f"{body.name}_x"] = float(disp[0])
+                extra[f"{body.name}_y"] = float(disp[1])
+                # A body of revolution takes no net radial force.
+                extra[f"{body.name}_force_x"] = (
+                    0.0 if self.axisymmetric else float(force[0])
+                )
+                extra[f"{body.name}_force_y"] = float(force[1])
+                extra[f"{body.name}_moment"] = 0.0 if self.axisymmetric else moment
+            extra[f"{body.name}_penetration"] = 0.0 if mark is None else float(mark[k])
 
     def _facets(self, nodes: ContactNodes) -> np.ndarray:
         """The boundary the body rows need: oriented edges (2D), faces (3D)."""
@@ -267,8 +261,3 @@ class RigidBodies:
         if any(b.adhesion > 0 for b in self.bodies):
             return boundary_faces(nodes.local_t)
         return np.zeros((3, 0), int)
-
-
-def _depth(mark: np.ndarray | None, k: int) -> float:
-    """Body ``k``'s penetration from the mark of :meth:`RigidBodies.put_back`."""
-    return 0.0 if mark is None else float(mark[k])

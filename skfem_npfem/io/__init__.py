@@ -29,6 +29,7 @@ from .checkpoints import (
     write_checkpoint,
 )
 from .files import (
+    LOCK_NAME,
     atomic_path,
     check_writable_dir,
     dumps,
@@ -37,11 +38,12 @@ from .files import (
     write_bytes,
     write_json,
 )
-from .results import ResultWriter, read_pvd, read_step
+from .results import ResultWriter, read_pvd, read_step, step_time
 from .run_folder import RunFolder
 
 __all__ = [
     "CHECKPOINT_FORMAT",
+    "LOCK_NAME",
     "ResultWriter",
     "RunFolder",
     "atomic_path",
@@ -56,6 +58,7 @@ __all__ = [
     "read_pvd",
     "read_step",
     "save_checkpoint",
+    "step_time",
     "to_jsonable",
     "write_bytes",
     "write_checkpoint",
