@@ -25,7 +25,6 @@
 from .body import RigidBody, body_loads, check_clear, project_out_of_bodies
 from .contact import (
     body_contacts,
-    boundary_facets,
     boundary_tributary,
     corner_contacts,
     oriented_boundary,
@@ -59,7 +58,6 @@ __all__ = [
     "body_contacts",
     "body_loads",
     "boundary_faces",
-    "boundary_facets",
     "boundary_tributary",
     "check_clear",
     "corner_contacts",

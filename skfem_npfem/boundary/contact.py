@@ -19,24 +19,10 @@ from .contacts import Contacts
 
 __all__ = [
     "body_contacts",
-    "boundary_facets",
     "boundary_tributary",
     "corner_contacts",
     "oriented_boundary",
 ]
-
-
-def boundary_facets(t: np.ndarray) -> np.ndarray:
-    """Boundary edges (2, nb) of a triangle mesh ``t`` (3, ne): edges of one triangle.
-
-    Examples
-    --------
-    >>> boundary_facets(np.array([[0, 1, 2], [1, 3, 2]]).T).T.tolist()
-    [[0, 1], [0, 2], [1, 3], [2, 3]]
-    """
-    edges = np.sort(np.concatenate([t[[0, 1]], t[[1, 2]], t[[2, 0]]], axis=1), axis=0)
-    uniq, counts = np.unique(edges, axis=1, return_counts=True)
-    return uniq[:, counts == 1]
 
 
 def oriented_boundary(x: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -72,7 +58,7 @@ def boundary_tributary(
     x : ndarray (N, 2)
         Node positions.
     facets : ndarray (2, nb)
-        Boundary edges (:func:`boundary_facets`).
+        Boundary edges (:func:`oriented_boundary`).
     tangent : ndarray (N, 2), optional
         Unit tangent of the surface a node touches: an edge then counts with
         its length along that tangent (a side edge meeting a flat contact
@@ -88,7 +74,7 @@ def boundary_tributary(
     Examples
     --------
     >>> x = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
-    >>> f = boundary_facets(np.array([[0], [1], [2]]))
+    >>> f = oriented_boundary(x, np.array([[0], [1], [2]]))
     >>> boundary_tributary(x, f).round(3).tolist()
     [1.0, 1.207, 1.207]
     >>> flat = np.tile([1.0, 0.0], (3, 1))
@@ -247,7 +233,7 @@ def body_contacts(
     lagged : ndarray (n, n_bodies)
         Normal force of each body on the node in the previous step, N.
     facets : ndarray (2, nb)
-        Boundary edges of the step's mesh (:func:`boundary_facets`): the
+        Boundary edges of the step's mesh (:func:`oriented_boundary`): the
         contact areas of adhesion (:func:`boundary_tributary` along the body).
     dt, h, gravity, time : float
         Step (s), spacing (m), gravity (m/s^2), time at the start (s).
