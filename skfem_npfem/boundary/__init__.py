@@ -32,7 +32,6 @@ from .contact import (
 from .contact3d import (
     boundary_faces,
     face_tributary,
-    solid_contacts,
     solid_loads,
     spanning_tetrahedra,
 )
@@ -67,7 +66,6 @@ __all__ = [
     "oriented_boundary",
     "project_out_of_bodies",
     "project_to_walls",
-    "solid_contacts",
     "solid_loads",
     "spanning_elements",
     "spanning_tetrahedra",

@@ -22,7 +22,7 @@ from ..errors import ParameterError
 from ..particles import Particles
 from .body import body_loads, project_out_of_bodies
 from .contact import body_contacts, oriented_boundary
-from .contact3d import boundary_faces, solid_contacts, solid_loads, spanning_tetrahedra
+from .contact3d import boundary_faces, solid_loads, spanning_tetrahedra
 from .contacts import Contacts
 from .protocol import ContactNodes
 from .spanning import CLIP_DEPTH, spanning_elements
@@ -133,10 +133,9 @@ class RigidBodies:
         """The rigid-body rows of one step on any set of displacement nodes.
 
         The particles of N-PFEM, the P1 or P2 nodes of FEM-remap:
-        :func:`~skfem_npfem.boundary.contact.body_contacts` with the bodies'
-        corners (2D) or :func:`~skfem_npfem.boundary.contact3d.solid_contacts`
-        (3D), the lagged normal forces of the body columns, adhesion and
-        friction as the bodies define them.
+        :func:`~skfem_npfem.boundary.contact.body_contacts` (with the bodies'
+        corners in 2D), the lagged normal forces of the body columns, adhesion
+        and friction as the bodies define them.
 
         Returns
         -------
@@ -144,7 +143,7 @@ class RigidBodies:
             The candidates and their columns; body ``k`` is ``first + k``.
         """
         cols = self.columns
-        args = (
+        bc, body_ids = body_contacts(
             self.bodies,
             nodes.x,
             nodes.v,
@@ -156,17 +155,10 @@ class RigidBodies:
             h,
             self.gravity,
             time,
+            noise_ref=nodes.noise_ref[:, cols],
+            axisymmetric=self.axisymmetric,
+            corners=self.dim == 2,
         )
-        noise_ref = nodes.noise_ref[:, cols]
-        if self.dim == 3:
-            bc, body_ids = solid_contacts(*args, noise_ref=noise_ref)
-        else:
-            bc, body_ids = body_contacts(
-                *args,
-                noise_ref=noise_ref,
-                axisymmetric=self.axisymmetric,
-                corners=True,
-            )
         return bc, self.first + body_ids
 
     def put_back(

@@ -16,7 +16,7 @@ They enter the step as :class:`~skfem_npfem.RigidBody` does in 2D
 (:mod:`skfem_npfem.boundary.body`), through :mod:`.contact3d`: the elements that
 span a body are dropped (:func:`~skfem_npfem.boundary.spanning_tetrahedra`), the
 mesh's nodes get unilateral contact rows against the body at its position at
-the start of the step (:func:`~skfem_npfem.boundary.solid_contacts`;
+the start of the step (:func:`~skfem_npfem.boundary.body_contacts`;
 frictionless, Tresca adhesion or Coulomb friction with the normal force lagged
 one step), particles that end inside are put back on its surface
 (:func:`~skfem_npfem.boundary.project_out_of_bodies`) and the step records the
