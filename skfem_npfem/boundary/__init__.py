@@ -32,7 +32,6 @@ from .contact import (
 from .contact3d import (
     boundary_faces,
     face_tributary,
-    solid_loads,
     spanning_tetrahedra,
 )
 from .contacts import Contacts
@@ -66,7 +65,6 @@ __all__ = [
     "oriented_boundary",
     "project_out_of_bodies",
     "project_to_walls",
-    "solid_loads",
     "spanning_elements",
     "spanning_tetrahedra",
     "wall_x",

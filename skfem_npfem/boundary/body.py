@@ -40,10 +40,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ..errors import ParameterError
+from ..mesh.geometry import tangents
 from .contacts import Contacts
 
 __all__ = [
@@ -398,31 +400,42 @@ def project_out_of_bodies(
 
 
 def body_loads(
-    bodies: Sequence[RigidBody],
+    bodies: Sequence[Any],
     contacts: Contacts,
     body_ids: np.ndarray,
     lambda_n: np.ndarray,
     lambda_t: np.ndarray,
     x: np.ndarray,
     time: float,
-) -> list[tuple[np.ndarray, float]]:
-    """Force (2,) and moment that the soil exerts on each body, N (per m) and N m.
+) -> list[tuple[np.ndarray, float | np.ndarray]]:
+    """Force (d,) and moment that the soil exerts on each body, N (per m) and N m.
 
-    The contact force on a node is ``n lambda_n + t lambda_t``; the body gets
-    the opposite.  The moment is about :meth:`RigidBody.reference_at` ``time``
-    (counter-clockwise positive), from the node positions ``x`` (nodes of
-    ``contacts``).
+    The contact force on a node is ``n lambda_n + t lambda_t`` (in 3D ``n
+    lambda_n + sum_k t_k lambda_t,k``, :func:`~skfem_npfem.mesh.geometry.tangents`
+    of ``n``); the body gets the opposite.  The moment is about
+    :meth:`RigidBody.reference_at` ``time``, from the node positions ``x``
+    (nodes of ``contacts``): counter-clockwise positive in 2D, a vector (3,)
+    in 3D.
     """
     n = contacts.normal
-    tang = np.stack([-n[:, 1], n[:, 0]], axis=1)
-    lt = lambda_t[:, 0] if lambda_t.size else np.zeros(n.shape[0])
-    f = -(n * lambda_n[:, None] + tang * lt[:, None])
+    d = x.shape[1]
+    if d == 2:
+        tang = np.stack([-n[:, 1], n[:, 0]], axis=1)
+        lt = lambda_t[:, 0] if lambda_t.size else np.zeros(n.shape[0])
+        f = -(n * lambda_n[:, None] + tang * lt[:, None])
+    else:
+        f = -n * lambda_n[:, None]
+        if lambda_t.size and contacts.size:
+            f -= np.einsum("ckd,ck->cd", tangents(n), lambda_t)
     out = []
     for b_id, body in enumerate(bodies):
         sel = body_ids == b_id
-        force = f[sel].sum(axis=0) if np.any(sel) else np.zeros(2)
+        force = f[sel].sum(axis=0) if np.any(sel) else np.zeros(d)
         r = contacts.subset(sel).points(x) - body.reference_at(time)
-        moment = float(np.sum(r[:, 0] * f[sel, 1] - r[:, 1] * f[sel, 0]))
+        if d == 2:
+            moment = float(np.sum(r[:, 0] * f[sel, 1] - r[:, 1] * f[sel, 0]))
+        else:
+            moment = np.cross(r, f[sel]).sum(axis=0) if np.any(sel) else np.zeros(3)
         out.append((force, moment))
     return out
 

@@ -13,16 +13,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..mesh.geometry import tangents
 from .body import _ON_OUTLINE
-from .contacts import Contacts
 from .plane import RigidPlane
 from .revolution import BodyOfRevolution
 
 __all__ = [
     "boundary_faces",
     "face_tributary",
-    "solid_loads",
     "spanning_tetrahedra",
 ]
 
@@ -141,33 +138,3 @@ def spanning_tetrahedra(
         )
         drop[near[np.any(inside, axis=0)]] = True
     return drop
-
-
-def solid_loads(
-    bodies: Sequence[SolidBody],
-    contacts: Contacts,
-    body_ids: np.ndarray,
-    lambda_n: np.ndarray,
-    lambda_t: np.ndarray,
-    x: np.ndarray,
-    time: float,
-) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Force (3,) and moment (3,) that the soil exerts on each 3D body, N and N m.
-
-    The contact force on a node is ``n lambda_n + sum_k t_k lambda_t,k``
-    (:func:`~skfem_npfem.mesh.geometry.tangents` of ``n``); the body gets the
-    opposite.  The moment is about the body's reference point at ``time``,
-    from the node positions ``x``.
-    """
-    n = contacts.normal
-    f = -n * lambda_n[:, None]
-    if lambda_t.size and contacts.size:
-        f -= np.einsum("ckd,ck->cd", tangents(n), lambda_t)
-    out = []
-    for b_id, body in enumerate(bodies):
-        sel = body_ids == b_id
-        force = f[sel].sum(axis=0) if np.any(sel) else np.zeros(3)
-        r = contacts.subset(sel).points(x) - body.reference_at(time)
-        moment = np.cross(r, f[sel]).sum(axis=0) if np.any(sel) else np.zeros(3)
-        out.append((force, moment))
-    return out

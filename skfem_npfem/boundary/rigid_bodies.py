@@ -22,7 +22,7 @@ from ..errors import ParameterError
 from ..particles import Particles
 from .body import body_loads, project_out_of_bodies
 from .contact import body_contacts, oriented_boundary
-from .contact3d import boundary_faces, solid_loads, spanning_tetrahedra
+from .contact3d import boundary_faces, spanning_tetrahedra
 from .contacts import Contacts
 from .protocol import ContactNodes
 from .spanning import CLIP_DEPTH, spanning_elements
@@ -221,9 +221,7 @@ class RigidBodies:
         body_ids = ids[sel] - self.first
         lambda_n, lambda_t = lambdas[0][sel], lambdas[1][sel]
         extra["dropped_elements"] = dropped
-        loads = (solid_loads if self.dim == 3 else body_loads)(
-            self.bodies, sub, body_ids, lambda_n, lambda_t, x, t_end
-        )
+        loads = body_loads(self.bodies, sub, body_ids, lambda_n, lambda_t, x, t_end)
         for k, (body, (force, moment)) in enumerate(
             zip(self.bodies, loads, strict=True)
         ):

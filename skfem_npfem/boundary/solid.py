@@ -13,15 +13,15 @@ The 3D models have two shapes, each moving with a constant velocity vector:
   profile's edges that lie on the axis (``r = 0``) are not surface.
 
 They enter the step as :class:`~skfem_npfem.RigidBody` does in 2D
-(:mod:`skfem_npfem.boundary.body`), through :mod:`.contact3d`: the elements that
-span a body are dropped (:func:`~skfem_npfem.boundary.spanning_tetrahedra`), the
-mesh's nodes get unilateral contact rows against the body at its position at
-the start of the step (:func:`~skfem_npfem.boundary.body_contacts`;
+(:mod:`skfem_npfem.boundary.body`): the elements that span a body are dropped
+(:func:`~skfem_npfem.boundary.spanning_tetrahedra`), the mesh's nodes get
+unilateral contact rows against the body at its position at the start of the
+step (:func:`~skfem_npfem.boundary.body_contacts`;
 frictionless, Tresca adhesion or Coulomb friction with the normal force lagged
 one step), particles that end inside are put back on its surface
 (:func:`~skfem_npfem.boundary.project_out_of_bodies`) and the step records the
 force and moment vectors of the soil on each body
-(:func:`~skfem_npfem.boundary.solid_loads`).  There are no corner rows: an edge
+(:func:`~skfem_npfem.boundary.body_loads`).  There are no corner rows: an edge
 of a body (the rim of a flat punch) can press into a boundary face of the soil
 between its nodes; the nodes themselves stay out.
 
