@@ -77,13 +77,9 @@ SURFACES = ("surcharge", "rollers")
 #: Apex angle of the standard cone, degrees.
 APEX = 60.0
 
-_POSITIVE = POSITIVE
-
 PARAMS = [
-    Param(
-        "diameter", 0.0357, "m", "cone diameter D (10 cm^2 cone)", float, **_POSITIVE
-    ),
-    Param("su", 1.0e4, "Pa", "undrained shear strength s_u", float, **_POSITIVE),
+    Param("diameter", 0.0357, "m", "cone diameter D (10 cm^2 cone)", float, **POSITIVE),
+    Param("su", 1.0e4, "Pa", "undrained shear strength s_u", float, **POSITIVE),
     Param(
         "rigidity_index",
         100.0,
@@ -138,7 +134,7 @@ PARAMS = [
         "how far the cone is pushed from where it starts (default 6 D: N_c is "
         "steady from about 5 D on)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param(
         "depth",
@@ -148,7 +144,7 @@ PARAMS = [
         "(default 10 D, deep enough that the free surface under its surcharge "
         "moves N_c by under 1 %; the cone starts embedded, wished in place)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param(
         "below",
@@ -175,7 +171,7 @@ PARAMS = [
         "m/s",
         "cone speed (standard 2 cm/s; quasi-static: sets the time unit)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param(
         "dt",
@@ -183,7 +179,7 @@ PARAMS = [
         "s",
         "time step (default: the cone moves spacing/2 per step; at most one spacing)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param(
         "spacing",
@@ -191,7 +187,7 @@ PARAMS = [
         "m",
         "particle spacing near the cone (default D/12)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     *lattice_params("cone"),
     Param(

@@ -89,9 +89,7 @@ def initial_stress(
             force=force,
             fixed=fixed,
             du_prescribed=np.zeros_like(x),
-            contacts=Contacts(
-                np.zeros(0, int), np.zeros((0, 2)), np.zeros(0), np.zeros(0)
-            ),
+            contacts=Contacts.empty(2),
         )
         sigma = solve_step(data, solver_from(values)).sigma
     else:
