@@ -67,7 +67,10 @@ _CORNER_MARGIN = 30.0
 
 
 class _Moving:
-    """What the rigid bodies share (2D and 3D): interface, motion, inside test."""
+    """What the rigid bodies share (2D and 3D): interface, motion, inside test.
+
+    Each body defines its ``size`` and its ``signed_distance(x, t)``.
+    """
 
     velocity: np.ndarray
     friction_angle: float
@@ -100,19 +103,10 @@ class _Moving:
         """The moment's reference point (d,) at time ``t``."""
         return self.reference + self.displacement(t)
 
-    def signed_distance(  # pragma: no cover - overridden
-        self, x: np.ndarray, t: float
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        raise NotImplementedError
-
     def contains(self, x: np.ndarray, t: float) -> np.ndarray:
         """Points (n, d) strictly inside the body at time ``t`` (n,) bool."""
         dist, _, _ = self.signed_distance(x, t)
         return dist < -_ON_OUTLINE * self.size
-
-    @property
-    def size(self) -> float:  # pragma: no cover - overridden
-        raise NotImplementedError
 
 
 @dataclass(frozen=True)
