@@ -103,6 +103,26 @@ class _Moving:
         """The moment's reference point (d,) at time ``t``."""
         return self.reference + self.displacement(t)
 
+    def _store(
+        self, reference: np.ndarray, example: str, edges: int = 0, **checked: Any
+    ) -> None:
+        """Store the ``checked`` fields with the checked velocity and interface.
+
+        The moment's reference point is the given one, else ``reference``;
+        ``example`` is a name for the error message, ``edges`` as in
+        :func:`_interface`.
+        """
+        d = reference.size
+        vel = _vector("velocity", self.velocity, "m/s", d)
+        fa, ad = _interface(
+            self.friction_angle, self.adhesion, self.name, example, edges
+        )
+        if self.reference is not None:
+            reference = _vector("reference", self.reference, "m", d)
+        checked |= {"velocity": vel, "friction_angle": fa, "adhesion": ad}
+        for key, value in {**checked, "reference": reference}.items():
+            object.__setattr__(self, key, value)
+
     def contains(self, x: np.ndarray, t: float) -> np.ndarray:
         """Points (n, d) strictly inside the body at time ``t`` (n,) bool."""
         dist, _, _ = self.signed_distance(x, t)
@@ -161,24 +181,8 @@ class RigidBody(_Moving):
 
     def __post_init__(self) -> None:
         v, ccw = _polygon("vertices", self.vertices, "corners", " (2D models only)")
-        vel = _vector("velocity", self.velocity)
-        fa, ad = _interface(
-            self.friction_angle,
-            self.adhesion,
-            self.name,
-            "footing",
-            v.shape[0] if ccw else -v.shape[0],
-        )
-        ref = (
-            v.mean(axis=0)
-            if self.reference is None
-            else _vector("reference", self.reference)
-        )
-        object.__setattr__(self, "vertices", v)
-        object.__setattr__(self, "velocity", vel)
-        object.__setattr__(self, "friction_angle", fa)
-        object.__setattr__(self, "adhesion", ad)
-        object.__setattr__(self, "reference", ref)
+        edges = v.shape[0] if ccw else -v.shape[0]
+        self._store(v.mean(axis=0), "footing", edges, vertices=v)
 
     @property
     def size(self) -> float:
@@ -339,7 +343,7 @@ def _adhesion(value, m: int) -> float | np.ndarray:
     return ad
 
 
-def _vector(name: str, value, what: str = "m or m/s", size: int = 2) -> np.ndarray:
+def _vector(name: str, value, what: str, size: int) -> np.ndarray:
     """A finite vector of ``size`` components."""
     try:
         v = np.asarray(value, dtype=float)

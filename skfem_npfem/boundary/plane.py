@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .body import _interface, _Moving, _vector
+from .body import _Moving, _vector
 from .solid import _unit3
 
 __all__ = ["RigidPlane"]
@@ -70,22 +70,7 @@ class RigidPlane(_Moving):
     def __post_init__(self) -> None:
         point = _vector("point", self.point, "m", 3)
         normal = _unit3("normal", self.normal)
-        vel = _vector("velocity", self.velocity, "m/s", 3)
-        fa, ad = _interface(self.friction_angle, self.adhesion, self.name, "punch")
-        ref = (
-            point.copy()
-            if self.reference is None
-            else _vector("reference", self.reference, "m", 3)
-        )
-        for key, value in (
-            ("point", point),
-            ("normal", normal),
-            ("velocity", vel),
-            ("friction_angle", fa),
-            ("adhesion", ad),
-            ("reference", ref),
-        ):
-            object.__setattr__(self, key, value)
+        self._store(point.copy(), "punch", point=point, normal=normal)
 
     @property
     def size(self) -> float:

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..mesh.geometry import tangents
-from .body import _ON_CORNER, _ON_OUTLINE, _interface, _Moving, _polygon, _vector
+from .body import _ON_CORNER, _ON_OUTLINE, _Moving, _polygon, _vector
 from .solid import _positive, _unit3
 
 __all__ = ["BodyOfRevolution"]
@@ -102,23 +102,7 @@ class BodyOfRevolution(_Moving):
         v = np.ascontiguousarray(v)
         point = _vector("axis_point", self.axis_point, "m", 3)
         axis = _unit3("axis", self.axis)
-        vel = _vector("velocity", self.velocity, "m/s", 3)
-        fa, ad = _interface(self.friction_angle, self.adhesion, self.name, "punch")
-        ref = (
-            point.copy()
-            if self.reference is None
-            else _vector("reference", self.reference, "m", 3)
-        )
-        for key, value in (
-            ("profile", v),
-            ("axis_point", point),
-            ("axis", axis),
-            ("velocity", vel),
-            ("friction_angle", fa),
-            ("adhesion", ad),
-            ("reference", ref),
-        ):
-            object.__setattr__(self, key, value)
+        self._store(point.copy(), "punch", profile=v, axis_point=point, axis=axis)
 
     # -- usual shapes ---------------------------------------------------------
     @classmethod
