@@ -154,19 +154,14 @@ METRICS = {
 }
 
 
-def _penetration(values: Mapping[str, Any]) -> float:
-    w = values["penetration"]
-    return values["width"] if w is None else w
-
-
 def _geometry(values: Mapping[str, Any]) -> tuple[float, float, float, float]:
     """``(B, half width of the soil, depth of the soil, final penetration)``."""
-    B = values["width"]
+    B, w = values["width"], values["penetration"]
     return (
         B,
         values["domain_width"] * B / 2,
         values["domain_depth"] * B,
-        _penetration(values),
+        B if w is None else w,
     )
 
 
