@@ -32,7 +32,7 @@ from .errors import NpfemError, ParameterError, RunInterrupted
 from .io import dumps
 from .run.control import end_line
 from .scenes import SCENES, run_scene
-from .sweeps.cli import add_sweep_commands
+from .sweeps.cli import add_debug, add_sweep_commands
 
 __all__ = ["main"]
 
@@ -280,12 +280,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="continue from the latest checkpoint in --out",
     )
     p_run.add_argument("--quiet", action="store_true", help="no progress output")
-    p_run.add_argument(
-        "--debug",
-        action="store_true",
-        default=argparse.SUPPRESS,
-        help="show tracebacks",
-    )
+    add_debug(p_run)
     p_run.set_defaults(func=cmd_run)
     p_plot = sub.add_parser("plot", help="render PNG snapshots of a result folder")
     p_plot.add_argument("dir", help="result folder (with result.pvd)")
@@ -309,12 +304,7 @@ def build_parser() -> argparse.ArgumentParser:
         "velocity, displacement",
     )
     p_plot.add_argument("--animation", default="gif", choices=("gif", "mp4", "none"))
-    p_plot.add_argument(
-        "--debug",
-        action="store_true",
-        default=argparse.SUPPRESS,
-        help="show tracebacks",
-    )
+    add_debug(p_plot)
     p_plot.set_defaults(func=cmd_plot)
     add_sweep_commands(sub)
     return parser

@@ -156,11 +156,6 @@ class StressPoints:
         """Number of stress points."""
         return int(self.volumes.shape[0])
 
-    @property
-    def n_stress(self) -> int:
-        """Stress variables per point."""
-        return len(self.components)
-
     def check(self) -> None:
         """Refuse a mesh with degenerate elements (zero or non-finite weights)."""
         bad = ~(np.isfinite(self.volumes) & (self.volumes > 0))

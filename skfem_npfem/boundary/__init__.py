@@ -26,7 +26,6 @@
 from .body import RigidBody, body_loads, check_clear, project_out_of_bodies
 from .contact import (
     body_contacts,
-    boundary_facets,
     boundary_tributary,
     corner_contacts,
     oriented_boundary,
@@ -34,8 +33,6 @@ from .contact import (
 from .contact3d import (
     boundary_faces,
     face_tributary,
-    solid_contacts,
-    solid_loads,
     spanning_tetrahedra,
 )
 from .contacts import Contacts
@@ -60,7 +57,6 @@ __all__ = [
     "body_contacts",
     "body_loads",
     "boundary_faces",
-    "boundary_facets",
     "boundary_tributary",
     "check_clear",
     "corner_contacts",
@@ -70,8 +66,6 @@ __all__ = [
     "oriented_boundary",
     "project_out_of_bodies",
     "project_to_walls",
-    "solid_contacts",
-    "solid_loads",
     "spanning_elements",
     "spanning_tetrahedra",
     "wall_x",

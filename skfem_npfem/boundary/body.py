@@ -40,10 +40,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ..errors import ParameterError
+from ..mesh.geometry import tangents
 from .contacts import Contacts
 
 __all__ = [
@@ -64,8 +66,71 @@ _ON_CORNER = 1e-6
 _CORNER_MARGIN = 30.0
 
 
+class _Moving:
+    """What the rigid bodies share (2D and 3D): interface, motion, inside test.
+
+    Each body defines its ``size`` and its ``signed_distance(x, t)``.
+    """
+
+    velocity: np.ndarray
+    friction_angle: float
+    adhesion: float | np.ndarray
+    name: str
+    reference: np.ndarray
+
+    @property
+    def mu(self) -> float:
+        """Coulomb friction coefficient ``tan(friction_angle)``."""
+        return math.tan(math.radians(self.friction_angle))
+
+    @property
+    def interface(self) -> str:
+        """``"smooth"``, ``"adhesion"`` or ``"coulomb"``."""
+        if np.max(self.adhesion) > 0:
+            return "adhesion"
+        return "coulomb" if self.friction_angle > 0 else "smooth"
+
+    @property
+    def dim(self) -> int:
+        """2 (plane strain or axisymmetric models) or 3: the velocity's size."""
+        return self.velocity.size
+
+    def displacement(self, t: float) -> np.ndarray:
+        """Displacement (d,) from time 0 to ``t``, m."""
+        return self.velocity * float(t)
+
+    def reference_at(self, t: float) -> np.ndarray:
+        """The moment's reference point (d,) at time ``t``."""
+        return self.reference + self.displacement(t)
+
+    def _store(
+        self, reference: np.ndarray, example: str, edges: int = 0, **checked: Any
+    ) -> None:
+        """Store the ``checked`` fields with the checked velocity and interface.
+
+        The moment's reference point is the given one, else ``reference``;
+        ``example`` is a name for the error message, ``edges`` as in
+        :func:`_interface`.
+        """
+        d = reference.size
+        vel = _vector("velocity", self.velocity, "m/s", d)
+        fa, ad = _interface(
+            self.friction_angle, self.adhesion, self.name, example, edges
+        )
+        if self.reference is not None:
+            reference = _vector("reference", self.reference, "m", d)
+        checked |= {"velocity": vel, "friction_angle": fa, "adhesion": ad}
+        for key, value in {**checked, "reference": reference}.items():
+            object.__setattr__(self, key, value)
+
+    def contains(self, x: np.ndarray, t: float) -> np.ndarray:
+        """Points (n, d) strictly inside the body at time ``t`` (n,) bool."""
+        dist, _, _ = self.signed_distance(x, t)
+        return dist < -_ON_OUTLINE * self.size
+
+
 @dataclass(frozen=True)
-class RigidBody:
+class RigidBody(_Moving):
     """A rigid polygon moving with a prescribed velocity (2D models).
 
     Parameters
@@ -115,94 +180,18 @@ class RigidBody:
     reference: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        try:
-            v = np.asarray(self.vertices, dtype=float)
-        except (TypeError, ValueError):
-            raise ParameterError(
-                "vertices", self.vertices, "an array (m, 2) of corners"
-            ) from None
-        if v.ndim != 2 or v.shape[1] != 2 or not np.all(np.isfinite(v)):
-            raise ParameterError(
-                "vertices",
-                getattr(v, "shape", v),
-                "a finite array (m, 2) of corners (2D models only)",
-            )
-        if v.shape[0] > 3 and np.allclose(v[0], v[-1]):
-            v = v[:-1]
-        area = 0.5 * float(
-            np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
-        )
-        size = float(np.ptp(v, axis=0).max()) if v.shape[0] else 0.0
-        if v.shape[0] < 3 or not abs(area) > 1e-12 * size**2:
-            raise ParameterError(
-                "vertices",
-                f"{v.shape[0]} corners enclosing an area of {abs(area):g} m^2",
-                "at least 3 corners enclosing a non-zero area",
-            )
-        if area < 0:
-            v = v[::-1]
-        vel = _vector("velocity", self.velocity)
-        fa = self.friction_angle
-        if isinstance(fa, bool) or not (
-            isinstance(fa, int | float) and math.isfinite(fa) and 0.0 <= fa < 90.0
-        ):
-            raise ParameterError("friction_angle", fa, "degrees in [0, 90)")
-        ad = _adhesion(self.adhesion, v.shape[0] if area > 0 else -v.shape[0])
-        if fa > 0 and np.max(ad) > 0:
-            raise ParameterError(
-                "adhesion",
-                ad,
-                "0 when friction_angle > 0 (choose Coulomb friction or Tresca "
-                "adhesion)",
-            )
-        if not (isinstance(self.name, str) and self.name.isidentifier()):
-            raise ParameterError(
-                "name", self.name, "a word (letters, digits, _), e.g. 'footing'"
-            )
-        ref = (
-            v.mean(axis=0)
-            if self.reference is None
-            else _vector("reference", self.reference)
-        )
-        object.__setattr__(self, "vertices", v)
-        object.__setattr__(self, "velocity", vel)
-        object.__setattr__(self, "friction_angle", float(fa))
-        object.__setattr__(self, "adhesion", ad)
-        object.__setattr__(self, "reference", ref)
-
-    @property
-    def mu(self) -> float:
-        """Coulomb friction coefficient ``tan(friction_angle)``."""
-        return math.tan(math.radians(self.friction_angle))
-
-    @property
-    def interface(self) -> str:
-        """``"smooth"``, ``"adhesion"`` or ``"coulomb"``."""
-        if np.max(self.adhesion) > 0:
-            return "adhesion"
-        return "coulomb" if self.friction_angle > 0 else "smooth"
+        v, ccw = _polygon("vertices", self.vertices, "corners", " (2D models only)")
+        edges = v.shape[0] if ccw else -v.shape[0]
+        self._store(v.mean(axis=0), "footing", edges, vertices=v)
 
     @property
     def size(self) -> float:
         """Largest extent of the outline, m."""
         return float(np.ptp(self.vertices, axis=0).max())
 
-    def displacement(self, t: float) -> np.ndarray:
-        """Displacement (2,) from time 0 to ``t``, m."""
-        return self.velocity * float(t)
-
     def vertices_at(self, t: float) -> np.ndarray:
         """The outline's corners (m, 2) at time ``t``."""
         return self.vertices + self.displacement(t)
-
-    def reference_at(self, t: float) -> np.ndarray:
-        """The moment's reference point (2,) at time ``t``."""
-        return self.reference + self.displacement(t)
-
-    @property
-    def dim(self) -> int:
-        """2: a body of 2D models (plane strain or axisymmetric)."""
-        return 2
 
     def bounds_at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """Bounding box (lo, hi) of the outline at time ``t``, each (2,)."""
@@ -267,15 +256,69 @@ class RigidBody:
         d2 = np.sum((ap - s[..., None] * ab[None]) ** 2, axis=2)
         return self.adhesion[np.argmin(d2, axis=1)]
 
-    def contains(self, x: np.ndarray, t: float) -> np.ndarray:
-        """Points (n, 2) strictly inside the outline at time ``t`` (n,) bool."""
-        dist, _, _ = self.signed_distance(x, t)
-        return dist < -_ON_OUTLINE * self.size
+
+def _polygon(name: str, value, corners: str, note: str = "") -> tuple[np.ndarray, bool]:
+    """A closed polygon (m >= 3, 2) enclosing an area, stored counter-clockwise.
+
+    Returns the corners (a repeated closing corner dropped) and whether they
+    were given counter-clockwise.
+    """
+    try:
+        v = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(name, value, f"an array (m, 2) of {corners}") from None
+    if v.ndim != 2 or v.shape[1] != 2 or not np.all(np.isfinite(v)):
+        raise ParameterError(
+            name, getattr(v, "shape", v), f"a finite array (m, 2) of {corners}{note}"
+        )
+    if v.shape[0] > 3 and np.allclose(v[0], v[-1]):
+        v = v[:-1]
+    area = 0.5 * float(
+        np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
+    )
+    size = float(np.ptp(v, axis=0).max()) if v.shape[0] else 0.0
+    if v.shape[0] < 3 or not abs(area) > 1e-12 * size**2:
+        raise ParameterError(
+            name,
+            f"{v.shape[0]} corners enclosing an area of {abs(area):g} m^2",
+            "at least 3 corners enclosing a non-zero area",
+        )
+    return (v[::-1] if area < 0 else v), area > 0
+
+
+def _interface(
+    friction_angle, adhesion, name, example: str, edges: int = 0
+) -> tuple[float, float | np.ndarray]:
+    """The checked interface law of a body and its name.
+
+    ``edges``: the adhesion may be one stress per edge (as :func:`_adhesion`);
+    0: one stress (the 3D bodies).
+    """
+    fa = friction_angle
+    if isinstance(fa, bool) or not (
+        isinstance(fa, int | float) and math.isfinite(fa) and 0.0 <= fa < 90.0
+    ):
+        raise ParameterError("friction_angle", fa, "degrees in [0, 90)")
+    ad = _adhesion(adhesion, edges)
+    if fa > 0 and np.max(ad) > 0:
+        raise ParameterError(
+            "adhesion",
+            ad,
+            "0 when friction_angle > 0 (choose Coulomb friction or Tresca adhesion)",
+        )
+    if not (isinstance(name, str) and name.isidentifier()):
+        raise ParameterError(
+            "name", name, f"a word (letters, digits, _), e.g. {example!r}"
+        )
+    return float(fa), ad
 
 
 def _adhesion(value, m: int) -> float | np.ndarray:
-    """A finite stress >= 0, or one per edge (``m`` edges; ``-m``: reversed)."""
-    if np.ndim(value) == 0:
+    """A finite stress >= 0, or one per edge (``m`` edges; ``-m``: reversed).
+
+    ``m = 0``: one stress only.
+    """
+    if np.ndim(value) == 0 or not m:
         if isinstance(value, bool) or not (
             isinstance(value, int | float | np.floating)
             and math.isfinite(value)
@@ -300,14 +343,14 @@ def _adhesion(value, m: int) -> float | np.ndarray:
     return ad
 
 
-def _vector(name: str, value) -> np.ndarray:
-    """A finite 2-vector."""
+def _vector(name: str, value, what: str, size: int) -> np.ndarray:
+    """A finite vector of ``size`` components."""
     try:
         v = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
-        raise ParameterError(name, value, "a finite vector of size 2") from None
-    if v.shape != (2,) or not np.all(np.isfinite(v)):
-        raise ParameterError(name, value, "a finite vector of size 2 (m or m/s)")
+        raise ParameterError(name, value, f"a finite vector of size {size}") from None
+    if v.shape != (size,) or not np.all(np.isfinite(v)):
+        raise ParameterError(name, value, f"a finite vector of size {size} ({what})")
     return v
 
 
@@ -355,31 +398,42 @@ def project_out_of_bodies(
 
 
 def body_loads(
-    bodies: Sequence[RigidBody],
+    bodies: Sequence[Any],
     contacts: Contacts,
     body_ids: np.ndarray,
     lambda_n: np.ndarray,
     lambda_t: np.ndarray,
     x: np.ndarray,
     time: float,
-) -> list[tuple[np.ndarray, float]]:
-    """Force (2,) and moment that the soil exerts on each body, N (per m) and N m.
+) -> list[tuple[np.ndarray, float | np.ndarray]]:
+    """Force (d,) and moment that the soil exerts on each body, N (per m) and N m.
 
-    The contact force on a node is ``n lambda_n + t lambda_t``; the body gets
-    the opposite.  The moment is about :meth:`RigidBody.reference_at` ``time``
-    (counter-clockwise positive), from the node positions ``x`` (nodes of
-    ``contacts``).
+    The contact force on a node is ``n lambda_n + t lambda_t`` (in 3D ``n
+    lambda_n + sum_k t_k lambda_t,k``, :func:`~skfem_npfem.mesh.geometry.tangents`
+    of ``n``); the body gets the opposite.  The moment is about
+    :meth:`RigidBody.reference_at` ``time``, from the node positions ``x``
+    (nodes of ``contacts``): counter-clockwise positive in 2D, a vector (3,)
+    in 3D.
     """
     n = contacts.normal
-    tang = np.stack([-n[:, 1], n[:, 0]], axis=1)
-    lt = lambda_t[:, 0] if lambda_t.size else np.zeros(n.shape[0])
-    f = -(n * lambda_n[:, None] + tang * lt[:, None])
+    d = x.shape[1]
+    if d == 2:
+        tang = np.stack([-n[:, 1], n[:, 0]], axis=1)
+        lt = lambda_t[:, 0] if lambda_t.size else np.zeros(n.shape[0])
+        f = -(n * lambda_n[:, None] + tang * lt[:, None])
+    else:
+        f = -n * lambda_n[:, None]
+        if lambda_t.size and contacts.size:
+            f -= np.einsum("ckd,ck->cd", tangents(n), lambda_t)
     out = []
     for b_id, body in enumerate(bodies):
         sel = body_ids == b_id
-        force = f[sel].sum(axis=0) if np.any(sel) else np.zeros(2)
+        force = f[sel].sum(axis=0) if np.any(sel) else np.zeros(d)
         r = contacts.subset(sel).points(x) - body.reference_at(time)
-        moment = float(np.sum(r[:, 0] * f[sel, 1] - r[:, 1] * f[sel, 0]))
+        if d == 2:
+            moment = float(np.sum(r[:, 0] * f[sel, 1] - r[:, 1] * f[sel, 0]))
+        else:
+            moment = np.cross(r, f[sel]).sum(axis=0) if np.any(sel) else np.zeros(3)
         out.append((force, moment))
     return out
 

@@ -11,32 +11,21 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
+from ..mesh.geometry import tangents
 from .body import _CORNER_MARGIN, _ON_CORNER, RigidBody, _near
+from .contact3d import face_tributary
 from .contacts import Contacts
 
 __all__ = [
     "body_contacts",
-    "boundary_facets",
     "boundary_tributary",
     "corner_contacts",
     "oriented_boundary",
 ]
-
-
-def boundary_facets(t: np.ndarray) -> np.ndarray:
-    """Boundary edges (2, nb) of a triangle mesh ``t`` (3, ne): edges of one triangle.
-
-    Examples
-    --------
-    >>> boundary_facets(np.array([[0, 1, 2], [1, 3, 2]]).T).T.tolist()
-    [[0, 1], [0, 2], [1, 3], [2, 3]]
-    """
-    edges = np.sort(np.concatenate([t[[0, 1]], t[[1, 2]], t[[2, 0]]], axis=1), axis=0)
-    uniq, counts = np.unique(edges, axis=1, return_counts=True)
-    return uniq[:, counts == 1]
 
 
 def oriented_boundary(x: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -72,7 +61,7 @@ def boundary_tributary(
     x : ndarray (N, 2)
         Node positions.
     facets : ndarray (2, nb)
-        Boundary edges (:func:`boundary_facets`).
+        Boundary edges (:func:`oriented_boundary`).
     tangent : ndarray (N, 2), optional
         Unit tangent of the surface a node touches: an edge then counts with
         its length along that tangent (a side edge meeting a flat contact
@@ -88,7 +77,7 @@ def boundary_tributary(
     Examples
     --------
     >>> x = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
-    >>> f = boundary_facets(np.array([[0], [1], [2]]))
+    >>> f = oriented_boundary(x, np.array([[0], [1], [2]]))
     >>> boundary_tributary(x, f).round(3).tolist()
     [1.0, 1.207, 1.207]
     >>> flat = np.tile([1.0, 0.0], (3, 1))
@@ -213,7 +202,7 @@ def _face_shares(
 
 
 def body_contacts(
-    bodies: Sequence[RigidBody],
+    bodies: Sequence[Any],
     x: np.ndarray,
     v: np.ndarray,
     fixed: np.ndarray,
@@ -228,35 +217,43 @@ def body_contacts(
     axisymmetric: bool = False,
     corners: bool = False,
 ) -> tuple[Contacts, np.ndarray]:
-    """Contact candidates of nodes against the bodies over one step.
+    """Contact candidates of nodes against the bodies over one step (2D or 3D).
 
     A node is a candidate when it is closer to a body than ``h + 2 (|v| +
     |V|) dt + g dt^2`` (it cannot tunnel through within the step).  Its row
     is ``gap + n . (du - dU) >= 0`` with the distance ``gap`` (0 for a node
     already inside), the outward normal ``n`` at the closest point and the
     body's displacement ``dU = V dt``; the slip is measured against the body
-    (:attr:`Contacts.slip_offset`).
+    (:attr:`Contacts.slip_offset`; in 3D along
+    :func:`~skfem_npfem.mesh.geometry.tangents` of ``n``).  Tresca adhesion
+    bounds it by ``adhesion`` times the node's contact area, Coulomb by ``mu``
+    times the lagged normal force, both only where the node was in contact in
+    the previous step.
 
     Parameters
     ----------
-    bodies : sequence of RigidBody
-    x, v : ndarray (n, 2)
+    bodies : sequence of RigidBody (2D), or of RigidPlane and BodyOfRevolution (3D)
+    x, v : ndarray (n, d)
         Node positions and velocities at the start of the step.
-    fixed, v_prescribed : ndarray (n, 2)
+    fixed, v_prescribed : ndarray (n, d)
         Prescribed dofs and their velocities.
     lagged : ndarray (n, n_bodies)
         Normal force of each body on the node in the previous step, N.
-    facets : ndarray (2, nb)
-        Boundary edges of the step's mesh (:func:`boundary_facets`): the
-        contact areas of adhesion (:func:`boundary_tributary` along the body).
+    facets : ndarray (2, nb) or (3, nf)
+        The boundary of the step's mesh, for the contact areas of adhesion:
+        its edges in 2D (:func:`oriented_boundary`; :func:`boundary_tributary`
+        along the body), its faces in 3D
+        (:func:`~skfem_npfem.boundary.contact3d.boundary_faces`;
+        :func:`~skfem_npfem.boundary.contact3d.face_tributary` projected on the
+        body's surface).
     dt, h, gravity, time : float
         Step (s), spacing (m), gravity (m/s^2), time at the start (s).
     axisymmetric : bool
-        Contact areas of rings.
+        Contact areas of rings (2D).
     corners : bool
         Add the candidates of the bodies' corners against the boundary edges
-        (:func:`corner_contacts`; ``facets`` must then have the mesh on their
-        left, :func:`oriented_boundary`).
+        (2D: :func:`corner_contacts`; ``facets`` must then have the mesh on
+        their left, :func:`oriented_boundary`).
     noise_ref : ndarray (m, n_bodies), optional
         Forces that set the noise level of ``lagged`` (default ``lagged``).
 
@@ -267,6 +264,7 @@ def body_contacts(
     ndarray (nc,) int
         The body of each candidate.
     """
+    dim = x.shape[1]
     noise_ref = lagged if noise_ref is None else noise_ref
     du_pres = np.where(fixed, v_prescribed * dt, 0.0)
     speed = np.linalg.norm(v, axis=1)
@@ -279,19 +277,32 @@ def body_contacts(
         dist, normal, _ = body.signed_distance(x[near], time)
         keep = dist < reach[near]
         cand, dist, normal = near[keep], dist[keep], normal[keep]
-        shares = _face_shares(body, x, facets, time, axisymmetric)[cand]
-        normal = _corner_normals(body, x[cand], normal, time, shares)
+        if dim == 2:
+            shares = _face_shares(body, x, facets, time, axisymmetric)[cand]
+            normal = _corner_normals(body, x[cand], normal, time, shares)
+        else:
+            normal = body.corner_normals(x[cand], normal, time)
         free = ~np.all(fixed[cand] | (np.abs(normal) == 0.0), axis=1)
         cand, dist, normal = cand[free], dist[free], normal[free]
         rel = du_pres[cand] - dU
-        tang = np.stack([-normal[:, 1], normal[:, 0]], axis=1)
+        if dim == 2:
+            tang = np.stack([-normal[:, 1], normal[:, 0]], axis=1)
+            slip = np.sum(rel * tang, axis=1)[:, None]
+        else:
+            tang = tangents(normal) if cand.size else np.zeros((0, 2, 3))
+            slip = np.einsum("ckd,cd->ck", tang, rel)
         lam = lagged[cand, b_id]
         touching = lam > 1e-8 * np.max(np.abs(noise_ref[:, b_id]), initial=0.0)
         if np.max(body.adhesion) > 0:
-            along = np.zeros_like(x)
-            along[cand] = tang
-            area = boundary_tributary(x, facets, along, axisymmetric)[cand]
-            strength = body.adhesion_at(x[cand], time)
+            surface = np.zeros_like(x)
+            if dim == 2:
+                surface[cand] = tang
+                area = boundary_tributary(x, facets, surface, axisymmetric)[cand]
+                strength = body.adhesion_at(x[cand], time)
+            else:
+                surface[cand] = normal
+                area = face_tributary(x, facets, surface)[cand]
+                strength = body.adhesion
             bound = np.where(touching, strength * area, 0.0)
         else:
             bound = np.where(touching, body.mu * lam, 0.0)
@@ -301,7 +312,7 @@ def body_contacts(
                 normal=normal,
                 gap=np.maximum(dist, 0.0) + np.sum(rel * normal, axis=1),
                 mu_lambda=bound,
-                slip_offset=np.sum(rel * tang, axis=1)[:, None],
+                slip_offset=slip,
             )
         )
         ids.append(np.full(cand.size, b_id))
@@ -310,7 +321,7 @@ def body_contacts(
             parts.append(cc)
             ids.append(np.full(cc.size, b_id))
     if not parts:
-        return Contacts.empty(2), np.zeros(0, int)
+        return Contacts.empty(dim), np.zeros(0, int)
     return Contacts.concat(parts), np.concatenate(ids)
 
 

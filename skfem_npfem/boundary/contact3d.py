@@ -1,9 +1,10 @@
 """Contact of 3D rigid bodies with the particles, found every step.
 
-The 3D counterpart of :mod:`.contact` (node rows only, no corner rows): the
-mesh's boundary faces and the nodes' contact areas, the tetrahedra that span
-a body, the nodes' contact candidates against the bodies and the loads the
-bodies take.  See :mod:`.solid` for how these enter the step.
+What the 3D bodies need beside :mod:`.contact` (whose
+:func:`~skfem_npfem.boundary.contact.body_contacts` gives their node rows; no
+corner rows): the mesh's boundary faces and the nodes' contact areas, the
+tetrahedra that span a body and the loads the bodies take.  See :mod:`.solid`
+for how these enter the step.
 """
 
 from __future__ import annotations
@@ -12,17 +13,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..mesh.geometry import tangents
 from .body import _ON_OUTLINE
-from .contacts import Contacts
 from .plane import RigidPlane
 from .revolution import BodyOfRevolution
 
 __all__ = [
     "boundary_faces",
     "face_tributary",
-    "solid_contacts",
-    "solid_loads",
     "spanning_tetrahedra",
 ]
 
@@ -97,12 +94,6 @@ def face_tributary(
     return out
 
 
-def _near3(body: SolidBody, x: np.ndarray, t: float, reach) -> np.ndarray:
-    lo, hi = body.bounds_at(t)
-    r = np.asarray(reach)[..., None] if np.ndim(reach) else reach
-    return np.flatnonzero(np.all((x > lo - r) & (x < hi + r), axis=1))
-
-
 def spanning_tetrahedra(
     bodies: Sequence[SolidBody], x: np.ndarray, t: np.ndarray, time: float
 ) -> np.ndarray:
@@ -147,122 +138,3 @@ def spanning_tetrahedra(
         )
         drop[near[np.any(inside, axis=0)]] = True
     return drop
-
-
-def solid_contacts(
-    bodies: Sequence[SolidBody],
-    x: np.ndarray,
-    v: np.ndarray,
-    fixed: np.ndarray,
-    v_prescribed: np.ndarray,
-    lagged: np.ndarray,
-    faces: np.ndarray,
-    dt: float,
-    h: float,
-    gravity: float,
-    time: float,
-    noise_ref: np.ndarray | None = None,
-) -> tuple[Contacts, np.ndarray]:
-    """Contact candidates of nodes against 3D bodies over one step.
-
-    The 3D counterpart of :func:`~skfem_npfem.boundary.body_contacts` (node
-    rows only): a node closer to a body than ``h + 2 (|v| + |V|) dt + g
-    dt^2`` gets the row ``gap + n . (du - dU) >= 0``, its slip measured
-    against the body along :func:`~skfem_npfem.mesh.geometry.tangents` of
-    ``n``; Tresca adhesion bounds it by ``adhesion`` times the node's contact
-    area (:func:`face_tributary` projected on the body's surface), Coulomb by
-    ``mu`` times the lagged normal force, both only where the node was in
-    contact in the previous step.
-
-    Parameters
-    ----------
-    bodies : sequence of RigidPlane or BodyOfRevolution
-    x, v : ndarray (n, 3)
-        Node positions and velocities at the start of the step.
-    fixed, v_prescribed : ndarray (n, 3)
-        Prescribed dofs and their velocities.
-    lagged : ndarray (n, n_bodies)
-        Normal force of each body on the node in the previous step, N.
-    faces : ndarray (3, nf)
-        Boundary faces of the step's mesh (:func:`boundary_faces`).
-    dt, h, gravity, time : float
-        Step (s), spacing (m), gravity (m/s^2), time at the start (s).
-    noise_ref : ndarray (m, n_bodies), optional
-        Forces that set the noise level of ``lagged`` (default ``lagged``).
-
-    Returns
-    -------
-    Contacts
-        Candidates (``node`` indexes the given nodes), with ``slip_offset``.
-    ndarray (nc,) int
-        The body of each candidate.
-    """
-    noise_ref = lagged if noise_ref is None else noise_ref
-    du_pres = np.where(fixed, v_prescribed * dt, 0.0)
-    speed = np.linalg.norm(v, axis=1)
-    parts, ids = [], []
-    for b_id, body in enumerate(bodies):
-        dU = body.velocity * dt
-        reach = h + 2.0 * (speed + float(np.linalg.norm(body.velocity))) * dt
-        reach = reach + gravity * dt**2
-        near = _near3(body, x, time, reach)
-        dist, normal, _ = body.signed_distance(x[near], time)
-        keep = dist < reach[near]
-        cand, dist, normal = near[keep], dist[keep], normal[keep]
-        normal = body.corner_normals(x[cand], normal, time)
-        free = ~np.all(fixed[cand] | (np.abs(normal) == 0.0), axis=1)
-        cand, dist, normal = cand[free], dist[free], normal[free]
-        rel = du_pres[cand] - dU
-        tang = tangents(normal) if cand.size else np.zeros((0, 2, 3))
-        lam = lagged[cand, b_id]
-        touching = lam > 1e-8 * np.max(np.abs(noise_ref[:, b_id]), initial=0.0)
-        if body.adhesion > 0:
-            across = np.zeros_like(x)
-            across[cand] = normal
-            area = face_tributary(x, faces, across)[cand]
-            bound = np.where(touching, body.adhesion * area, 0.0)
-        else:
-            bound = np.where(touching, body.mu * lam, 0.0)
-        parts.append(
-            Contacts(
-                node=cand,
-                normal=normal,
-                gap=np.maximum(dist, 0.0) + np.sum(rel * normal, axis=1),
-                mu_lambda=bound,
-                slip_offset=np.einsum("ckd,cd->ck", tang, rel),
-            )
-        )
-        ids.append(np.full(cand.size, b_id))
-    if not parts:
-        return Contacts.empty(3), np.zeros(0, int)
-    return Contacts.concat(parts), np.concatenate(ids)
-
-
-def solid_loads(
-    bodies: Sequence[SolidBody],
-    contacts: Contacts,
-    body_ids: np.ndarray,
-    lambda_n: np.ndarray,
-    lambda_t: np.ndarray,
-    x: np.ndarray,
-    time: float,
-) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Force (3,) and moment (3,) that the soil exerts on each 3D body, N and N m.
-
-    The contact force on a node is ``n lambda_n + sum_k t_k lambda_t,k``
-    (:func:`~skfem_npfem.mesh.geometry.tangents` of ``n``); the body gets the
-    opposite.  The moment is about the body's reference point at ``time``,
-    from the node positions ``x``.
-    """
-    n = contacts.normal
-    f = -n * lambda_n[:, None]
-    if lambda_t.size and contacts.size:
-        f -= np.einsum("ckd,ck->cd", tangents(n), lambda_t)
-    out = []
-    for b_id, body in enumerate(bodies):
-        sel = body_ids == b_id
-        force = f[sel].sum(axis=0) if np.any(sel) else np.zeros(3)
-        r = contacts.subset(sel).points(x) - body.reference_at(time)
-        moment = np.cross(r, f[sel]).sum(axis=0) if np.any(sel) else np.zeros(3)
-        out.append((force, moment))
-    return out

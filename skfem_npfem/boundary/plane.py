@@ -10,13 +10,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .solid import _check_interface, _Moving3D, _unit3, _vector3
+from .body import _Moving, _vector
+from .solid import _unit3
 
 __all__ = ["RigidPlane"]
 
 
 @dataclass(frozen=True)
-class RigidPlane(_Moving3D):
+class RigidPlane(_Moving):
     """The rigid half-space behind a plane, moving with a prescribed velocity (3D).
 
     Parameters
@@ -67,24 +68,9 @@ class RigidPlane(_Moving3D):
     reference: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        point = _vector3("point", self.point, "m")
+        point = _vector("point", self.point, "m", 3)
         normal = _unit3("normal", self.normal)
-        vel = _vector3("velocity", self.velocity, "m/s")
-        fa, ad = _check_interface(self.friction_angle, self.adhesion, self.name)
-        ref = (
-            point.copy()
-            if self.reference is None
-            else _vector3("reference", self.reference, "m")
-        )
-        for key, value in (
-            ("point", point),
-            ("normal", normal),
-            ("velocity", vel),
-            ("friction_angle", fa),
-            ("adhesion", ad),
-            ("reference", ref),
-        ):
-            object.__setattr__(self, key, value)
+        self._store(point.copy(), "punch", point=point, normal=normal)
 
     @property
     def size(self) -> float:

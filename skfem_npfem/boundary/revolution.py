@@ -15,14 +15,8 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..mesh.geometry import tangents
-from .body import _ON_CORNER, _ON_OUTLINE
-from .solid import (
-    _check_interface,
-    _Moving3D,
-    _positive,
-    _unit3,
-    _vector3,
-)
+from .body import _ON_CORNER, _ON_OUTLINE, _Moving, _polygon, _vector
+from .solid import _positive, _unit3
 
 __all__ = ["BodyOfRevolution"]
 
@@ -31,7 +25,7 @@ _BLOCK = 1 << 20
 
 
 @dataclass(frozen=True)
-class BodyOfRevolution(_Moving3D):
+class BodyOfRevolution(_Moving):
     """A rigid body of revolution moving with a prescribed velocity (3D).
 
     The body is a closed profile polygon in the half-plane ``(r, z)``, ``r >=
@@ -98,57 +92,17 @@ class BodyOfRevolution(_Moving3D):
     reference: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        try:
-            v = np.asarray(self.profile, dtype=float)
-        except (TypeError, ValueError):
-            raise ParameterError(
-                "profile", self.profile, "an array (m, 2) of (r, z) corners"
-            ) from None
-        if v.ndim != 2 or v.shape[1] != 2 or not np.all(np.isfinite(v)):
-            raise ParameterError(
-                "profile",
-                getattr(v, "shape", v),
-                "a finite array (m, 2) of (r, z) corners",
-            )
-        if v.shape[0] > 3 and np.allclose(v[0], v[-1]):
-            v = v[:-1]
-        if v.shape[0] and v[:, 0].min() < 0.0:
+        v, _ = _polygon("profile", self.profile, "(r, z) corners")
+        if v[:, 0].min() < 0.0:
             raise ParameterError(
                 "profile",
                 f"a corner at r = {v[:, 0].min():g} m",
                 "corners with r >= 0 (the half-plane on one side of the axis)",
             )
-        area = 0.5 * float(
-            np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
-        )
-        size = float(np.ptp(v, axis=0).max()) if v.shape[0] else 0.0
-        if v.shape[0] < 3 or not abs(area) > 1e-12 * size**2:
-            raise ParameterError(
-                "profile",
-                f"{v.shape[0]} corners enclosing an area of {abs(area):g} m^2",
-                "at least 3 corners enclosing a non-zero area",
-            )
-        if area < 0:
-            v = v[::-1].copy()
-        point = _vector3("axis_point", self.axis_point, "m")
+        v = np.ascontiguousarray(v)
+        point = _vector("axis_point", self.axis_point, "m", 3)
         axis = _unit3("axis", self.axis)
-        vel = _vector3("velocity", self.velocity, "m/s")
-        fa, ad = _check_interface(self.friction_angle, self.adhesion, self.name)
-        ref = (
-            point.copy()
-            if self.reference is None
-            else _vector3("reference", self.reference, "m")
-        )
-        for key, value in (
-            ("profile", v),
-            ("axis_point", point),
-            ("axis", axis),
-            ("velocity", vel),
-            ("friction_angle", fa),
-            ("adhesion", ad),
-            ("reference", ref),
-        ):
-            object.__setattr__(self, key, value)
+        self._store(point.copy(), "punch", profile=v, axis_point=point, axis=axis)
 
     # -- usual shapes ---------------------------------------------------------
     @classmethod

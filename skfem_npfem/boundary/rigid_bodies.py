@@ -22,7 +22,7 @@ from ..errors import ParameterError
 from ..particles import Particles
 from .body import body_loads, project_out_of_bodies
 from .contact import body_contacts, oriented_boundary
-from .contact3d import boundary_faces, solid_contacts, solid_loads, spanning_tetrahedra
+from .contact3d import boundary_faces, spanning_tetrahedra
 from .contacts import Contacts
 from .protocol import ContactNodes
 from .spanning import CLIP_DEPTH, spanning_elements
@@ -133,10 +133,9 @@ class RigidBodies:
         """The rigid-body rows of one step on any set of displacement nodes.
 
         The particles of N-PFEM, the P1 or P2 nodes of FEM-remap:
-        :func:`~skfem_npfem.boundary.contact.body_contacts` with the bodies'
-        corners (2D) or :func:`~skfem_npfem.boundary.contact3d.solid_contacts`
-        (3D), the lagged normal forces of the body columns, adhesion and
-        friction as the bodies define them.
+        :func:`~skfem_npfem.boundary.contact.body_contacts` (with the bodies'
+        corners in 2D), the lagged normal forces of the body columns, adhesion
+        and friction as the bodies define them.
 
         Returns
         -------
@@ -144,7 +143,7 @@ class RigidBodies:
             The candidates and their columns; body ``k`` is ``first + k``.
         """
         cols = self.columns
-        args = (
+        bc, body_ids = body_contacts(
             self.bodies,
             nodes.x,
             nodes.v,
@@ -156,17 +155,10 @@ class RigidBodies:
             h,
             self.gravity,
             time,
+            noise_ref=nodes.noise_ref[:, cols],
+            axisymmetric=self.axisymmetric,
+            corners=self.dim == 2,
         )
-        noise_ref = nodes.noise_ref[:, cols]
-        if self.dim == 3:
-            bc, body_ids = solid_contacts(*args, noise_ref=noise_ref)
-        else:
-            bc, body_ids = body_contacts(
-                *args,
-                noise_ref=noise_ref,
-                axisymmetric=self.axisymmetric,
-                corners=True,
-            )
         return bc, self.first + body_ids
 
     def put_back(
@@ -229,34 +221,26 @@ class RigidBodies:
         body_ids = ids[sel] - self.first
         lambda_n, lambda_t = lambdas[0][sel], lambdas[1][sel]
         extra["dropped_elements"] = dropped
-        if self.dim == 3:
-            loads = solid_loads(
-                self.bodies, sub, body_ids, lambda_n, lambda_t, x, t_end
-            )
-            for k, (body, (force, moment)) in enumerate(
-                zip(self.bodies, loads, strict=True)
-            ):
-                disp = body.displacement(t_end)
-                for i, axis in enumerate("xyz"):
-                    extra[f"{body.name}_{axis}"] = float(disp[i])
-                    extra[f"{body.name}_force_{axis}"] = float(force[i])
-                    extra[f"{body.name}_moment_{axis}"] = float(moment[i])
-                extra[f"{body.name}_penetration"] = _depth(mark, k)
-            return
         loads = body_loads(self.bodies, sub, body_ids, lambda_n, lambda_t, x, t_end)
         for k, (body, (force, moment)) in enumerate(
             zip(self.bodies, loads, strict=True)
         ):
             disp = body.displacement(t_end)
-            extra[f"{body.name}_x"] = float(disp[0])
-            extra[f"{body.name}_y"] = float(disp[1])
-            # A body of revolution takes no net radial force.
-            extra[f"{body.name}_force_x"] = (
-                0.0 if self.axisymmetric else float(force[0])
-            )
-            extra[f"{body.name}_force_y"] = float(force[1])
-            extra[f"{body.name}_moment"] = 0.0 if self.axisymmetric else moment
-            extra[f"{body.name}_penetration"] = _depth(mark, k)
+            if self.dim == 3:
+                for i, axis in enumerate("xyz"):
+                    extra[f"{body.name}_{axis}"] = float(disp[i])
+                    extra[f"{body.name}_force_{axis}"] = float(force[i])
+                    extra[f"{body.name}_moment_{axis}"] = float(moment[i])
+            else:
+                extra[f"{body.name}_x"] = float(disp[0])
+                extra[f"{body.name}_y"] = float(disp[1])
+                # A body of revolution takes no net radial force.
+                extra[f"{body.name}_force_x"] = (
+                    0.0 if self.axisymmetric else float(force[0])
+                )
+                extra[f"{body.name}_force_y"] = float(force[1])
+                extra[f"{body.name}_moment"] = 0.0 if self.axisymmetric else moment
+            extra[f"{body.name}_penetration"] = 0.0 if mark is None else float(mark[k])
 
     def _facets(self, nodes: ContactNodes) -> np.ndarray:
         """The boundary the body rows need: oriented edges (2D), faces (3D)."""
@@ -267,8 +251,3 @@ class RigidBodies:
         if any(b.adhesion > 0 for b in self.bodies):
             return boundary_faces(nodes.local_t)
         return np.zeros((3, 0), int)
-
-
-def _depth(mark: np.ndarray | None, k: int) -> float:
-    """Body ``k``'s penetration from the mark of :meth:`RigidBodies.put_back`."""
-    return 0.0 if mark is None else float(mark[k])

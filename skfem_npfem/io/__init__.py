@@ -22,8 +22,6 @@ from .checkpoints import (
     CHECKPOINT_FORMAT,
     checkpoint_path,
     checkpoint_step,
-    clear_run_files,
-    clear_temporaries,
     latest_checkpoint,
     load_checkpoint,
     read_checkpoint,
@@ -41,7 +39,7 @@ from .files import (
     write_json,
 )
 from .results import ResultWriter, read_pvd, read_step, step_time
-from .run_folder import RunFolder, finish_commits
+from .run_folder import RunFolder
 
 __all__ = [
     "CHECKPOINT_FORMAT",
@@ -52,10 +50,7 @@ __all__ = [
     "check_writable_dir",
     "checkpoint_path",
     "checkpoint_step",
-    "clear_run_files",
-    "clear_temporaries",
     "dumps",
-    "finish_commits",
     "folder_lock",
     "latest_checkpoint",
     "load_checkpoint",

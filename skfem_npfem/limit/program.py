@@ -147,7 +147,7 @@ def static_program(
         force=f0,
         fixed=fixed,
         du_prescribed=np.zeros((N, d)),
-        contacts=Contacts(np.zeros(0, int), np.zeros((0, d)), np.zeros(0), np.zeros(0)),
+        contacts=Contacts.empty(d),
     )
     check_step_data(data)
     return Program(data)

@@ -192,11 +192,6 @@ class NodalIntegration:
         """Number of stress points (one per node)."""
         return self.volumes.shape[0]
 
-    @property
-    def n_stress(self) -> int:
-        """Stress components per node ``n_s``."""
-        return len(self.components)
-
     def check(self) -> None:
         """Refuse a mesh with degenerate elements (infinite P1 gradients).
 

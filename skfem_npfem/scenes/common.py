@@ -17,7 +17,7 @@ from ..io import ResultWriter, checkpoint_step
 from ..step.model import NODAL_MASS
 from ..step.solver import ACCURACY_PRESETS, LINEAR_SOLVERS, SolverOptions
 from ..step.stabilisation import STABILISATION_MODES
-from .params import Param
+from .params import POSITIVE, Param
 
 __all__ = [
     "elastic_params",
@@ -30,7 +30,7 @@ __all__ = [
 def elastic_params(E: float) -> list[Param]:
     """Young's modulus (default ``E``, Pa) and Poisson's ratio parameters."""
     return [
-        Param("E", E, "Pa", "Young's modulus", float, lo=0, lo_open=True),
+        Param("E", E, "Pa", "Young's modulus", float, **POSITIVE),
         Param(
             "nu",
             0.3,
@@ -109,9 +109,7 @@ def solver_from(values: Mapping[str, Any]) -> SolverOptions:
     )
 
 
-def make_writer(
-    out: str | Path | None, resume: bool = False, resume_after_step: int | None = None
-):
+def make_writer(out: str | Path | None, resume: bool = False):
     """A :class:`~skfem_npfem.io.ResultWriter` for ``out`` (None: no output).
 
     With ``resume`` the steps up to the latest checkpoint in ``out`` are kept
@@ -122,9 +120,8 @@ def make_writer(
     """
     if out is None:
         return None
-    if resume and resume_after_step is None:
-        resume_after_step = checkpoint_step(out)[1]
-    return ResultWriter(out, resume_after_step=resume_after_step, defer=True)
+    after = checkpoint_step(out)[1] if resume else None
+    return ResultWriter(out, resume_after_step=after, defer=True)
 
 
 def fidelity_params(

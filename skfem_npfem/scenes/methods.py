@@ -32,11 +32,12 @@ from ..baseline.operators import ELEMENTS
 from ..errors import ParameterError
 from ..metrics import stress_roughness
 from .base import SceneRun
-from .params import Param
+from .params import POSITIVE, Param
 
 __all__ = [
     "METHODS",
     "METHOD_METRICS",
+    "METHOD_METRICS_NO_SPFEM",
     "METHOD_OPTIONS",
     "METHOD_PARAMS",
     "make_method",
@@ -163,8 +164,7 @@ def method_params(
                 "spfem only: explicit substep, at most the stable step (default "
                 "0.9 x the stable step of each step's mesh)",
                 float,
-                lo=0,
-                lo_open=True,
+                **POSITIVE,
             ),
         ]
     return params
@@ -190,6 +190,12 @@ METHOD_METRICS = {
     "stable_dt": "spfem: smallest stable explicit step of the run's meshes, s "
     "(null: other methods)",
     "explicit_dt": "spfem: largest explicit substep used, s (null: other methods)",
+}
+
+#: :data:`METHOD_METRICS` of a scene that does not offer spfem.
+METHOD_METRICS_NO_SPFEM = METHOD_METRICS | {
+    k: "spfem only: always null here (spfem is not available in this scene)"
+    for k in ("explicit_steps", "stable_dt", "explicit_dt")
 }
 
 #: Record keys summed (or reduced) into each method-specific metric.

@@ -19,10 +19,13 @@ import numpy as np
 from ..errors import ParameterError
 from .limits import MAGNITUDES
 
-__all__ = ["POSITIVE", "Param", "Values", "parse_value"]
+__all__ = ["ANGLE", "POSITIVE", "Param", "Values", "parse_value"]
 
 #: Bounds of a parameter that must be a finite number > 0 (``Param(..., **POSITIVE)``).
 POSITIVE = {"lo": 0, "lo_open": True}
+
+#: Bounds of an angle in degrees, in [0, 90) (``Param(..., **ANGLE)``).
+ANGLE = {"lo": 0, "hi": 90, "hi_open": True}
 
 
 @dataclass(frozen=True)

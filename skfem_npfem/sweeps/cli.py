@@ -14,7 +14,7 @@ from .engine import RETRIES
 from .plan import parse_grid_args, parse_set_args
 from .plot import plot_sweep
 
-__all__ = ["add_sweep_commands", "cmd_sweep", "cmd_sweep_plot"]
+__all__ = ["add_debug", "add_sweep_commands", "cmd_sweep", "cmd_sweep_plot"]
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
@@ -104,7 +104,7 @@ def add_sweep_commands(sub: Any) -> None:
         help=f"retries of a run whose worker died or that crashed (default {RETRIES})",
     )
     p.add_argument("--quiet", action="store_true", help="no progress lines")
-    _debug(p)
+    add_debug(p)
     p.set_defaults(func=cmd_sweep)
     q = sub.add_parser(
         "sweep-plot",
@@ -117,11 +117,15 @@ def add_sweep_commands(sub: Any) -> None:
     q.add_argument("param", help="table column, e.g. spacing")
     q.add_argument("--png", metavar="FILE", help="output (default DIR/M_vs_P.png)")
     q.add_argument("--log", default="", choices=("", "x", "y", "xy"), help="log axes")
-    _debug(q)
+    add_debug(q)
     q.set_defaults(func=cmd_sweep_plot)
 
 
-def _debug(p: argparse.ArgumentParser) -> None:
+def add_debug(p: argparse.ArgumentParser) -> None:
+    """Add ``--debug`` (tracebacks) to a sub-command, after the command name too."""
     p.add_argument(
-        "--debug", action="store_true", default=argparse.SUPPRESS, help="tracebacks"
+        "--debug",
+        action="store_true",
+        default=argparse.SUPPRESS,
+        help="show tracebacks",
     )

@@ -29,6 +29,8 @@ __all__ = ["Frames2D", "View", "load_settlement_figure", "mechanism_figure"]
 _DPI = 100
 _BODY = "#303030"
 _REF = "#1f77b4"
+#: The hatched patches of a fixed base and of walls.
+_SUPPORT = {"facecolor": "#d9d9d9", "edgecolor": "#404040", "lw": 0.8, "zorder": 1}
 _FRONT = "#d62728"
 
 
@@ -109,12 +111,9 @@ def _scenery(ax, sc: Scenery, view: View) -> None:
                 (x0, sc.floor - depth),
                 x1 - x0,
                 depth,
-                facecolor="#d9d9d9",
-                edgecolor="#404040",
                 hatch="////",
-                lw=0.8,
-                zorder=1,
                 label=sc.floor_label,
+                **_SUPPORT,
             )
         )
         ax.axhline(sc.floor, color="black", lw=1.5, zorder=2)
@@ -126,12 +125,9 @@ def _scenery(ax, sc: Scenery, view: View) -> None:
                 (x - width if side > 0 else x, base),
                 width,
                 y1 - base,
-                facecolor="#d9d9d9",
-                edgecolor="#404040",
                 hatch="\\\\\\\\",
-                lw=0.8,
-                zorder=1,
                 label=text or None,
+                **_SUPPORT,
             )
         )
     if sc.symmetry is not None:

@@ -27,7 +27,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..constants import GRAVITY
 from ..errors import CheckpointError, ParameterError
 from ..io import check_writable_dir, read_pvd
 from .animation import write_animation
@@ -55,7 +54,6 @@ from .snapshots import (
 __all__ = ["plot_results"]
 
 _ANIMATIONS = ("gif", "mp4", "none")
-_GRAVITY = GRAVITY
 
 
 def _find_pvd(result_dir: Path) -> Path:

@@ -27,7 +27,6 @@ import skfem_npfem as npfem
 from skfem_npfem import ParameterError, RigidBody
 from skfem_npfem.boundary import (
     body_contacts,
-    boundary_facets,
     boundary_tributary,
     corner_contacts,
     oriented_boundary,
@@ -91,7 +90,7 @@ def test_spanning_elements_thin_body_and_tributary():
     blade = RigidBody([[0.49, 0.2], [0.51, 0.2], [0.51, 0.21], [0.49, 0.21]])
     assert spanning_elements([blade], x, t, 0.0).tolist() == [True, False, False]
     # contact areas: half the boundary edges at each node (perimeter 4 + sqrt 2)
-    area = boundary_tributary(x, boundary_facets(t))
+    area = boundary_tributary(x, oriented_boundary(x, t))
     assert area.sum() == pytest.approx(4.0 + math.sqrt(2.0))
     assert area[3] == pytest.approx(1.0)
 

@@ -37,7 +37,7 @@ from ...errors import ParameterError
 from ..base import Scene
 from ..common import check_soil
 from ..limits import LENGTH, check_size
-from ..params import Param, Values
+from ..params import POSITIVE, Param, Values
 from .box_column import DEPTH_SPACINGS
 from .cylinder import GEOMETRY_ALPHA, SEED, SEED_DIVISIONS
 from .sizing import lattice_particles
@@ -89,8 +89,7 @@ GEOMETRY_PARAMS = [
         "m",
         "cylindrical geometries: column height h0 (default aspect * r0: 7.8 cm)",
         float,
-        lo=0,
-        lo_open=True,
+        **POSITIVE,
     ),
     Param(
         "depth",

@@ -15,7 +15,7 @@ from ..common import (
 )
 from ..limits import SPACING
 from ..methods import METHOD_METRICS, METHOD_PARAMS
-from ..params import Param
+from ..params import ANGLE, POSITIVE, Param
 from .runout import (
     DETACHED_WARNING,
 )
@@ -65,15 +65,14 @@ VOLUME_CORRECTION_STRAIN = 1e-2
 
 
 PARAMS = [
-    Param("aspect", 2.0, "-", "aspect ratio a = H0/L0", float, lo=0, lo_open=True),
+    Param("aspect", 2.0, "-", "aspect ratio a = H0/L0", float, **POSITIVE),
     Param(
         "half_width",
         0.2,
         "m",
         "column half-width L0 (the width of the half column)",
         float,
-        lo=0,
-        lo_open=True,
+        **POSITIVE,
     ),
     Param(
         "symmetric",
@@ -92,7 +91,7 @@ PARAMS = [
         **SPACING,
     ),
     Param("material", "mohr-coulomb", "-", "yield criterion", str, MATERIALS),
-    Param("rho", 1800.0, "kg/m^3", "density", float, lo=0, lo_open=True),
+    Param("rho", 1800.0, "kg/m^3", "density", float, **POSITIVE),
     *elastic_params(1.0e7),
     Param(
         "phi",
@@ -113,9 +112,7 @@ PARAMS = [
         "deg",
         "floor friction angle (default: phi)",
         float,
-        lo=0,
-        hi=90,
-        hi_open=True,
+        **ANGLE,
     ),
     Param(
         "K0",
@@ -127,27 +124,10 @@ PARAMS = [
         "material, not the initial stresses. For phi < 19.5 it lies outside "
         "the yield cone and is refused: set K0 too (e.g. 1 - sin phi)",
         float,
-        lo=0,
-        lo_open=True,
+        **POSITIVE,
     ),
-    Param(
-        "gravity",
-        GRAVITY,
-        "m/s^2",
-        "gravitational acceleration",
-        float,
-        lo=0,
-        lo_open=True,
-    ),
-    Param(
-        "dt",
-        5e-3,
-        "s",
-        "time step (halved on solver failure)",
-        float,
-        lo=0,
-        lo_open=True,
-    ),
+    Param("gravity", GRAVITY, "m/s^2", "gravitational acceleration", float, **POSITIVE),
+    Param("dt", 5e-3, "s", "time step (halved on solver failure)", float, **POSITIVE),
     Param(
         "max_displacement",
         None,
@@ -155,10 +135,9 @@ PARAMS = [
         "adaptive dt: keep the largest particle displacement per step below this "
         "fraction of the spacing (default: off, fixed dt)",
         float,
-        lo=0,
-        lo_open=True,
+        **POSITIVE,
     ),
-    Param("t_end", 1.0, "s", "end time", float, lo=0, lo_open=True),
+    Param("t_end", 1.0, "s", "end time", float, **POSITIVE),
     Param(
         "rest_fraction",
         1e-3,

@@ -35,21 +35,19 @@ from ..common import (
 )
 from ..limits import SPACING, check_size
 from ..methods import METHOD_METRICS, method_params, with_method
-from ..params import Param, Values
+from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
 
 PARAMS = [
     Param("dim", 2, "-", "spatial dimension (2: plane strain, 3: 3D)", int, (2, 3)),
     *elastic_params(1.0e7),
-    Param("rho", 2000.0, "kg/m^3", "density", float, lo=0, lo_open=True),
+    Param("rho", 2000.0, "kg/m^3", "density", float, **POSITIVE),
     Param("gravity", GRAVITY, "m/s^2", "gravitational acceleration", float, lo=0),
-    Param("height", 4.0, "m", "column height H", float, lo=0, lo_open=True),
-    Param(
-        "width", 1.0, "m", "column width (and depth in 3D)", float, lo=0, lo_open=True
-    ),
+    Param("height", 4.0, "m", "column height H", float, **POSITIVE),
+    Param("width", 1.0, "m", "column width (and depth in 3D)", float, **POSITIVE),
     Param("spacing", 0.125, "m", "particle (node) spacing", float, **SPACING),
     Param("mode", "static", "-", "static or dynamic", str, ("static", "dynamic")),
-    Param("dt", 0.01, "s", "time step", float, lo=0, lo_open=True),
+    Param("dt", 0.01, "s", "time step", float, **POSITIVE),
     Param(
         "steps",
         1,

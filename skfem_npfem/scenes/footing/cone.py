@@ -55,15 +55,18 @@ from ..limits import check_size
 from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
 from .penetration_common import (
-    Steady,
+    ALPHA,
     axis_count,
     graded_axis,
     interface_adhesion,
+    lattice_gap,
+    lattice_params,
     penetration_warnings,
     steady_factor,
+    step_dt,
 )
 
-__all__ = ["INTERFACES", "SCENE", "Steady", "cone_body", "steady_factor"]
+__all__ = ["INTERFACES", "SCENE", "cone_body"]
 
 #: Cone-soil interfaces.
 INTERFACES = ("smooth", "rough", "adhesion")
@@ -74,13 +77,9 @@ SURFACES = ("surcharge", "rollers")
 #: Apex angle of the standard cone, degrees.
 APEX = 60.0
 
-_POSITIVE = POSITIVE
-
 PARAMS = [
-    Param(
-        "diameter", 0.0357, "m", "cone diameter D (10 cm^2 cone)", float, **_POSITIVE
-    ),
-    Param("su", 1.0e4, "Pa", "undrained shear strength s_u", float, **_POSITIVE),
+    Param("diameter", 0.0357, "m", "cone diameter D (10 cm^2 cone)", float, **POSITIVE),
+    Param("su", 1.0e4, "Pa", "undrained shear strength s_u", float, **POSITIVE),
     Param(
         "rigidity_index",
         100.0,
@@ -127,15 +126,7 @@ PARAMS = [
         str,
         INTERFACES,
     ),
-    Param(
-        "alpha",
-        0.5,
-        "-",
-        "adhesion factor (interface=adhesion): |t| <= alpha s_u",
-        float,
-        lo=0.0,
-        hi=1.0,
-    ),
+    ALPHA,
     Param(
         "penetration",
         None,
@@ -143,7 +134,7 @@ PARAMS = [
         "how far the cone is pushed from where it starts (default 6 D: N_c is "
         "steady from about 5 D on)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param(
         "depth",
@@ -153,7 +144,7 @@ PARAMS = [
         "(default 10 D, deep enough that the free surface under its surcharge "
         "moves N_c by under 1 %; the cone starts embedded, wished in place)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param(
         "below",
@@ -180,7 +171,7 @@ PARAMS = [
         "m/s",
         "cone speed (standard 2 cm/s; quasi-static: sets the time unit)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param(
         "dt",
@@ -188,7 +179,7 @@ PARAMS = [
         "s",
         "time step (default: the cone moves spacing/2 per step; at most one spacing)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param(
         "spacing",
@@ -196,26 +187,9 @@ PARAMS = [
         "m",
         "particle spacing near the cone (default D/12)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
-    Param(
-        "grading",
-        1.15,
-        "-",
-        "spacing growth per row away from the cone",
-        float,
-        lo=1.0,
-        hi=2.0,
-    ),
-    Param(
-        "alpha_shape",
-        1.3,
-        "-",
-        "alpha-shape factor of the remeshing",
-        float,
-        lo=0.8,
-        hi=3.0,
-    ),
+    *lattice_params("cone"),
     Param(
         "steady_window",
         1.0,
@@ -296,16 +270,7 @@ def check(values: Mapping[str, Any]) -> float:
             f"at least 2 D = {2 * D:g} m: the cone starts embedded, its tip "
             "this deep below the surface",
         )
-    dt = values["dt"]
-    if dt is None:
-        dt = 0.5 * h / values["speed"]
-    if values["speed"] * dt > h * (1 + 1e-9):
-        raise ParameterError(
-            "speed",
-            values["speed"],
-            f"at most spacing/dt = {h / dt:g} m/s: the cone may move at most one "
-            "spacing per step (lower speed or dt)",
-        )
+    dt = step_dt(values, h, 0.5, "cone")
     lo, hi = _fine_window(g)
     nr = axis_count(1.5 * D, h, g["radius"], values["grading"])
     nz = (hi - lo) / h + axis_count(h, h, lo, values["grading"])
@@ -352,22 +317,11 @@ def soil_points(values: Mapping[str, Any], body: RigidBody) -> tuple[np.ndarray,
     shaft = np.stack([np.full(shaft_z.size, R), shaft_z], axis=1)
     rr, zz = np.meshgrid(rs, zs, indexing="ij")
     lattice = np.stack([rr.ravel(), zz.ravel()], axis=1)
-    gap = _lattice_gap(lattice, rs, zs)
+    gap = lattice_gap(lattice, rs, zs)
     dist, _, _ = body.signed_distance(lattice, 0.0)
     keep = dist > 0.5 * gap
     x = np.concatenate([face, shaft, lattice[keep]])
-    return x, _lattice_gap(x, rs, zs)
-
-
-def _lattice_gap(x: np.ndarray, rs: np.ndarray, zs: np.ndarray) -> np.ndarray:
-    """The larger of the lattice row and column gaps at each point."""
-    gr, gz = np.diff(rs), np.diff(zs)
-    ir = np.clip(np.searchsorted(rs, x[:, 0] - 1e-12), 0, gr.size - 1)
-    iz = np.clip(np.searchsorted(zs, x[:, 1] - 1e-12), 0, gz.size - 1)
-    return np.maximum(
-        np.maximum(gr[ir], gr[np.maximum(ir - 1, 0)]),
-        np.maximum(gz[iz], gz[np.maximum(iz - 1, 0)]),
-    )
+    return x, lattice_gap(x, rs, zs)
 
 
 def build(

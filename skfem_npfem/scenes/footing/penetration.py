@@ -50,24 +50,22 @@ from ..common import (
     solver_params,
 )
 from ..limits import check_size
-from ..methods import METHOD_METRICS, method_params, with_method
+from ..methods import METHOD_METRICS_NO_SPFEM, method_params, with_method
 from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
 from .penetration_common import (
+    ALPHA,
     axis_count,
     graded_axis,
     interface_adhesion,
+    lattice_gap,
+    lattice_params,
     locking_warnings,
     penetration_warnings,
+    step_dt,
 )
 
-__all__ = [
-    "INTERFACES",
-    "SCENE",
-    "graded_axis",
-    "interface_adhesion",
-    "penetration_warnings",
-]
+__all__ = ["INTERFACES", "SCENE"]
 
 #: Footing-soil interfaces.
 INTERFACES = ("smooth", "rough", "adhesion")
@@ -98,15 +96,7 @@ PARAMS = [
     ),
     Param("su", 1.0e3, "Pa", "undrained shear strength s_u", float, **POSITIVE),
     Param("interface", "smooth", "-", "footing-soil interface", str, INTERFACES),
-    Param(
-        "alpha",
-        0.5,
-        "-",
-        "adhesion factor (interface=adhesion): |t| <= alpha s_u",
-        float,
-        lo=0.0,
-        hi=1.0,
-    ),
+    ALPHA,
     Param(
         "penetration",
         None,
@@ -133,24 +123,7 @@ PARAMS = [
         **POSITIVE,
     ),
     Param("spacing", 0.05, "m", "particle spacing near the footing", float, **POSITIVE),
-    Param(
-        "grading",
-        1.15,
-        "-",
-        "spacing growth per row away from the footing",
-        float,
-        lo=1.0,
-        hi=2.0,
-    ),
-    Param(
-        "alpha_shape",
-        1.3,
-        "-",
-        "alpha-shape factor of the remeshing",
-        float,
-        lo=0.8,
-        hi=3.0,
-    ),
+    *lattice_params("footing"),
     *method_params(
         ("npfem", "fem-remap"),
         missing="spfem is not available in footing-penetration: it is explicit "
@@ -177,28 +150,18 @@ METRICS = {
     "the footing; method=fem-remap with P1 elements (they lock)",
     "curve": "list of [w/B, q/s_u] per step",
     "n_particles": "number of particles",
-    **METHOD_METRICS,
-    # spfem is not offered here: its metrics are always null.
-    **{
-        k: "spfem only: always null here (spfem is not available in this scene)"
-        for k in ("explicit_steps", "stable_dt", "explicit_dt")
-    },
+    **METHOD_METRICS_NO_SPFEM,
 }
-
-
-def _penetration(values: Mapping[str, Any]) -> float:
-    w = values["penetration"]
-    return values["width"] if w is None else w
 
 
 def _geometry(values: Mapping[str, Any]) -> tuple[float, float, float, float]:
     """``(B, half width of the soil, depth of the soil, final penetration)``."""
-    B = values["width"]
+    B, w = values["width"], values["penetration"]
     return (
         B,
         values["domain_width"] * B / 2,
         values["domain_depth"] * B,
-        _penetration(values),
+        B if w is None else w,
     )
 
 
@@ -215,16 +178,7 @@ def check(values: Mapping[str, Any]) -> float:
             f"less than the soil depth minus two spacings ({depth - 2 * h:g} m): "
             "the footing would hit the fixed base",
         )
-    dt = values["dt"]
-    if dt is None:
-        dt = 0.25 * h / values["speed"]
-    if values["speed"] * dt > h * (1 + 1e-9):
-        raise ParameterError(
-            "speed",
-            values["speed"],
-            f"at most spacing/dt = {h / dt:g} m/s: the footing may move at most "
-            "one spacing per step (lower speed or dt)",
-        )
+    dt = step_dt(values, h, 0.25, "footing")
     nx = axis_count(B / 2 + B, h, half, values["grading"])
     ny = axis_count(w + B, h, depth, values["grading"])
     check_size(nx * ny, 2, values, advice="use a larger spacing or grading")
@@ -245,16 +199,7 @@ def soil(values: Mapping[str, Any]) -> tuple[Particles, np.ndarray, MeshTri]:
     volumes = nodal_integration(mesh).volumes
     # Weightless soil: tiny masses (static steps do not use them).
     p = Particles.create(x, 1e-12 * volumes, fixed=fixed, n_walls=1)
-    # Each particle's spacing: the larger of its lattice row and column gaps.
-    gx = np.diff(xs)
-    gy = np.diff(ys)
-    ix = np.clip(np.searchsorted(xs, x[:, 0] - 1e-12), 0, gx.size - 1)
-    iy = np.clip(np.searchsorted(ys, x[:, 1] - 1e-12), 0, gy.size - 1)
-    spacing = np.maximum(
-        np.maximum(gx[ix], gx[np.maximum(ix - 1, 0)]),
-        np.maximum(gy[iy], gy[np.maximum(iy - 1, 0)]),
-    )
-    return p, spacing, mesh
+    return p, lattice_gap(x, xs, ys), mesh
 
 
 def footing_body(values: Mapping[str, Any]) -> RigidBody:

@@ -16,17 +16,34 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from ...errors import ParameterError
+from ..params import Param
+
 __all__ = [
+    "ALPHA",
     "Steady",
     "axis_count",
     "graded_axis",
     "grow_axis",
     "grown_count",
     "interface_adhesion",
+    "lattice_gap",
+    "lattice_params",
     "locking_warnings",
     "penetration_warnings",
     "steady_factor",
 ]
+
+#: The ``alpha`` parameter of ``interface=adhesion`` (footing and cone).
+ALPHA = Param(
+    "alpha",
+    0.5,
+    "-",
+    "adhesion factor (interface=adhesion): |t| <= alpha s_u",
+    float,
+    lo=0.0,
+    hi=1.0,
+)
 
 
 def graded_axis(fine: float, h: float, length: float, ratio: float) -> np.ndarray:
@@ -72,6 +89,62 @@ def axis_count(fine: float, h: float, length: float, ratio: float) -> float:
     """Number of :func:`graded_axis` coordinates, estimated without building them."""
     n_fine = max(1, math.ceil(min(fine, length) / h - 1e-9))
     return n_fine + 1 + grown_count(max(length - n_fine * h, 0.0), h, ratio)
+
+
+def lattice_gap(x: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """The larger of the lattice ``xs`` x ``ys``'s row and column gaps at each point."""
+    gx, gy = np.diff(xs), np.diff(ys)
+    ix = np.clip(np.searchsorted(xs, x[:, 0] - 1e-12), 0, gx.size - 1)
+    iy = np.clip(np.searchsorted(ys, x[:, 1] - 1e-12), 0, gy.size - 1)
+    return np.maximum(
+        np.maximum(gx[ix], gx[np.maximum(ix - 1, 0)]),
+        np.maximum(gy[iy], gy[np.maximum(iy - 1, 0)]),
+    )
+
+
+def lattice_params(body: str) -> list[Param]:
+    """``grading`` of the lattice away from the ``body`` and ``alpha_shape``."""
+    return [
+        Param(
+            "grading",
+            1.15,
+            "-",
+            f"spacing growth per row away from the {body}",
+            float,
+            lo=1.0,
+            hi=2.0,
+        ),
+        Param(
+            "alpha_shape",
+            1.3,
+            "-",
+            "alpha-shape factor of the remeshing",
+            float,
+            lo=0.8,
+            hi=3.0,
+        ),
+    ]
+
+
+def step_dt(values: Mapping[str, Any], h: float, fraction: float, body: str) -> float:
+    """The time step: ``dt``, or the ``body`` moving ``fraction`` of ``h`` per step.
+
+    Raises
+    ------
+    ParameterError
+        If the body would move more than one spacing ``h`` per step.
+    """
+    dt = values["dt"]
+    if dt is None:
+        dt = fraction * h / values["speed"]
+    if values["speed"] * dt > h * (1 + 1e-9):
+        raise ParameterError(
+            "speed",
+            values["speed"],
+            f"at most spacing/dt = {h / dt:g} m/s: the {body} may move at most "
+            "one spacing per step (lower speed or dt)",
+        )
+    return dt
 
 
 def interface_adhesion(values: Mapping[str, Any]) -> float:

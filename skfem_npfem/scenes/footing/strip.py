@@ -54,8 +54,8 @@ from ..limit_mode import (
     limit_scene_run,
 )
 from ..limits import SPACING as SPACING_RANGE
-from ..methods import METHOD_METRICS, method_params, with_method
-from ..params import POSITIVE, Param, Values
+from ..methods import METHOD_METRICS_NO_SPFEM, method_params, with_method
+from ..params import ANGLE, POSITIVE, Param, Values
 from .mesh import (
     DEFAULT_DOMAIN,
     DEFAULT_SPACING,
@@ -89,25 +89,9 @@ PARAMS = [
         float,
         lo=0,
     ),
+    Param("phi", 0.0, "deg", "friction angle (ignored by tresca)", float, **ANGLE),
     Param(
-        "phi",
-        0.0,
-        "deg",
-        "friction angle (ignored by tresca)",
-        float,
-        lo=0,
-        hi=90,
-        hi_open=True,
-    ),
-    Param(
-        "psi",
-        None,
-        "deg",
-        "dilation angle (default: phi, associated)",
-        float,
-        lo=0,
-        hi=90,
-        hi_open=True,
+        "psi", None, "deg", "dilation angle (default: phi, associated)", float, **ANGLE
     ),
     Param(
         "rho",
@@ -123,8 +107,7 @@ PARAMS = [
         "m/s^2",
         "gravitational acceleration (acts when rho > 0)",
         float,
-        lo=0,
-        lo_open=True,
+        **POSITIVE,
     ),
     Param(
         "K0",
@@ -255,12 +238,7 @@ METRICS = {
     "warnings": "list of one-line warnings (a cap stopped the run before the "
     "plateau; fem-remap P1 locking); the CLI prints each on stderr",
     "n_particles": "number of particles",
-    **METHOD_METRICS,
-    # spfem is not offered here: its metrics are always null.
-    **{
-        k: "spfem only: always null here (spfem is not available in this scene)"
-        for k in ("explicit_steps", "stable_dt", "explicit_dt")
-    },
+    **METHOD_METRICS_NO_SPFEM,
     **LIMIT_METRICS,
 }
 

@@ -48,7 +48,7 @@ from ...run.simulation import Simulation
 from ..base import Scene, SceneRun
 from ..common import elastic_params, fidelity_params, make_writer, solver_params
 from ..limit_mode import LIMIT_METRICS, analysis_param
-from ..params import POSITIVE, Param, Values
+from ..params import ANGLE, POSITIVE, Param, Values
 from ..scenery import Scenery, number
 from .runout import (
     runout_metrics,
@@ -91,25 +91,14 @@ PARAMS = [
     Param("material", "mohr-coulomb", "-", "yield criterion", str, MATERIALS),
     *elastic_params(2.0e7),
     Param("c", 1.0e4, "Pa", "cohesion", float, lo=0),
-    Param(
-        "phi",
-        20.0,
-        "deg",
-        "friction angle (tresca: 0)",
-        float,
-        lo=0,
-        hi=90,
-        hi_open=True,
-    ),
+    Param("phi", 20.0, "deg", "friction angle (tresca: 0)", float, **ANGLE),
     Param(
         "psi",
         0.0,
         "deg",
         "dilation angle of the run-out (limit analysis is associated)",
         float,
-        lo=0,
-        hi=90,
-        hi_open=True,
+        **ANGLE,
     ),
     Param("rho", 2000.0, "kg/m^3", "density", float, **POSITIVE),
     Param(
@@ -321,7 +310,7 @@ def build(
     particles = Particles.create(
         pts, masses, stress=sigma, fixed=fixed, material=material
     )
-    model = flow_model(values, body, state, out, run_out)
+    model = flow_model(values, body, state, run_out)
     source = (
         AlphaShapeMesher(body.h, values["alpha"]) if run_out else FixedMesh(body.mesh.t)
     )

@@ -102,9 +102,7 @@ def initial_stress(
             force=force,
             fixed=fixed,
             du_prescribed=np.zeros_like(x),
-            contacts=Contacts(
-                np.zeros(0, int), np.zeros((0, 2)), np.zeros(0), np.zeros(0)
-            ),
+            contacts=Contacts.empty(2),
         )
         sigma = solve_step(data, solver_from(values)).sigma
     else:
@@ -325,7 +323,6 @@ def flow_model(
     values: Mapping[str, Any],
     body: SlopeBody,
     state: dict[str, Any],
-    out: Path | None,
     run_out: bool,
 ) -> Model:
     """The dynamic model of stage 3, with the run-out's reduced strengths.
@@ -343,8 +340,6 @@ def flow_model(
         The slope's section and particles.
     state : dict
         The run's shared state.
-    out : Path or None
-        Output folder (for the mechanism).
     run_out : bool
         Whether stage 3 runs.
 
