@@ -78,6 +78,8 @@ def directive(name: str) -> str:
             f".. autoclass:: {name}\n   :members:\n   :show-inheritance:\n"
             "   :special-members: __call__\n"
         )
+        if any(b.__name__.startswith("_") for b in obj.__mro__[1:-1]):
+            text += "   :inherited-members:\n"  # what a private base gives it
         bare = _bare_fields(obj)
         if bare:
             text += f"   :exclude-members: {', '.join(bare)}\n"

@@ -11,16 +11,18 @@
   model's walls as one boundary;
 * :mod:`.rigid_bodies` -- :class:`RigidBodies`, a model's bodies as one
   boundary;
-* 2D bodies: :mod:`.body` -- :class:`RigidBody` (a polygon moved at a
-  prescribed velocity), particles put back out of a body, the loads a body
-  takes; :mod:`.spanning` -- the elements of a step's mesh that span a body
-  (a sliver at a corner allowed); :mod:`.contact` -- contact with the
-  particles' boundary, found every step (boundary nodes against faces, body
-  corners against boundary edges);
-* 3D bodies: :class:`RigidPlane` (:mod:`.plane`, a moving half-space) and
+* the bodies: :mod:`.body` -- :class:`RigidBody` (a polygon moved at a
+  prescribed velocity) and what every body shares (its motion, interface and
+  inside test), particles put back out of a body, the loads a body takes;
+  :class:`RigidPlane` (:mod:`.plane`, a moving half-space) and
   :class:`BodyOfRevolution` (:mod:`.revolution`, an ``(r, z)`` profile turned
-  about an axis), with what they share in :mod:`.solid`; :mod:`.contact3d` --
-  the tetrahedra that span them, their contacts and loads.
+  about an axis) in 3D, with the checks of their inputs in :mod:`.solid`;
+* their contacts: :mod:`.contact` -- contact with the particles' boundary,
+  found every step, in 2D and 3D (boundary nodes against faces, body corners
+  against boundary edges); :mod:`.spanning` -- the elements of a 2D mesh that
+  span a body (a sliver at a corner allowed); :mod:`.contact3d` -- the
+  boundary faces of a 3D mesh, their tributary areas and the tetrahedra that
+  span a body.
 """
 
 from .body import RigidBody, body_loads, check_clear, project_out_of_bodies
