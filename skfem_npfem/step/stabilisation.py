@@ -37,14 +37,15 @@ sqrt(G_e / rho_e)``) is weighted on its inertial scale ``dt^2 / rho_e``: the
 step's own operator per element is ``G_e / h_e^2 + rho_e / dt^2``, and the
 weight of a least-squares stabilisation is the inverse of its larger part
 (the time-step term of GLS and PSPG parameters of transient problems).
-Without it the lagged inertia below was fed back with a gain ``beta rho_e
-h_e^2 / (G_e dt^2)``, about 7e3 for a column of E = 1 kPa at dt = 5 ms, and the
-step created energy (docs/extremes.md, "Energy").  The acceleration is the one
-at the start of the step (``a_n``, lagged by one step): the inertial forces
-stay uncoupled in the program, which keeps the factorisation sparser (with the
-implicit ``a_n+1`` the step cost about 1.3x more in our trials), and the lag
-is ``O(dt)`` in a transient and nothing at rest.  Quasi-static steps have no
-inertia: their residual is exact.
+Without it the lagged inertia (below) was fed back with a gain ``beta rho_e
+h_e^2 / (G_e dt^2)``, about 7e3 for a column of E = 1 kPa at dt = 5 ms, and
+the step created energy (docs/extremes.md, "What broke on the way").
+
+The acceleration is the one at the start of the step (``a_n``, lagged by one
+step): the inertial forces stay uncoupled in the program, which keeps the
+factorisation sparser (with the implicit ``a_n+1`` the step cost about 1.3x
+more in our trials), and the lag is ``O(dt)`` in a transient and nothing at
+rest.  Quasi-static steps have no inertia: their residual is exact.
 
 Properties (tests/step/test_stabilisation.py):
 
