@@ -87,6 +87,9 @@ def case(name, group, scene, params, expected, slow=False):
 
 #: Largest energy excess a case may show (:attr:`EnergyBudget.excess`): the
 #: mechanical energy may not grow by more than 1 % of the energy turned over.
+#: Measured: at most 2e-10 in the matrix (columns at rest), +8.8e-4 for the
+#: column collapse at E = 1 kPa (before the stabilisation's weight took the
+#: inertial scale: 1.0, the run created all the energy it turned over).
 ENERGY_TOLERANCE = 0.01
 
 _BUDGETS: list[EnergyBudget] = []
