@@ -60,7 +60,7 @@ def case_row(c) -> dict:
             o.iterations,
             o.plastic,
         )
-        yielding = o.yielding
+        yielding, energy = o.yielding, o.energy
     except Exception as err:  # a crash is a finding, not a demo failure
         passed, outcome, error, its, plastic = (
             False,
@@ -69,7 +69,7 @@ def case_row(c) -> dict:
             [],
             False,
         )
-        yielding = False
+        yielding, energy = False, float("nan")
     return {
         "case": c.name,
         "group": c.group,
@@ -82,6 +82,7 @@ def case_row(c) -> dict:
         "iterations": list(its),
         "plastic": plastic,
         "yielding": yielding,
+        "energy": energy if math.isfinite(energy) else None,
         "slow": c.slow,
         "seconds": round(time.perf_counter() - t0, 3),
     }
@@ -153,7 +154,17 @@ def markdown(rows: list[dict], summary: dict) -> str:
         "physical answer in *expected* or a specific documented error. "
         "*error* is the case's main error measure (relative; see *outcome*). "
         "*iterations* are Clarabel's interior-point iterations per step "
-        "(elastic programs are a single KKT solve: 0).",
+        "(elastic programs are a single KKT solve: 0). *energy* is the energy "
+        "the run created, relative to the energy it turned over (largest over "
+        "its steps of K + (P - P_0) + (Psi - Psi_0) - W, with K the kinetic "
+        "energy, 0 in quasi-static steps, P the potential energy of gravity, "
+        "Psi the elastic energy of the stresses and W the work of the "
+        "prescribed motions; `tests/cases/framework.py` `EnergyBudget`): "
+        "backward Euler with a dissipative material cannot create energy, and "
+        "every case asserts it is at most "
+        f"{tx.ENERGY_TOLERANCE:g} beside its physical answer (negative: "
+        "energy dissipated or stored; '-': a documented error before the "
+        "first step).",
         "",
         f"Result: {summary['passed']} of {summary['cases']} cases pass. "
         "Per-case peak IPM iterations: "
@@ -175,8 +186,8 @@ def markdown(rows: list[dict], summary: dict) -> str:
         "`strip-footing` half model, b = 1 m, block 5 b, spacing 0.125 m "
         "(576 particles), Tresca c = 10 kPa, E = 100 MPa, smooth, weightless.",
         "",
-        "| case | parameters | expected | outcome | error | iterations | |",
-        "|---|---|---|---|---|---|---|",
+        "| case | parameters | expected | outcome | error | iterations | energy | |",
+        "|---|---|---|---|---|---|---|---|",
     ]
 
     def cell(text: str) -> str:  # a "|" inside a cell would split the row
@@ -188,7 +199,8 @@ def markdown(rows: list[dict], summary: dict) -> str:
         lines.append(
             f"| {name} | {cell(fmt_params(r['parameters']))} | "
             f"{cell(r['expected'])} | {cell(r['outcome'])} | "
-            f"{fmt_error(r['error'])} | {fmt_iters(r['iterations'])} | {mark} |"
+            f"{fmt_error(r['error'])} | {fmt_iters(r['iterations'])} | "
+            f"{fmt_error(r.get('energy'))} | {mark} |"
         )
     lines += [
         "",
@@ -224,6 +236,43 @@ def markdown(rows: list[dict], summary: dict) -> str:
         "Near-degenerate elements are fine (the sliver cases).",
         "* **nu = 0 metric (scenes/elastic/column.py).** `sigma_h_rel_l2` was NaN "
         "(the exact s_h is 0); it is now normalised by |s_v| in that case.",
+        "* **Energy from nowhere at E = 1 kPa (step/stabilisation.py).** The "
+        "soft column collapse of `tests/scenes/test_extremes_collapse.py` "
+        "(E = 1 kPa, 91 particles, dt = 5 ms) solved every step and blew up: "
+        "kinetic energy 0.6 J at step 1, 289 J at step 21 (the potential "
+        "energy had not fallen at all), 1.5e11 J from step 30 on, particles at "
+        "665 km/s. Logging K + P + Psi per step (Psi: the elastic energy of the "
+        "stresses, 451 J at the start, more than the 283 J of potential "
+        "energy: the geostatic stress of so soft a column stores a lot, so K "
+        "above the potential energy released, from step 1 on, was not yet "
+        "wrong) showed it growing from step 2 on (+1.2, +7, +16, +20 J per "
+        "step, +350 J by "
+        "step 21, Psi 1954 J), with no inverted element before step 23 and "
+        "the fastest particles in the mesh (a grain in free flight kept "
+        "2.9 m/s); the 665 km/s step then started on a sliver of 1e-14 m^2. "
+        "Switched off one at a time over the first 12 steps: the "
+        "stabilisation off, the run lost energy every step (largest single "
+        "gain +0.4 J, -22 J in all); the volume correction off, the same "
+        "numbers to the last digit (it is not active in this run); particle "
+        "masses instead of mesh masses, still +5 to +146 J per step; "
+        "associated flow (psi = phi), faster growth. The cause was the "
+        "stabilisation. Its residual takes the acceleration of the start of "
+        "the step and its weight was beta h^2 / G: the lagged inertia was fed "
+        "back with a gain beta rho h^2 / (G dt^2), 0.7 at E = 10 MPa but about "
+        "7e3 at E = 1 kPa, where the shear wave (0.44 m/s) takes 8 steps to "
+        "cross an element. The weight is now beta min(h^2/G, dt^2/rho) |e| "
+        "(the time-step term of GLS parameters of transient problems): "
+        "unchanged where the wave crosses an element within a step (every "
+        "ordinary run; the benchmark digest is bit-identical), the inertial "
+        "scale where it does not. The same run now loses energy (K + P + Psi "
+        "733 J -> 631 J after 40 steps, K = 145 J, Psi 451 J -> 213 J, "
+        "fastest particle 4.4 m/s, no inverted element). Every case now checks "
+        "its energy balance (the *energy* column), and so does every run of "
+        "the column-collapse part of the matrix "
+        "(`tests/scenes/test_extremes_collapse.py`): +8.8e-4 at E = 1 kPa "
+        "(before: 1.0, all of the energy turned over was created), -4.7e-4 to "
+        "-4e-5 for nu, E = 10 GPa, phi and length scale, -0.13 for the "
+        "cohesive column, -0.96 for the one step of dt = 1 s.",
         "",
         "## Observations",
         "",

@@ -23,18 +23,29 @@ element, and the exact stress satisfies the momentum balance pointwise,
 The step therefore adds to its complementary energy the Galerkin least-squares
 (GLS) penalty of the element residual of the end-of-step stress
 
-    1/2 sum_e  beta h_e^2 |e| / G_e  |div tau_h(sigma_n+1) + f_e - m a_e|^2,
+    1/2 sum_e  beta tau_e |e|  |div tau_h(sigma_n+1) + f_e - m a_e|^2,
+    tau_e = min(h_e^2 / G_e, dt^2 / rho_e),
 
 where ``f_e`` and ``m a_e`` are the element means of the nodal load and
 inertia densities ``f_i / V_i`` and ``m_i a_i / V_i``, ``h_e = (d! |e|)^(1/d)``
 is the lattice spacing of an element of that size, ``G_e`` the smallest shear
-modulus at its vertices and ``beta`` the dimensionless factor
-:attr:`~skfem_npfem.step.model.Model.stabilisation`.  The acceleration is the one
-at the start of the step (``a_n``, lagged by one step): the inertial forces
-stay uncoupled in the program, which keeps the factorisation sparser (with the
-implicit ``a_n+1`` the step cost about 1.3x more in our trials), and the lag
-is ``O(dt)`` in a transient and nothing at rest.  Quasi-static steps have no
-inertia: their residual is exact.
+modulus at its vertices, ``rho_e`` the largest density there and ``beta`` the
+dimensionless factor :attr:`~skfem_npfem.step.model.Model.stabilisation`.
+Quasi-static steps take ``h_e^2 / G_e``.  In a dynamic step an element that the
+shear wave does not cross within the step (``h_e > c_s dt``, ``c_s =
+sqrt(G_e / rho_e)``) is weighted on its inertial scale ``dt^2 / rho_e``: the
+step's own operator per element is ``G_e / h_e^2 + rho_e / dt^2``, and the
+weight of a least-squares stabilisation is the inverse of its larger part
+(the time-step term of GLS and PSPG parameters of transient problems).
+Without it the lagged inertia (below) was fed back with a gain ``beta rho_e
+h_e^2 / (G_e dt^2)``, about 7e3 for a column of E = 1 kPa at dt = 5 ms, and
+the step created energy (docs/extremes.md, "What broke on the way").
+
+The acceleration is the one at the start of the step (``a_n``, lagged by one
+step): the inertial forces stay uncoupled in the program, which keeps the
+factorisation sparser (with the implicit ``a_n+1`` the step cost about 1.3x
+more in our trials), and the lag is ``O(dt)`` in a transient and nothing at
+rest.  Quasi-static steps have no inertia: their residual is exact.
 
 Properties (tests/step/test_stabilisation.py):
 
@@ -274,7 +285,8 @@ def element_residual(prog: Program) -> tuple[sp.csr_matrix, np.ndarray, np.ndarr
         ``div tau_h(sigma_n)`` plus the element means of the load and inertia
         densities.
     w : ndarray (d*ne,)
-        Penalty weight ``beta h_e^2 |e| / G_e`` of every row.
+        Penalty weight ``beta min(h_e^2 / G_e, dt^2 / rho_e) |e|`` of every
+        row (``h_e^2 / G_e`` in quasi-static steps).
 
     Notes
     -----
@@ -300,6 +312,15 @@ def element_residual(prog: Program) -> tuple[sp.csr_matrix, np.ndarray, np.ndarr
     shear = np.array([m.E / (2.0 * (1.0 + m.nu)) for m in data.materials])
     g_e = shear[np.asarray(data.material)][t].min(axis=0)
     h2 = (math.factorial(d) * area) ** (2.0 / d)
+    if data.dynamic:
+        # An element the shear wave does not cross within the step (h_e >
+        # c_s dt) is weighted on its inertial scale dt^2 / rho instead of
+        # h_e^2 / G_e: the lagged inertia then cannot feed energy back.
+        rho = np.array([m.rho for m in data.materials])
+        rho_e = rho[np.asarray(data.material)][t].max(axis=0)
+        wave = data.dt**2 * g_e  # rho_e h_e^2 above it: the wave is slower
+        cap = rho_e * h2 > wave
+        h2 = np.where(cap, wave / np.where(cap, rho_e, 1.0), h2)
     w_e = data.stabilisation * h2 * vol / g_e
     w = np.repeat(w_e, d)
     rows = np.ones(d * t.shape[1], dtype=bool)

@@ -17,9 +17,9 @@ from __future__ import annotations
 
 # Importing the case modules registers their cases.
 from . import extremes_column, extremes_footing, extremes_mesh  # noqa: F401
-from .framework import CASES, Case, Outcome, result
+from .framework import CASES, ENERGY_TOLERANCE, Case, Outcome, result
 
-__all__ = ["CASES", "DEFAULT", "SLOW", "Case", "Outcome", "result"]
+__all__ = ["CASES", "DEFAULT", "ENERGY_TOLERANCE", "SLOW", "Case", "Outcome", "result"]
 
 #: Cases of the default test run.
 DEFAULT = [c for c in CASES if not c.slow]

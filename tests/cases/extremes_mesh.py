@@ -22,6 +22,7 @@ from .framework import (
     E_COL,
     NU,
     RHO,
+    EnergyBudget,
     G,
     H,
     Outcome,
@@ -48,8 +49,10 @@ def mc_column_at_rest(E: float, dt: float, n: int = 3):
     mat = MohrCoulomb(E, NU, RHO, c=1e3, phi=30.0)
     model = Model(dim=2, materials=[mat], gravity=G, mode="dynamic")
     its = []
+    budget = EnergyBudget(model, p)
     for _ in range(n):
         p, step = advance(p, model, dt, FixedMesh(mesh.t))
+        budget.add(p, step)
         its.append(step.record.iterations)
     v = float(np.abs(p.v).max() / (G * n * dt))
     ds = float(np.abs(p.stress - stress).max() / (RHO * G * H))
@@ -109,6 +112,7 @@ def _near_duplicate():
     p = Particles.create(x, mass, fixed=fixed)
     model = Model(dim=2, materials=[LinearElastic(E_COL, NU, RHO)], mode="static")
     new, step = advance(p, model, 1.0, AlphaShapeMesher(h))
+    EnergyBudget(model, p).add(new, step)
     rec = step.record
     act = tri.active
     sv_ex = -RHO * G * (H - x[act, 1])
@@ -176,6 +180,7 @@ def column_on_mesh(mesh: MeshTri, material) -> tuple[Particles, StepRecord]:
     p = Particles.create(x, RHO * ni.volumes, fixed=fixed)
     model = Model(dim=2, materials=[material], gravity=G, mode="static")
     new, step = advance(p, model, 1.0, FixedMesh(mesh.t))
+    EnergyBudget(model, p).add(new, step)
     return new, step.record
 
 

@@ -12,12 +12,17 @@ from __future__ import annotations
 
 import pytest
 from cases.extremes import DEFAULT, SLOW, result
+from cases.framework import ENERGY_TOLERANCE
 
 
 @pytest.mark.parametrize("case_", DEFAULT, ids=[c.name for c in DEFAULT])
 def test_extreme_case(case_):
     out = result(case_.name)
     assert out.passed, f"{case_.name}: {out.outcome}; expected: {case_.expected}"
+    # Beside the physical answer, the energy balance (cases.framework
+    # EnergyBudget): no step creates energy.  nan: a documented error came
+    # before the first step.
+    assert not out.energy > ENERGY_TOLERANCE, f"{case_.name}: energy {out.energy:.3g}"
 
 
 @pytest.mark.slow
@@ -25,6 +30,10 @@ def test_extreme_case(case_):
 def test_extreme_case_slow(case_):
     out = result(case_.name)
     assert out.passed, f"{case_.name}: {out.outcome}; expected: {case_.expected}"
+    # Beside the physical answer, the energy balance (cases.framework
+    # EnergyBudget): no step creates energy.  nan: a documented error came
+    # before the first step.
+    assert not out.energy > ENERGY_TOLERANCE, f"{case_.name}: energy {out.energy:.3g}"
 
 
 #: Largest ratio of the per-case peak IPM iterations (a) across the cases that

@@ -136,6 +136,26 @@ def test_the_penalty_vanishes_like_h_squared():
     assert r32 / r16 == pytest.approx(0.25, rel=0.1)
 
 
+def test_the_weight_is_the_inertial_scale_where_the_wave_does_not_cross_an_element():
+    # Element weight beta |e| min(h_e^2 / G, dt^2 / rho), h_e = (2 |e|)^(1/2):
+    # h_e^2 / G where the shear wave crosses an element within the step
+    # (c_s dt > h_e), dt^2 / rho where it does not; quasi-static steps always
+    # take h_e^2 / G.  c_s = sqrt(G / rho) = 43.9 m/s here, h_e ~ 0.25 m.
+    shear = E / (2 * (1 + NU))
+    for dt, dynamic in ((1e-1, True), (1e-4, True), (1e-4, False)):
+        d = geostatic(2, 4, beta=30.0)
+        d.dynamic, d.dt = dynamic, dt
+        d.mass = RHO * d.operator.volumes
+        d.v_n = d.a_n = np.zeros_like(d.force)
+        vol = p1_gradients(block(2, 4))[1]
+        h2 = 2.0 * vol
+        tau = np.minimum(h2 / shear, dt**2 / RHO) if dynamic else h2 / shear
+        w = element_residual(build_program(d)[0])[2]
+        np.testing.assert_allclose(w, np.repeat(30.0 * tau * vol, 2), rtol=1e-12)
+        if dynamic and dt < 1e-3:
+            assert np.all(tau < h2 / shear)  # the inertial scale applies
+
+
 def test_mesh_node_masses_keep_each_materials_total_and_a_uniform_density():
     rng = np.random.default_rng(3)
     mass, vol = rng.uniform(1, 2, 50), rng.uniform(0.5, 1.5, 50)
