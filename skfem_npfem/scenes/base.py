@@ -21,6 +21,7 @@ from .._version import __version__
 from ..errors import CheckpointError, ParameterError, RunInterrupted
 from ..io import (
     RunFolder,
+    check_not_held,
     check_writable_dir,
     checkpoint_step,
     load_checkpoint,
@@ -225,6 +226,8 @@ class Scene:
         """The latest checkpoint of ``out``, checked against this scene and values."""
         if out is None:
             raise ParameterError("resume", True, "needs out (a folder)")
+        # A run in progress stages its checkpoints: its lock is the news.
+        check_not_held(out)
         path, step = checkpoint_step(out)
         _, meta = load_checkpoint(path)
         if meta.get("scene", self.name) != self.name:
