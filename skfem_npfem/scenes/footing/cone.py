@@ -486,4 +486,5 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=cone_scenery,
+    time_params=("dt", "penetration"),
 )

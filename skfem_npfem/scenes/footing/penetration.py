@@ -429,4 +429,5 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=penetration_scenery,
+    time_params=("dt", "penetration"),
 )

@@ -470,4 +470,5 @@ SCENE = Scene(
     metrics_doc=METRICS,
     scenery=footing_scenery,
     derive=resolve_defaults,
+    time_params=None,  # a run counts its steps
 )
