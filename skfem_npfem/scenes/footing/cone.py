@@ -423,6 +423,7 @@ def build(
         meta={"scene": "cone-penetration", "parameters": dict(values)},
     )
     area = math.pi * D**2 / 4
+    sim.penetration_check.enabled = False  # penetration_warnings says it
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
         curve = [

@@ -305,6 +305,7 @@ def build(
         meta={"scene": "footing-penetration", "parameters": dict(values)},
     )
     t_end = w / values["speed"]
+    sim.penetration_check.enabled = False  # penetration_warnings says it
     surface = particles.x[:, 1] >= particles.x[:, 1].max() - 1e-9
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
