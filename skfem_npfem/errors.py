@@ -1,8 +1,9 @@
-"""Exceptions raised by skfem-npfem.
+"""Exceptions raised by skfem-npfem, and how it warns.
 
 Every error a user can trigger through the public API or the CLI derives from
 :class:`NpfemError`; input errors are also :class:`ValueError` so that ordinary
-``except ValueError`` code keeps working.
+``except ValueError`` code keeps working.  Every warning goes through
+:func:`warn_user`, which names the user's line, not the package's.
 """
 
 from __future__ import annotations
