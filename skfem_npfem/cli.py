@@ -180,12 +180,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         metrics = {
             k: v for k, v in result["metrics"].items() if not isinstance(v, list)
         }
-        solver = result["solver"]
-        print(
-            f"scene {result['scene']}: {solver['steps']} steps, "
-            f"{solver['ipm_iterations_total']} IPM iterations, "
-            f"{result['wall_time_total']:.2f} s"
-        )
+        print(f"scene {result['scene']}: {work_done(result)}")
         for k, v in metrics.items():
             print(f"  {k} = {format_value(v)}")
         if args.out:
@@ -193,6 +188,33 @@ def cmd_run(args: argparse.Namespace) -> int:
         if args.summary:
             print(f"  summary: {args.summary} (full precision)")
     return 0
+
+
+def work_done(result: dict) -> str:
+    """What a run solved, for its headline: steps, or a limit analysis's programs.
+
+    Examples
+    --------
+    >>> work_done({"solver": {"steps": 3, "ipm_iterations_total": 40},
+    ...            "metrics": {}, "wall_time_total": 1.5})
+    '3 steps, 40 IPM iterations, 1.50 s'
+    >>> work_done({"solver": {"steps": 0, "ipm_iterations_total": 0},
+    ...            "metrics": {"cone_programs": 5, "limit_iterations": 92},
+    ...            "wall_time_total": 7.25})
+    'limit analysis, 5 cone programs, 92 IPM iterations, 7.25 s'
+    """
+    m, solver = result["metrics"], result["solver"]
+    if m.get("cone_programs") is not None:  # analysis=limit: no steps
+        n = m["cone_programs"]
+        return (
+            f"limit analysis, {n} cone program{'s' if n != 1 else ''}, "
+            f"{m.get('limit_iterations', 0)} IPM iterations, "
+            f"{result['wall_time_total']:.2f} s"
+        )
+    return (
+        f"{solver['steps']} steps, {solver['ipm_iterations_total']} IPM "
+        f"iterations, {result['wall_time_total']:.2f} s"
+    )
 
 
 def interrupted_message(err: KeyboardInterrupt, command: str = "run") -> str:

@@ -1,13 +1,19 @@
-"""Exceptions raised by skfem-npfem.
+"""Exceptions raised by skfem-npfem, and how it warns.
 
 Every error a user can trigger through the public API or the CLI derives from
 :class:`NpfemError`; input errors are also :class:`ValueError` so that ordinary
-``except ValueError`` code keeps working.
+``except ValueError`` code keeps working.  Every warning goes through
+:func:`warn_user`, which names the user's line, not the package's.
 """
 
 from __future__ import annotations
 
+import os
 import signal
+import sys
+import warnings
+
+_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__)) + os.sep
 
 
 class NpfemError(Exception):
@@ -137,3 +143,40 @@ class RunInterrupted(KeyboardInterrupt):
     def exit_code(self) -> int:
         """The shell's exit code of a process ended by the signal (128 + N)."""
         return 128 + self.signum
+
+
+def warn_user(message: str, category: type[Warning] = UserWarning) -> None:
+    """Warn with the user's line named: the first caller outside the package.
+
+    A warning raised deep in a scene's metrics would otherwise be attributed
+    to a line of this package that the user never wrote.  On Python 3.12 and
+    later this is ``warnings.warn(..., skip_file_prefixes=...)``; before, the
+    stack level is counted to the first frame outside the package.
+
+    Parameters
+    ----------
+    message : str
+        The warning's text.
+    category : type of Warning
+        Its category.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     warn_user("a note")
+    >>> str(caught[0].message), caught[0].filename.startswith(_PACKAGE_DIR)
+    ('a note', False)
+    """
+    if sys.version_info >= (3, 12):
+        warnings.warn(message, category, skip_file_prefixes=(_PACKAGE_DIR,))
+        return
+    level = 2
+    frame = sys._getframe(1)
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(
+        _PACKAGE_DIR
+    ):
+        frame = frame.f_back
+        level += 1
+    warnings.warn(message, category, stacklevel=level)

@@ -31,6 +31,7 @@ from .checkpoints import (
 from .files import (
     LOCK_NAME,
     atomic_path,
+    check_not_held,
     check_writable_dir,
     dumps,
     folder_lock,
@@ -47,6 +48,7 @@ __all__ = [
     "ResultWriter",
     "RunFolder",
     "atomic_path",
+    "check_not_held",
     "check_writable_dir",
     "checkpoint_path",
     "checkpoint_step",

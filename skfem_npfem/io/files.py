@@ -36,6 +36,7 @@ from ..errors import ParameterError
 __all__ = [
     "LOCK_NAME",
     "atomic_path",
+    "check_not_held",
     "check_writable_dir",
     "dumps",
     "folder_lock",
@@ -113,20 +114,69 @@ def folder_lock(folder: str | os.PathLike, name: str = "out") -> Iterator[Path]:
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
-                holder = os.pread(fd, 64, 0).decode(errors="replace").strip()
-                who = f"process {holder}" if holder.isdigit() else "another process"
-                raise ParameterError(
-                    name,
-                    str(folder),
-                    f"a folder no other run is writing to ({who} is running "
-                    f"into it and holds {LOCK_NAME}); wait for it to finish or "
-                    "choose another folder",
-                ) from None
+                raise _held(fd, folder, name) from None
             except OSError:  # pragma: no cover - a file system without locks
                 pass
             os.ftruncate(fd, 0)
             os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
         yield path
+    finally:
+        os.close(fd)
+
+
+def _held(fd: int, folder: Path, name: str) -> ParameterError:
+    """The error for ``folder``, whose lock (open as ``fd``) another run holds."""
+    holder = os.pread(fd, 64, 0).decode(errors="replace").strip()
+    who = f"process {holder}" if holder.isdigit() else "another process"
+    return ParameterError(
+        name,
+        str(folder),
+        f"a folder no other run is writing to ({who} is running "
+        f"into it and holds {LOCK_NAME}); wait for it to finish or "
+        "choose another folder",
+    )
+
+
+def check_not_held(folder: str | os.PathLike, name: str = "out") -> None:
+    """Refuse a folder another run holds, without taking it or creating anything.
+
+    What a run in progress has written is staged, not yet in ``folder``, so
+    looking there for a checkpoint (``--resume``) would say "no checkpoint"
+    when the truth is that another run is writing to it.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`folder_lock` does, if another process holds the lock.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> check_not_held(folder)  # nobody holds it
+    >>> with folder_lock(folder):
+    ...     check_not_held(folder)
+    Traceback (most recent call last):
+    ...
+    skfem_npfem.errors.ParameterError: invalid out=...
+    """
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - Windows
+        return
+    path = Path(folder) / LOCK_NAME
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:  # no lock file: no run has held the folder
+        return
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise _held(fd, Path(folder), name) from None
+        except OSError:  # pragma: no cover - a file system without locks
+            return
+        fcntl.flock(fd, fcntl.LOCK_UN)
     finally:
         os.close(fd)
 

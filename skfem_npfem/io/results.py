@@ -15,7 +15,6 @@ from __future__ import annotations
 import operator
 import os
 import re
-import warnings
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from pathlib import Path
@@ -24,7 +23,7 @@ from typing import Any
 import meshio
 import numpy as np
 
-from ..errors import CheckpointError, ParameterError
+from ..errors import CheckpointError, ParameterError, warn_user
 from .files import atomic_path, check_writable_dir, write_bytes, write_json
 
 __all__ = [
@@ -192,7 +191,7 @@ class ResultWriter:
             try:
                 listed = read_pvd(self.pvd_path)
             except CheckpointError as err:
-                warnings.warn(f"{err}; rebuilding it from the VTU files", stacklevel=3)
+                warn_user(f"{err}; rebuilding it from the VTU files")
                 listed = []
             for time, file in listed:
                 m = self._pattern.fullmatch(file.name)
@@ -209,16 +208,14 @@ class ResultWriter:
             except CheckpointError:
                 unreadable.append(f.name)
         if added:
-            warnings.warn(
+            warn_user(
                 f"{self.pvd_path.name} did not list {added} step file(s) on disk; "
                 "added them with the times stored in the files",
-                stacklevel=3,
             )
         if unreadable:
-            warnings.warn(
+            warn_user(
                 f"left out {len(unreadable)} unreadable step file(s): "
                 + ", ".join(unreadable[:5]),
-                stacklevel=3,
             )
         return kept
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import copy
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -76,6 +76,10 @@ class SafetyResult:
         Every iterate.
     multiplier_unreduced : float
         The load multiplier of the unreduced strengths (the first iterate).
+    iterations : int
+        Interior-point iterations of all the programs.
+    statuses : list of str
+        Clarabel's status of every program (``Solved`` or ``AlmostSolved``).
     """
 
     factor_of_safety: float
@@ -83,6 +87,8 @@ class SafetyResult:
     programs: int
     iterates: list
     multiplier_unreduced: float
+    iterations: int = 0
+    statuses: list = field(default_factory=list)
 
 
 def strength_reduction(
@@ -156,6 +162,7 @@ def strength_reduction(
         return FLOOR < lam < (1 - 1e-6) * CAP
 
     iterates: list = []
+    runs: list[tuple[str, int]] = []  # (status, iterations) of every program
     points: list[tuple[float, float]] = []  # (log F, log lambda), interior only
     lo = hi = None  # log F with lambda >= 1, and with lambda < 1
     best = failing = None
@@ -174,6 +181,7 @@ def strength_reduction(
         res = solve(math.exp(x))
         lam = res.multiplier
         iterates.append((math.exp(x), lam))
+        runs.append((res.status, res.iterations))
         if lam >= 1.0:
             lo, best = x, res
         else:
@@ -207,6 +215,8 @@ def strength_reduction(
         programs=len(iterates),
         iterates=iterates,
         multiplier_unreduced=iterates[0][1],
+        iterations=sum(n for _, n in runs),
+        statuses=[status for status, _ in runs],
     )
 
 

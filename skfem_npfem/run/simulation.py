@@ -31,6 +31,7 @@ from ..step.kinematics import energies
 from ..step.model import Model
 from ..step.stages import Step, StepRecord, StepState, advance
 from .control import INTERVAL, AbandonStep, Progress, SignalGuard
+from .penetration import PenetrationCheck
 from .rest import AtRest
 from .statistics import peak_memory_mb, run_statistics
 
@@ -158,6 +159,7 @@ class Simulation:
         self.meta = dict(meta or {})
         self.extra_point_data = extra_point_data
         self.stepper = stepper
+        self.penetration_check = PenetrationCheck()  # a body's half a spacing
         #: What the next step starts from besides the particles (time, filter).
         self.state = StepState()
         self.after_output = lambda sim: None  # after a step's files are written
@@ -375,6 +377,7 @@ class Simulation:
         rec.volume_change = rec.mesh_volume / v0 - 1.0 if v0 > 0 else 0.0
         self.records.append(rec)
         self.last_record = rec
+        self.penetration_check(self, rec)
         last = (n_target is not None and self.step >= n_target) or (
             t_end is not None and self.time >= t_end * (1 - 1e-12)
         )

@@ -21,6 +21,7 @@ from .._version import __version__
 from ..errors import CheckpointError, ParameterError, RunInterrupted
 from ..io import (
     RunFolder,
+    check_not_held,
     check_writable_dir,
     checkpoint_step,
     load_checkpoint,
@@ -81,6 +82,12 @@ class Scene:
         ``derive(values: dict) -> None``: the scene's one resolving function,
         which fills the defaults derived from other parameters (e.g. a spacing
         from a height) in place, before the run is built.
+    time_params : tuple of str or None
+        ``(step, end)``: the scene's parameters that set how many steps a
+        run of ``t_end`` takes (the time step, and the one that sets the
+        run's end, ``t_end`` or, where the end is where a body has got to, its
+        ``penetration``); the step-count error names them.  None for a scene
+        whose runs count their ``steps`` instead.
     """
 
     name: str
@@ -90,6 +97,7 @@ class Scene:
     metrics_doc: dict[str, str]
     scenery: Callable[..., Any] | None = None
     derive: Callable[[dict[str, Any]], Any] | None = None
+    time_params: tuple[str, str] | None = ("dt", "t_end")
 
     def resolve(self, overrides: Mapping[str, Any] | None = None) -> Values:
         """The values of a run: defaults, validated overrides, derived defaults.
@@ -169,7 +177,7 @@ class Scene:
             _check_not_past_end(sim, run_kwargs, checkpoint)
             if run_kwargs.get("steps") is not None:  # steps counts from step 0
                 run_kwargs["steps"] = run_kwargs["steps"] - sim.step
-        _check_step_count(sim, run_kwargs, values)
+        _check_step_count(sim, run_kwargs, values, self.time_params)
         with folder.hold() if folder is not None else nullcontext():
             if folder is not None:
                 folder.watch(sim)
@@ -225,6 +233,8 @@ class Scene:
         """The latest checkpoint of ``out``, checked against this scene and values."""
         if out is None:
             raise ParameterError("resume", True, "needs out (a folder)")
+        # A run in progress stages its checkpoints: its lock is the news.
+        check_not_held(out)
         path, step = checkpoint_step(out)
         _, meta = load_checkpoint(path)
         if meta.get("scene", self.name) != self.name:
@@ -274,21 +284,29 @@ def _check_not_past_end(sim: Any, run_kwargs: dict, checkpoint: Path) -> None:
         )
 
 
-def _check_step_count(sim: Any, run_kwargs: dict, values: Values) -> None:
-    """Refuse a run that plans more than :data:`~.limits.MAX_STEPS` steps."""
+def _check_step_count(
+    sim: Any, run_kwargs: dict, values: Values, time_params: tuple[str, str] | None
+) -> None:
+    """Refuse a run that plans more than :data:`~.limits.MAX_STEPS` steps.
+
+    ``time_params`` are the scene's ``(step, end)`` parameters
+    (:attr:`Scene.time_params`), which the error tells the user to change.
+    """
     t_end, steps = run_kwargs.get("t_end"), run_kwargs.get("steps")
     by_time = math.inf
     if t_end is not None:
         by_time = max(t_end - sim.time, 0.0) / sim.dt_max
     if by_time <= (math.inf if steps is None else steps):
         if t_end is not None:
-            name = "dt" if "dt" in values else "t_end"
+            step, end = time_params or ("dt", "t_end")
+            name = step if step in values else end
+            run_time = "t_end" if end == "t_end" else f"the run's time (set by {end})"
             check_steps(
                 by_time,
                 values,
                 name,
-                f"t_end/dt = {t_end:g}/{sim.dt_max:g} s",
-                "raise dt or lower t_end",
+                f"{run_time}/{step} = {t_end:g}/{sim.dt_max:g} s",
+                f"raise {step} or lower {end}",
             )
     else:
         name = next(

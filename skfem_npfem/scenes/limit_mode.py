@@ -17,13 +17,14 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import ParameterError, warn_user
 from ..laws import prandtl_depth
 from ..limit.analysis import LimitResult
 from .base import SceneRun
 from .params import Param
 
 __all__ = [
+    "ALMOST_SOLVED",
     "ANALYSES",
     "LIMIT_METRICS",
     "analysis_param",
@@ -45,7 +46,20 @@ LIMIT_METRICS = {
     "collapse mechanism",
     "limit_wall_time": "analysis=limit: seconds spent building and solving the "
     "limit programs",
+    "limit_iterations": "analysis=limit: interior-point iterations of all the "
+    "limit programs",
+    "limit_note": "analysis=limit: what an AlmostSolved program means for the "
+    "result (null when every program was Solved)",
 }
+
+#: What ``AlmostSolved`` means for a multiplier or a factor of safety.
+ALMOST_SOLVED = (
+    "{n} of the {programs} limit program(s) ended AlmostSolved: Clarabel met its "
+    "reduced tolerances (relative duality gap 5e-5, feasibility 1e-4) but not tol, "
+    "so {what} is certain only to about 1e-4 relative (usually far better: it is "
+    "where the solver stalled, next to the optimum); rerun with another tol (e.g. "
+    "1e-9) to confirm its digits"
+)
 
 
 def analysis_param(incremental: str) -> Param:
@@ -119,15 +133,31 @@ def limit_metrics(
     volumes: np.ndarray,
     programs: int,
     wall_time: float | None = None,
+    iterations: int | None = None,
+    statuses: list[str] | None = None,
+    what: str = "the collapse multiplier",
 ) -> dict:
-    """The :data:`LIMIT_METRICS` of a limit result (``wall_time``: of all programs)."""
+    """The :data:`LIMIT_METRICS` of a limit result.
+
+    ``wall_time``, ``iterations`` and ``statuses`` are of all the programs
+    (default: those of ``res``, the one program); ``what`` names the result
+    in the note on ``AlmostSolved`` programs, which is also warned.
+    """
     volumes = np.asarray(volumes, float)
+    statuses = [res.status] if statuses is None else list(statuses)
+    almost = sum(s != "Solved" for s in statuses)
+    note = None
+    if almost:
+        note = ALMOST_SOLVED.format(n=almost, programs=len(statuses), what=what)
+        warn_user(note)
     return {
         "collapse_multiplier": float(res.multiplier),
         "limit_status": res.status,
         "cone_programs": int(programs),
         "plastic_fraction": float(volumes[res.plastic].sum() / volumes.sum()),
         "limit_wall_time": float(res.wall_time if wall_time is None else wall_time),
+        "limit_iterations": int(res.iterations if iterations is None else iterations),
+        "limit_note": note,
     }
 
 

@@ -310,7 +310,8 @@ def check_step_data(data: ConeInput) -> None:
         (zero area/volume: its P1 gradients are infinite), a non-positive or
         non-finite ``stress_scale``, an eigenstrain not shaped like the
         stresses or not finite, or (dynamic steps) a time step, mass or
-        velocity that is not finite and positive where required.
+        velocity that is not finite and positive where required; and a
+        static step of a body that nothing holds (:func:`_check_supported`).
     """
     op = data.operator
     n, n_nodes = op.n_points, op.n_nodes
@@ -364,6 +365,41 @@ def check_step_data(data: ConeInput) -> None:
                 f"array of shape {v.shape}",
                 f"({n_nodes}, {op.dim}), finite (m/s)",
             )
+    else:
+        _check_supported(data)
+
+
+def _check_supported(data: ConeInput) -> None:
+    """Refuse a static step whose load moves the body as a rigid body.
+
+    With no fixed degree of freedom and no contact row (no wall or body
+    touches it), a translation strains nothing; a static step then has no
+    equilibrium if the load has a resultant along it (gravity on a body
+    nothing supports), and Clarabel calls the program infeasible, which
+    reads like a load above the collapse load.  Said here instead.
+    """
+    if np.any(data.fixed) or np.asarray(data.contacts.node).size:
+        return
+    op = data.operator
+    force = np.asarray(data.force, float).reshape(op.n_nodes, op.dim)
+    total = float(np.abs(force).sum())
+    for k in range(op.dim):
+        resultant = float(force[:, k].sum())
+        if not abs(resultant) > 1e-9 * total:
+            continue
+        u = np.zeros((op.n_nodes, op.dim))
+        u[:, k] = 1.0
+        if np.max(np.abs(op.strain(u)), initial=0.0) > 1e-8:
+            continue  # not a rigid motion (the radius in axisymmetry)
+        raise ParameterError(
+            "mode",
+            "static",
+            f"a supported body: nothing holds it (no fixed degree of freedom, no "
+            f"wall or body touching it), so its load (resultant {resultant:.4g} N "
+            f"along axis {k}) moves it as a rigid body, which a static step does "
+            "not support; fix degrees of freedom (Particles(fixed=...)), add a "
+            "wall (Model(walls=...)) or a body, or use mode='dynamic'",
+        )
 
 
 def stress_scale(prog: Program) -> float:

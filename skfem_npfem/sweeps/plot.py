@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import re
-import warnings
 from pathlib import Path
 from typing import Any
 
-from ..errors import NpfemError, ParameterError
+from ..errors import NpfemError, ParameterError, warn_user
 from ..io import atomic_path
 from .plan import value_label
 from .table import read_spec, read_table
@@ -97,11 +96,10 @@ def plot_sweep(
             )
     if moving.any():
         ax.plot([], [], "o", mfc="white", mec="0.3", label=NOT_AT_REST)
-        warnings.warn(
+        warn_user(
             f"{int(moving.sum())} of {len(ok)} runs ended at t_end before the "
             f"material came to rest (at_rest = false): their {metric} is not "
             f"final; open markers in the plot",
-            stacklevel=2,
         )
     ax.set_xlabel(param)
     ax.set_ylabel(metric)

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import CheckpointError, ParameterError
+from ..errors import CheckpointError, ParameterError, warn_user
 from ..io import read_step
 from .colours import (
     _SAMPLE,
@@ -155,7 +155,7 @@ def _load(
                 pooled = {name: [] for name in names}
             step, _ = _read(path, t, names)
         except CheckpointError as err:
-            warnings.warn(f"skipped an unreadable step: {err}", UserWarning, 3)
+            warn_user(f"skipped an unreadable step: {err}")
             bad.append(i)
             continue
         for name in names:
@@ -178,7 +178,7 @@ def _load_reporting(entries, field, req, unit, animation, max_frames):
         warnings.simplefilter("always")
         picked = _load_picked(entries, field, req, unit, animation, max_frames)
     for w in caught:
-        warnings.warn(str(w.message), w.category, stacklevel=3)
+        warn_user(str(w.message), w.category)
     return picked
 
 

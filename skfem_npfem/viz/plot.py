@@ -21,13 +21,12 @@ from __future__ import annotations
 
 import math
 import os
-import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import CheckpointError, ParameterError
+from ..errors import CheckpointError, ParameterError, warn_user
 from ..io import check_writable_dir, read_pvd
 from .animation import write_animation
 from .colours import (
@@ -241,11 +240,9 @@ def plot_results(
     sc = scenery(folder)
     unit = _time_unit(sc, normalised)
     if normalised and sc.tau is None and sc.footing is None and req:
-        warnings.warn(
+        warn_user(
             f"{folder}: scene.json has no 'aspect' and 'half_width' parameters, so "
             "times are taken as absolute seconds instead of t/sqrt(H0/g)",
-            UserWarning,
-            stacklevel=2,
         )
     loaded, entries, snaps, frames = _load_reporting(
         entries, field, req, unit, animation, max_frames

@@ -7,10 +7,11 @@ steps draws the nearest step and names it by the time it shows.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
+
+from ..errors import warn_user
 
 __all__ = []
 
@@ -93,13 +94,11 @@ def _pick_snapshots(
                 if unit.name in ("s", "m of settlement")
                 else (f" (t = {ts[i]:.4g} s)")
             )
-            warnings.warn(
+            warn_user(
                 f"{unit.text(label)} is outside the stored steps "
                 f"({ts[0] / scale:.4g}..{ts[-1] / scale:.4g} {unit.name}); drawing "
                 f"the step at {unit.text(shown)}{seconds}, saved as "
                 f"_{unit.prefix}{_time_label(shown)}",
-                UserWarning,
-                stacklevel=3,
             )
             label = shown
         snaps.setdefault(i, label)

@@ -38,6 +38,15 @@ RHO = 2000.0
 SQUARE = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
 
 
+def _soil_block():
+    """A 1 m elastic square, 0.25 m lattice, on a fixed base: mesh, soil, particles."""
+    mesh = MeshTri.init_tensor(np.linspace(0, 1, 5), np.linspace(0, 1, 5))
+    soil = npfem.LinearElastic(1e6, 0.3, 1.0)
+    fixed = np.zeros((mesh.p.shape[1], 2), bool)
+    fixed[np.isclose(mesh.p[1], 0.0)] = True
+    return mesh, soil, npfem.Particles.from_mesh(mesh, soil, fixed=fixed)
+
+
 # --- geometry ----------------------------------------------------------------
 def test_signed_distance_and_normals():
     body = RigidBody(SQUARE[::-1], velocity=[0.0, -1.0])  # clockwise: reordered
@@ -221,11 +230,7 @@ def test_adhesion_belt_drags_block_at_a_L_over_m():
 
 
 def test_unilateral_soil_stays_when_body_leaves():
-    mesh = MeshTri.init_tensor(np.linspace(0, 1, 5), np.linspace(0, 1, 5))
-    soil = npfem.LinearElastic(1e6, 0.3, 1.0)
-    fixed = np.zeros((mesh.p.shape[1], 2), bool)
-    fixed[np.isclose(mesh.p[1], 0.0)] = True
-    p = npfem.Particles.from_mesh(mesh, soil, fixed=fixed)
+    mesh, soil, p = _soil_block()
     lid = RigidBody(
         [[0.0, 1.0], [1.0, 1.0], [1.0, 1.5], [0.0, 1.5]], velocity=[0.0, 0.1]
     )
@@ -291,11 +296,7 @@ def test_wedge_tip_between_nodes_pushes_the_soil_edge():
     closed) and the wedge takes the force the soil pushes back with; no
     particle gets inside it.
     """
-    mesh = MeshTri.init_tensor(np.linspace(0, 1, 5), np.linspace(0, 1, 5))
-    soil = npfem.LinearElastic(1e6, 0.3, 1.0)
-    fixed = np.zeros((mesh.p.shape[1], 2), bool)
-    fixed[np.isclose(mesh.p[1], 0.0)] = True
-    p = npfem.Particles.from_mesh(mesh, soil, fixed=fixed)
+    mesh, soil, p = _soil_block()
     tip = RigidBody(  # tip at x = 0.375, between the nodes at 0.25 and 0.5
         [[0.375, 1.0], [0.575, 1.4], [0.175, 1.4]], velocity=[0.0, -0.1], name="wedge"
     )
@@ -349,3 +350,46 @@ def test_adhesion_per_edge_follows_the_corners_order():
     with pytest.raises(ParameterError, match="one per edge"):
         RigidBody(square, adhesion=[1.0, -2.0, 0.0, 0.0])
     assert RigidBody(square, adhesion=2.0).adhesion == 2.0
+
+
+# --- the half-a-spacing contract, said by the API ---------------------------
+def _wedge_run(mesh_source=None):
+    mesh, soil, p = _soil_block()
+    tip = RigidBody(
+        [[0.375, 1.0], [0.575, 1.4], [0.175, 1.4]], velocity=[0.0, -0.1], name="skirt"
+    )
+    model = npfem.Model(
+        dim=2, materials=[soil], bodies=[tip], mode="static", gravity=0.0
+    )
+    source = mesh if mesh_source is None else mesh_source
+    return npfem.Simulation(p, model, source, 0.1, progress=False)
+
+
+@pytest.mark.parametrize(
+    ("source", "h"),
+    [
+        (None, 0.25),  # a fixed mesh: its median edge, the lattice's 0.25 m
+        (npfem.AlphaShapeMesher(0.2, 1.4), 0.2),  # the spacing it declares
+    ],
+)
+def test_a_particle_deeper_than_half_a_spacing_in_a_body_is_warned(source, h):
+    # Reproducer: a user's skirted footing (skirts one spacing thick) let
+    # particles 0.63 spacings into it; only the scenes warned, the API said
+    # nothing.  The step's record holds the depth (what put_back measured).
+    sim = _wedge_run(source)
+    sim.run(steps=1)
+    rec = sim.records[-1]
+    rec.extra["skirt_penetration"] = 0.49 * h  # within the contract: quiet
+    assert sim.penetration_check(sim, rec) == []
+    rec.extra["skirt_penetration"] = 0.63 * h
+    with pytest.warns(UserWarning, match="0.63 spacings inside it at step 1") as w:
+        (msg,) = sim.penetration_check(sim, rec)
+    assert "body 'skirt'" in msg and w[0].filename == __file__
+    assert sim.penetration_check(sim, rec) == []  # once per body and run
+
+
+def test_a_run_whose_particles_stay_out_of_the_body_is_not_warned(recwarn):
+    sim = _wedge_run()
+    sim.run(steps=2)
+    assert max(r.extra["skirt_penetration"] for r in sim.records) == 0.0
+    assert not [w for w in recwarn if "spacings inside" in str(w.message)]

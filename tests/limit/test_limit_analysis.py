@@ -10,6 +10,8 @@ spacing are measured by ``demos/studies/limit_footing.py`` (docs/validation).
 
 from __future__ import annotations
 
+import contextlib
+import io
 import math
 
 import numpy as np
@@ -17,11 +19,16 @@ import pytest
 from helpers import check_cli_error, run_cli
 
 import skfem_npfem as npfem
+from skfem_npfem.cli import main
 from skfem_npfem.laws import prandtl_depth, prandtl_nc
 from skfem_npfem.limit.program import limit_hint
 from skfem_npfem.scenes.footing.mesh import soil_mesh
 from skfem_npfem.scenes.footing.strip import PARAMS
-from skfem_npfem.scenes.limit_mode import MECHANISM_MARGIN, check_limit_method
+from skfem_npfem.scenes.limit_mode import (
+    MECHANISM_MARGIN,
+    check_limit_method,
+    limit_metrics,
+)
 
 #: Largest |N/N_c - 1| at the coarse spacing 0.125 b, block 5 b: the O(h)
 #: discretisation error of the mixed program (measured -3.9 % at phi = 35).
@@ -147,6 +154,62 @@ def test_strength_reduction_that_finds_no_factor_says_why():
         )
     assert not isinstance(err.value, npfem.ParameterError)
     assert "in 1 cone programs" in str(err.value) and "supports" in str(err.value)
+
+
+def test_strength_reduction_counts_the_iterations_of_every_program():
+    """Each iterate solved again on its own: the same statuses and iterations."""
+    mesh, fixed, _foot, load = footing_problem(spacing=0.25)
+    mat = npfem.MohrCoulomb(1e8, 0.3, c=1.0, phi=30.0)
+    n = mesh.p.shape[1]
+    fos = npfem.strength_reduction(mesh, [mat], np.zeros(n, int), load, fixed=fixed)
+    again = [
+        npfem.limit_analysis(
+            mesh,
+            [npfem.reduced_strength(mat, F)],
+            np.zeros(n, int),
+            load,
+            fixed=fixed,
+            max_multiplier=1.0e3,
+        )
+        for F, _ in fos.iterates
+    ]
+    assert fos.statuses == [r.status for r in again]
+    assert fos.iterations == sum(r.iterations for r in again) > fos.programs
+
+
+def test_a_limit_run_reports_its_cone_programs_not_zero_steps():
+    """Reproducer: a limit run's headline said "0 steps, 0 IPM iterations"."""
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+        argv = ["run", "slope", "--set", "analysis=limit", "--set", "spacing=1.0"]
+        assert main(argv) == 0
+    head = out.getvalue().splitlines()[0]
+    metrics = dict(
+        line.strip().split(" = ", 1) for line in out.getvalue().splitlines()[1:]
+    )
+    programs, iterations = int(metrics["cone_programs"]), metrics["limit_iterations"]
+    assert head.startswith(
+        f"scene slope: limit analysis, {programs} cone programs, "
+        f"{iterations} IPM iterations, "
+    )
+    assert programs >= 2 and int(iterations) > programs and "0 steps" not in head
+
+
+def test_almost_solved_says_what_it_means_for_the_result():
+    """An AlmostSolved program is warned and noted: F good to about 1e-4."""
+    mesh, fixed, _foot, load = footing_problem(spacing=0.25)
+    mat = npfem.Tresca(1e8, 0.3, c=1.0)
+    n = mesh.p.shape[1]
+    res = npfem.limit_analysis(mesh, [mat], np.zeros(n, int), load, fixed=fixed)
+    vol = np.ones(n)
+    assert limit_metrics(res, vol, 1)["limit_note"] is None  # Solved: no note
+    statuses = ["Solved", "AlmostSolved", "Solved"]
+    with pytest.warns(UserWarning, match="1 of the 3 limit program") as w:
+        m = limit_metrics(res, vol, 3, statuses=statuses, what="the factor of safety")
+    assert m["limit_note"] == str(w[0].message)
+    assert "reduced tolerances" in m["limit_note"]
+    assert "the factor of safety is certain only to about 1e-4" in m["limit_note"]
+    assert m["limit_iterations"] == res.iterations
 
 
 def test_bad_input():

@@ -135,6 +135,24 @@ def test_a_second_run_into_a_busy_folder_is_refused_and_kill_9_frees_it(tmp_path
     assert (d / "result.pvd").is_file()
 
 
+def test_a_resume_into_a_busy_folder_names_the_lock_not_a_missing_checkpoint(
+    tmp_path,
+):
+    # Reproducer: --resume into a folder a fresh run was writing to said "no
+    # checkpoint_*.npz to resume from" (the running run stages its files),
+    # which sends the user looking for a file instead of at the other run.
+    d = tmp_path / "k"
+    argv = ["run", "column-collapse", *sets(*COARSE, "t_end=0.01"), "--resume"]
+    with npio.folder_lock(d):
+        code, _, err = cli([*argv, "--out", str(d), "--quiet"])
+    assert code == 2, err
+    assert err.startswith(f"error: invalid out='{d}': a folder no other run"), err
+    assert f"process {os.getpid()}" in err and "no checkpoint" not in err
+    # Once the folder is free, the missing checkpoint is what is said.
+    code, _, err = cli([*argv, "--out", str(d), "--quiet"])
+    assert code == 2 and "no checkpoint_*.npz to resume from" in err, err
+
+
 def test_the_lock_refuses_a_second_holder_in_the_same_process(tmp_path):
     with npio.folder_lock(tmp_path), pytest.raises(ParameterError):
         with npio.folder_lock(tmp_path):

@@ -269,3 +269,24 @@ def test_resolved_values_are_read_only_with_derived_defaults_filled():
     given = {"analysis": "limit", "spacing": 2.0}
     summary = run_scene("slope", given)
     assert summary["parameters"] == dict(get_scene("slope").resolve(given))
+
+
+# ------------------------------------------------- the step-count message ----
+def test_every_scene_s_step_count_advice_names_its_own_parameters():
+    from skfem_npfem.scenes import SCENES
+
+    for name, scene in SCENES.items():
+        names = {p.name for p in scene.params}
+        assert set(scene.time_params or ("steps",)) <= names, name
+
+
+@pytest.mark.parametrize("name", ["cone-penetration", "footing-penetration"])
+def test_too_many_steps_tells_a_penetration_user_what_to_change(name):
+    # Reproducer: dt = 1e-9 s told a cone user to "raise dt or lower t_end";
+    # the cone scene has no t_end (its run ends at penetration/speed).
+    from skfem_npfem import ParameterError
+
+    with pytest.raises(ParameterError, match="raise dt or lower penetration") as err:
+        run_scene(name, {"dt": 1e-9})
+    assert "t_end" not in str(err.value)
+    assert "more than the 1e+06 a run may plan" in str(err.value)

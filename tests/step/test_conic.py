@@ -652,3 +652,37 @@ def test_bad_inputs_raise_parameter_error(name, make):
     assert isinstance(info.value, ValueError)
     assert info.value.name == name
     assert name in str(info.value)
+
+
+# ------------------------------------------ a static body nothing holds ----
+def _square(**particles_kw):
+    from skfem_npfem import LinearElastic, Model, Particles
+
+    mesh = MeshTri.init_tensor(np.linspace(0, 1, 5), np.linspace(0, 1, 5))
+    soil = LinearElastic(E=1e7, nu=0.3, rho=2000.0)
+    p = Particles.from_mesh(mesh, soil, **particles_kw)
+    return p, Model(dim=2, materials=[soil], mode="static"), mesh, soil
+
+
+def test_a_static_body_nothing_holds_is_refused_as_unsupported():
+    # Reproducer: an elastic square under gravity, static, nothing fixed, no
+    # wall: Clarabel's PrimalInfeasible came back as "the load exceeds the
+    # collapse load", which an elastic body does not have.
+    from skfem_npfem import ParameterError, advance
+
+    p, model, mesh, soil = _square()
+    with pytest.raises(ParameterError, match="moves it as a rigid body") as err:
+        advance(p, model, dt=1.0, mesh_source=mesh)
+    msg = str(err.value)
+    assert "collapse load" not in msg and "mode='dynamic'" in msg
+    # The resultant it names is the weight, rho g times the area of 1 m^2.
+    assert f"resultant {-soil.rho * model.gravity:.4g} N along axis 1" in msg
+
+
+def test_a_static_body_on_a_fixed_base_is_still_solved():
+    from skfem_npfem import advance
+
+    mesh = MeshTri.init_tensor(np.linspace(0, 1, 5), np.linspace(0, 1, 5))
+    p, model, mesh, _ = _square(fixed=np.repeat(mesh.p[1][:, None] == 0, 2, 1))
+    _, step = advance(p, model, dt=1.0, mesh_source=mesh)
+    assert step.record.status == "Solved"

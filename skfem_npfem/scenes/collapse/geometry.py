@@ -28,12 +28,11 @@ which parameters were given; :mod:`.runs` builds the runs.
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from ...errors import ParameterError
+from ...errors import ParameterError, warn_user
 from ..base import Scene
 from ..common import check_soil
 from ..limits import LENGTH, check_size
@@ -323,11 +322,10 @@ def _check_values(values: Mapping[str, Any]) -> None:
                 "spacing", h, f"at most min(L0, H0)/2 = {min(L0, H0) / 2:g} m"
             )
     if values["theta2"] < 1.0:
-        warnings.warn(
+        warn_user(
             f"theta2={values['theta2']:g}: impacts on the floor have restitution "
             f"{1 / values['theta2'] - 1:.2f}; keep theta2 = 1 (1/2 makes them "
             "elastic and the collapse unstable)",
-            stacklevel=3,
         )
 
 

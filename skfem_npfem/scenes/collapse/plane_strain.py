@@ -40,7 +40,6 @@ perfectly elastic and the collapse gains volume and then blows up.
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Mapping
 from functools import partial
 from pathlib import Path
@@ -50,7 +49,7 @@ import numpy as np
 
 from ...boundary import floor, wall_x
 from ...constants import GRAVITY
-from ...errors import ParameterError
+from ...errors import ParameterError, warn_user
 from ...laws import lube2005_runout as lube_runout
 from ...materials import DruckerPrager, MohrCoulomb
 from ...mesh.smoothing import nodal_integration
@@ -175,11 +174,10 @@ def _check(values: Mapping[str, Any]) -> float:
         )
     check_soil(values)
     if values["theta2"] < 1.0:
-        warnings.warn(
+        warn_user(
             f"theta2={values['theta2']:g}: impacts on the floor have restitution "
             f"{1 / values['theta2'] - 1:.2f}; theta2 = 1/2 makes them elastic and the "
             "collapse unstable (keep theta2 = 1)",
-            stacklevel=3,
         )
     return h
 
@@ -264,7 +262,7 @@ def _metrics(values: Mapping[str, Any], h: float, stop: AtRest | None):
         detached = float(last.get("detached_mass_fraction", 0.0))
         notes = detached_warnings("column-collapse", detached, runout, main, L0)
         for msg in notes:
-            warnings.warn(msg, stacklevel=2)
+            warn_user(msg)
         return {
             "runout": runout,
             "normalised_runout": (runout - L0) / L0,

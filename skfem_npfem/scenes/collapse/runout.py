@@ -10,12 +10,12 @@ is when the front stops; :func:`rest_warnings` says when a run ended at
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
+from ...errors import warn_user
 from ...run.rest import AtRest
 from ...run.simulation import Simulation
 
@@ -131,5 +131,5 @@ def rest_warnings(sim_: Simulation, values: Mapping[str, Any], stop: AtRest | No
         "is not at rest, so the run-out and height are not final (at_rest = "
         "false): raise t_end"
     )
-    warnings.warn(msg, stacklevel=3)
+    warn_user(msg)
     return [msg]

@@ -17,7 +17,6 @@ parameters; plane strain runs the plane-strain build unchanged.
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
@@ -26,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from ...constants import GRAVITY
+from ...errors import warn_user
 from ...laws import lajeunesse2004_runout, lube2004_runout
 from ...laws import lube2005_runout as lube_runout
 from ...mesh.sources import main_body
@@ -236,7 +236,7 @@ def _metrics(values: Mapping[str, Any], h: float, stop: AtRest | None):
         main = None if cyl else float(last.get("runout_main_body", L0))
         notes = detached_warnings("column-collapse", detached, run, main, L0)
         for msg in notes:
-            warnings.warn(msg, stacklevel=2)
+            warn_user(msg)
         out: dict[str, Any] = {key: run, "normalised_runout": (run - L0) / L0}
         if cyl:
             out["reference_runout_lube2004"] = lube2004_runout(H0 / L0)

@@ -377,6 +377,7 @@ def build(
         meta={"scene": "cone-penetration", "parameters": dict(values)},
     )
     area = math.pi * D**2 / 4
+    sim.penetration_check.enabled = False  # penetration_warnings says it
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
         curve = [
@@ -440,4 +441,5 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=cone_scenery,
+    time_params=("dt", "penetration"),
 )

@@ -250,6 +250,7 @@ def build(
         meta={"scene": "footing-penetration", "parameters": dict(values)},
     )
     t_end = w / values["speed"]
+    sim.penetration_check.enabled = False  # penetration_warnings says it
     surface = particles.x[:, 1] >= particles.x[:, 1].max() - 1e-9
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
@@ -374,4 +375,5 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=penetration_scenery,
+    time_params=("dt", "penetration"),
 )

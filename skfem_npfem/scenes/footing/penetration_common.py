@@ -10,13 +10,12 @@ loads doubtful, and the cone reads its steady factor off the curve.
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Mapping
 from typing import Any, NamedTuple
 
 import numpy as np
 
-from ...errors import ParameterError
+from ...errors import ParameterError, warn_user
 from ..params import Param
 
 __all__ = [
@@ -174,7 +173,7 @@ def penetration_warnings(
         f"(more than half a spacing) before it was put back; the loads of that step "
         f"are off: lower dt (now {dt_now:.4g} s) or refine the spacing"
     )
-    warnings.warn(msg, stacklevel=3)
+    warn_user(msg)
     return [msg]
 
 
@@ -197,7 +196,7 @@ def locking_warnings(values: Mapping[str, Any]) -> list[str]:
         "isochoric Tresca flow (the bearing factor comes out too high: +63 % at "
         "B/20 with E_u/s_u = 1000); use element=p2, or method=npfem"
     )
-    warnings.warn(msg, stacklevel=3)
+    warn_user(msg)
     return [msg]
 
 

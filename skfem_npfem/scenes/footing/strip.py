@@ -20,7 +20,6 @@ References (weightless soil): Prandtl ``q/c = 2 + pi``; Mohr-Coulomb
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -28,7 +27,7 @@ from typing import Any
 import numpy as np
 from skfem import MeshTri
 
-from ...errors import ParameterError
+from ...errors import ParameterError, warn_user
 from ...laws import prandtl_nc
 from ...limit.analysis import limit_analysis
 from ...materials import DruckerPrager, Material, MohrCoulomb, Tresca
@@ -348,7 +347,7 @@ def build(
         factor = q / c if c > 0 else q / (gamma * b)
         plateau = rule.outcome(curve, "strip-footing", locking_note(values, phi))
         for msg in plateau["warnings"]:
-            warnings.warn(msg, stacklevel=2)
+            warn_user(msg)
         return {
             "q_ult": q,
             "bearing_factor": factor,
@@ -449,4 +448,5 @@ SCENE = Scene(
     metrics_doc=METRICS,
     scenery=footing_scenery,
     derive=resolve_defaults,
+    time_params=None,  # a run counts its steps
 )

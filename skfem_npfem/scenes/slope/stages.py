@@ -242,7 +242,15 @@ def fos_metrics(
         state["fos_metrics"] = {
             "factor_of_safety": res.factor_of_safety,
             "fos_iterates": [list(map(float, it)) for it in res.iterates],
-            **limit_metrics(res.limit, ni_.volumes, res.programs, state["t_fos"]),
+            **limit_metrics(
+                res.limit,
+                ni_.volumes,
+                res.programs,
+                state["t_fos"],
+                iterations=res.iterations,
+                statuses=res.statuses,
+                what="the factor of safety",
+            ),
             # The gravity multiplier of the slope as it is (F = 1).
             "collapse_multiplier": res.multiplier_unreduced,
             **spacing_check(values, res.factor_of_safety, state),
