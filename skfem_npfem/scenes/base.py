@@ -81,6 +81,11 @@ class Scene:
         ``derive(values: dict) -> None``: the scene's one resolving function,
         which fills the defaults derived from other parameters (e.g. a spacing
         from a height) in place, before the run is built.
+    ignored : callable or None
+        ``ignored(values: dict, given: frozenset) -> None``: refuses (raises
+        :class:`~skfem_npfem.errors.ParameterError`) or warns about given
+        parameters that the chosen material, analysis or option does not use
+        (e.g. ``phi`` with ``material=tresca``), before anything is derived.
     """
 
     name: str
@@ -90,6 +95,7 @@ class Scene:
     metrics_doc: dict[str, str]
     scenery: Callable[..., Any] | None = None
     derive: Callable[[dict[str, Any]], Any] | None = None
+    ignored: Callable[[dict[str, Any], frozenset[str]], None] | None = None
 
     def resolve(self, overrides: Mapping[str, Any] | None = None) -> Values:
         """The values of a run: defaults, validated overrides, derived defaults.
@@ -120,6 +126,8 @@ class Scene:
                     f"scene '{self.name}' has parameters: " + ", ".join(by_name),
                 )
             values[key] = by_name[key].check(val)
+        if self.ignored is not None:
+            self.ignored(values, frozenset(overrides or {}))
         return values
 
     def run(

@@ -245,9 +245,10 @@ def test_parameter_help_says_what_each_scene_does():
     footing_steps = params["strip-footing"]["steps"].help
     assert "first stage" in footing_steps and "max_steps counting all" in footing_steps
     assert "steps" not in params["column-collapse"]  # the collapse runs to t_end
-    # K0: why the collapse keeps 0.5 and the footing follows phi.
-    assert "not recomputed from phi" in params["column-collapse"]["K0"].help
-    assert "1 - sin phi" in params["strip-footing"]["K0"].help
+    # K0: every scene's default follows phi (Jaky's 1 - sin phi).
+    for s in ("column-collapse", "strip-footing"):
+        assert "1 - sin phi" in params[s]["K0"].help
+        assert params[s]["K0"].default is None
 
 
 def test_resolved_values_are_read_only_with_derived_defaults_filled():

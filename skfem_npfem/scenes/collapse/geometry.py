@@ -35,7 +35,7 @@ from typing import Any
 
 from ...errors import ParameterError
 from ..base import Scene
-from ..common import check_soil
+from ..common import check_soil, fill_at_rest
 from ..limits import LENGTH, check_size
 from ..params import Param, Values
 from .box_column import DEPTH_SPACINGS
@@ -236,6 +236,7 @@ def finalize(
         name = unused[0]
         why = _unused_reason(geo, name)
         raise ParameterError(name, values[name], why)
+    fill_at_rest(values)
     if geo == "plane-strain":
         return
     if geo in CYLINDRICAL:

@@ -61,7 +61,13 @@ from ...run.simulation import Simulation
 from ...step.model import Model
 from ...step.records import Step
 from ..base import Scene, SceneRun
-from ..common import check_soil, fidelity_from, make_writer, solver_from
+from ..common import (
+    check_soil,
+    fidelity_from,
+    fill_at_rest,
+    make_writer,
+    solver_from,
+)
 from ..limits import check_size
 from ..methods import with_method
 from ..params import Values
@@ -383,4 +389,5 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=collapse_scenery,
+    derive=fill_at_rest,
 )

@@ -43,8 +43,10 @@ from ..common import (
     fidelity_from,
     fidelity_params,
     make_writer,
+    refuse_frictional,
     solver_from,
     solver_params,
+    warn_unused,
 )
 from ..limit_mode import (
     LIMIT_METRICS,
@@ -93,7 +95,7 @@ PARAMS = [
         "phi",
         0.0,
         "deg",
-        "friction angle (ignored by tresca)",
+        "friction angle (tresca: 0; another value is refused)",
         float,
         lo=0,
         hi=90,
@@ -463,6 +465,40 @@ def load_curve(sim: Simulation) -> list[list[float]]:
     ]
 
 
+#: Parameters that analysis=limit does not use (it has no elasticity, no
+#: steps, and associated flow).
+LIMIT_UNUSED = (
+    "E",
+    "nu",
+    "psi",
+    "K0",
+    "settlement",
+    "steps",
+    "plateau_tol",
+    "growth",
+    "max_settlement",
+    "max_steps",
+    "large_deformation",
+)
+
+
+def ignored(values: Mapping[str, Any], given: frozenset[str]) -> None:
+    """Refuse phi/psi with Tresca; warn about parameters the run does not use."""
+    refuse_frictional(values, given)
+    if values["analysis"] == "limit":
+        warn_unused(
+            given,
+            LIMIT_UNUSED,
+            "analysis=limit solves one rigid-plastic cone program on the "
+            "initial mesh (no elasticity, no steps, associated flow); choose "
+            "analysis=incremental to use them",
+        )
+    elif values["rho"] == 0:
+        warn_unused(
+            given, ("K0",), "a weightless soil (rho = 0) has no geostatic stress"
+        )
+
+
 SCENE = Scene(
     name="strip-footing",
     description=__doc__.strip().splitlines()[0].split(": ", 1)[1],
@@ -471,4 +507,5 @@ SCENE = Scene(
     metrics_doc=METRICS,
     scenery=footing_scenery,
     derive=resolve_defaults,
+    ignored=ignored,
 )
