@@ -48,12 +48,17 @@ class SceneRun:
         Arguments of :meth:`Simulation.run` (``steps``, ``t_end`` or ``stop``).
     metrics : callable
         ``metrics(sim) -> dict`` of documented scene metrics.
+    derived : dict
+        Values of derived parameters known only once the run is built (e.g.
+        the slope's ``reduction``, from its factor of safety); the summary's
+        ``parameters`` records them in place of their null.
     """
 
     simulation: Any
     run_kwargs: dict
     metrics: Callable[[Any], dict]
     history: list = field(default_factory=list)
+    derived: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -214,7 +219,8 @@ class Scene:
         sim = srun.simulation
         result = {
             "scene": self.name,
-            "parameters": dict(values),
+            "parameters": dict(values)
+            | {k: v for k, v in srun.derived.items() if values.get(k) is None},
             "metrics": srun.metrics(sim),
             "solver": sim.summary(),
             "wall_time_total": time.perf_counter() - start,

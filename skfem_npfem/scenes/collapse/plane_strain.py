@@ -64,7 +64,6 @@ from ..base import Scene, SceneRun
 from ..common import (
     check_soil,
     fidelity_from,
-    fill_at_rest,
     make_writer,
     solver_from,
 )
@@ -72,6 +71,7 @@ from ..limits import check_size
 from ..methods import with_method
 from ..params import Values
 from ..scenery import Scenery, box, number, time_label
+from .geometry import fill_column_defaults
 from .params import (
     COLLAPSE_STABILISATION,
     COLLAPSE_VOLUME_CORRECTION,
@@ -389,5 +389,5 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=collapse_scenery,
-    derive=fill_at_rest,
+    derive=fill_column_defaults,
 )

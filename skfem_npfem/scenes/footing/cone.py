@@ -57,9 +57,11 @@ from ..scenery import Scenery, box, number
 from .penetration_common import (
     Steady,
     axis_count,
+    derive_cone,
     graded_axis,
     interface_adhesion,
     penetration_warnings,
+    refuse_adhesion,
     steady_factor,
 )
 
@@ -74,13 +76,9 @@ SURFACES = ("surcharge", "rollers")
 #: Apex angle of the standard cone, degrees.
 APEX = 60.0
 
-_POSITIVE = POSITIVE
-
 PARAMS = [
-    Param(
-        "diameter", 0.0357, "m", "cone diameter D (10 cm^2 cone)", float, **_POSITIVE
-    ),
-    Param("su", 1.0e4, "Pa", "undrained shear strength s_u", float, **_POSITIVE),
+    Param("diameter", 0.0357, "m", "cone diameter D (10 cm^2 cone)", float, **POSITIVE),
+    Param("su", 1.0e4, "Pa", "undrained shear strength s_u", float, **POSITIVE),
     Param(
         "rigidity_index",
         100.0,
@@ -128,10 +126,10 @@ PARAMS = [
         INTERFACES,
     ),
     Param(
-        "alpha",
+        "adhesion",
         0.5,
         "-",
-        "adhesion factor (interface=adhesion): |t| <= alpha s_u",
+        "adhesion factor alpha of interface=adhesion: |t| <= alpha s_u",
         float,
         lo=0.0,
         hi=1.0,
@@ -143,7 +141,7 @@ PARAMS = [
         "how far the cone is pushed from where it starts (default 6 D: N_c is "
         "steady from about 5 D on)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param(
         "depth",
@@ -153,10 +151,10 @@ PARAMS = [
         "(default 10 D, deep enough that the free surface under its surcharge "
         "moves N_c by under 1 %; the cone starts embedded, wished in place)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param(
-        "below",
+        "domain_below",
         8.0,
         "-",
         "soil below the tip's final position / D",
@@ -180,7 +178,7 @@ PARAMS = [
         "m/s",
         "cone speed (standard 2 cm/s; quasi-static: sets the time unit)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param(
         "dt",
@@ -188,7 +186,7 @@ PARAMS = [
         "s",
         "time step (default: the cone moves spacing/2 per step; at most one spacing)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param(
         "spacing",
@@ -196,7 +194,7 @@ PARAMS = [
         "m",
         "particle spacing near the cone (default D/12)",
         float,
-        **_POSITIVE,
+        **POSITIVE,
     ),
     Param(
         "grading",
@@ -208,7 +206,7 @@ PARAMS = [
         hi=2.0,
     ),
     Param(
-        "alpha_shape",
+        "alpha",
         1.3,
         "-",
         "alpha-shape factor of the remeshing",
@@ -254,7 +252,7 @@ def _sizes(values: Mapping[str, Any]) -> dict[str, float]:
     h = values["spacing"] if values["spacing"] is not None else D / 12
     w = values["penetration"] if values["penetration"] is not None else 6 * D
     depth = values["depth"] if values["depth"] is not None else 10 * D
-    z_tip = values["below"] * D + w  # the tip's height at time 0
+    z_tip = values["domain_below"] * D + w  # the tip's height at time 0
     return {
         "D": D,
         "h": h,
@@ -410,9 +408,7 @@ def build(
         solver=solver_from(values),
         **fidelity_from(values, 0.0),
     )
-    mesher = AlphaShapeMesher(
-        g["h"], values["alpha_shape"], spacing=spacing, walls=[axis]
-    )
+    mesher = AlphaShapeMesher(g["h"], values["alpha"], spacing=spacing, walls=[axis])
     sim = Simulation(
         particles,
         model,
@@ -457,10 +453,22 @@ def cone_scenery(p: dict, folder: Path | None = None) -> Scenery:
     """Base, rollers, the axis, the cone and its shaft where they are."""
     s = Scenery(scene="cone-penetration")
     default = {q.name: q.default for q in PARAMS}
-    names = ("diameter", "spacing", "penetration", "depth", "below", "domain_radius")
+    names = (
+        "diameter",
+        "spacing",
+        "penetration",
+        "depth",
+        "domain_below",
+        "domain_radius",
+    )
     values = {k: number(p, k, default[k]) for k in names}
     speed = number(p, "speed", default["speed"])
-    if None in (values["diameter"], values["below"], values["domain_radius"], speed):
+    if None in (
+        values["diameter"],
+        values["domain_below"],
+        values["domain_radius"],
+        speed,
+    ):
         return s
     g = _sizes(values)
     s.floor, s.floor_label = 0.0, "fixed base"
@@ -485,5 +493,7 @@ SCENE = Scene(
     params=PARAMS,
     build=build,
     metrics_doc=METRICS,
+    ignored=refuse_adhesion,
+    derive=derive_cone,
     scenery=cone_scenery,
 )

@@ -55,10 +55,12 @@ from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
 from .penetration_common import (
     axis_count,
+    derive_footing,
     graded_axis,
     interface_adhesion,
     locking_warnings,
     penetration_warnings,
+    refuse_adhesion,
 )
 
 __all__ = [
@@ -99,10 +101,10 @@ PARAMS = [
     Param("su", 1.0e3, "Pa", "undrained shear strength s_u", float, **POSITIVE),
     Param("interface", "smooth", "-", "footing-soil interface", str, INTERFACES),
     Param(
-        "alpha",
+        "adhesion",
         0.5,
         "-",
-        "adhesion factor (interface=adhesion): |t| <= alpha s_u",
+        "adhesion factor alpha of interface=adhesion: |t| <= alpha s_u",
         float,
         lo=0.0,
         hi=1.0,
@@ -143,7 +145,7 @@ PARAMS = [
         hi=2.0,
     ),
     Param(
-        "alpha_shape",
+        "alpha",
         1.3,
         "-",
         "alpha-shape factor of the remeshing",
@@ -294,7 +296,7 @@ def build(
         solver=solver_from(values),
         **fidelity_from(values, 0.0),
     )
-    mesher = AlphaShapeMesher(values["spacing"], values["alpha_shape"], spacing=spacing)
+    mesher = AlphaShapeMesher(values["spacing"], values["alpha"], spacing=spacing)
     sim = Simulation(
         particles,
         model,
@@ -428,5 +430,7 @@ SCENE = Scene(
     params=PARAMS,
     build=build,
     metrics_doc=METRICS,
+    ignored=refuse_adhesion,
+    derive=derive_footing,
     scenery=penetration_scenery,
 )

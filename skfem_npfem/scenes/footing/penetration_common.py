@@ -16,15 +16,20 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from ...errors import ParameterError
+
 __all__ = [
     "Steady",
     "axis_count",
+    "derive_cone",
+    "derive_footing",
     "graded_axis",
     "grow_axis",
     "grown_count",
     "interface_adhesion",
     "locking_warnings",
     "penetration_warnings",
+    "refuse_adhesion",
     "steady_factor",
 ]
 
@@ -81,7 +86,50 @@ def interface_adhesion(values: Mapping[str, Any]) -> float:
         return 0.0
     if choice == "rough":
         return values["su"]
-    return values["alpha"] * values["su"]
+    return values["adhesion"] * values["su"]
+
+
+def derive_cone(values: dict[str, Any]) -> None:
+    """cone-penetration's derived defaults, in place.
+
+    ``spacing`` D/12, ``penetration`` 6 D, ``depth`` 10 D, and ``dt``: the
+    cone moves half a spacing per step.
+    """
+    D = values["diameter"]
+    if values["spacing"] is None:
+        values["spacing"] = D / 12
+    if values["penetration"] is None:
+        values["penetration"] = 6 * D
+    if values["depth"] is None:
+        values["depth"] = 10 * D
+    if values["dt"] is None:
+        values["dt"] = 0.5 * values["spacing"] / values["speed"]
+
+
+def derive_footing(values: dict[str, Any]) -> None:
+    """footing-penetration's ``penetration`` (B) and ``dt`` (spacing/4 a step)."""
+    if values["penetration"] is None:
+        values["penetration"] = values["width"]
+    if values["dt"] is None:
+        values["dt"] = 0.25 * values["spacing"] / values["speed"]
+
+
+def refuse_adhesion(values: Mapping[str, Any], given: frozenset[str]) -> None:
+    """Refuse ``adhesion`` given with an interface other than ``adhesion``.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``adhesion``, its value and the interface that uses it.
+    """
+    if "adhesion" in given and values["interface"] != "adhesion":
+        raise ParameterError(
+            "adhesion",
+            values["adhesion"],
+            f"left out with interface={values['interface']} (the adhesion "
+            "factor is used by interface=adhesion only); choose "
+            "interface=adhesion for |t| <= adhesion x s_u",
+        )
 
 
 def penetration_warnings(

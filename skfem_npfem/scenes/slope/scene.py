@@ -320,6 +320,8 @@ def ignored(values: dict[str, Any], given: frozenset[str]) -> None:
 def resolve_values(values: dict[str, Any]) -> None:
     """The slope's derived defaults, in place: ``spacing``, ``dt``, ``t_end``.
 
+    The parametric slope's ``crest_length`` (1.5 H) and ``toe_length`` (2.5 H)
+    are filled first.
     The spacing defaults to H/10 (a section file: its tallest region / 20);
     ``dt`` to ``0.02 sqrt(H/g)`` and ``t_end`` to ``15 sqrt(H/g)`` with the
     height H of the section filled at that spacing.  A section too large for
@@ -330,6 +332,12 @@ def resolve_values(values: dict[str, Any]) -> None:
     values : dict
         The checked parameter values (defaults and overrides).
     """
+    if not values["geometry"]:
+        H = values["height"]
+        if values["crest_length"] is None:
+            values["crest_length"] = 1.5 * H
+        if values["toe_length"] is None:
+            values["toe_length"] = 2.5 * H
     sec, default_h = section_of(values)
     h = values["spacing"] if values["spacing"] is not None else default_h
     values["spacing"] = h
@@ -405,11 +413,20 @@ def build(
             m.update(runout_metrics(sim_, state, values, body.h, *toe_crest))
         return m
 
+    derived = {}
+    phis = {getattr(m, "phi", 0.0) for m in body.mats}
+    if values["initial_stress"] == "k0" and not limit_only and len(phis) == 1:
+        derived["K0"] = float(1 - np.sin(np.radians(phis.pop())))  # as used
     if not run_out:
-        return SceneRun(sim, {"steps": 0}, metrics)
+        return SceneRun(sim, {"steps": 0}, metrics, derived=derived)
     stop = AtRest(values["rest_fraction"], 2 * math.sqrt(H / GRAVITY))
     state["stop"] = stop
-    return SceneRun(sim, {"t_end": values["t_end"], "stop": stop}, metrics)
+    return SceneRun(
+        sim,
+        {"t_end": values["t_end"], "stop": stop},
+        metrics,
+        derived=derived | {"reduction": state["reduction"]},
+    )
 
 
 def _toe_and_crest(sec: CrossSection, values: Mapping[str, Any]):
