@@ -285,7 +285,9 @@ def _help_scene(argv: Sequence[str]) -> str | None:
     if "run" not in argv or not {"-h", "--help"} & set(argv):
         return None
     after = argv[argv.index("run") + 1 :]
-    name = next((a for a in after if not a.startswith("-")), None)
+    valued = {"--set", "--out", "--summary"}  # options followed by a value
+    words = [a for i, a in enumerate(after) if i == 0 or after[i - 1] not in valued]
+    name = next((a for a in words if not a.startswith("-")), None)
     return name if name in SCENES else None
 
 

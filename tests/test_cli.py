@@ -206,3 +206,9 @@ def test_one_scene_help_refuses_an_unknown_scene(capsys):
     with pytest.raises(SystemExit):  # the generic help: no scene, no listing
         main(["run", "--help"])
     assert "parameter  " not in capsys.readouterr().out
+
+
+def test_run_help_finds_the_scene_after_options(capsys):
+    with pytest.raises(SystemExit):
+        main(["run", "--set", "spacing=0.1", "--out", "x", "cone-penetration", "-h"])
+    assert "cone-penetration: " in capsys.readouterr().out
