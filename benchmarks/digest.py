@@ -73,7 +73,7 @@ CASES: dict[str, tuple[str, dict]] = {
     ),
     "strip-footing-limit": (
         "strip-footing",
-        {"analysis": "limit", "spacing": 0.25, "domain": 5},
+        {"analysis": "limit", "spacing": 0.25, "domain_width": 5},
     ),
     "slope-limit": ("slope", {"analysis": "limit", "spacing": 2.0}),
     "slope-runout": (

@@ -37,7 +37,7 @@ def one(phi: float, analysis: str) -> dict:
         "material": "tresca" if phi == 0 else "mohr-coulomb",
         "phi": phi,
         "spacing": 0.125,
-        "domain": 5.0,
+        "domain_width": 5.0,
         "analysis": analysis,
     }
     t0 = time.perf_counter()

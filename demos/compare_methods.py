@@ -54,7 +54,7 @@ p1_overshoot = results["FEM P1"]["metrics"]["bearing_factor"] / (2 + math.pi)
 fig, ax = plt.subplots(figsize=(5, 3.5))
 for label, summary in results.items():
     curve = np.vstack([[0.0, 0.0], summary["metrics"]["load_curve"]])
-    b, c = summary["parameters"]["half_width"], summary["parameters"]["c"]
+    b, c = summary["parameters"]["width"] / 2, summary["parameters"]["c"]
     ax.plot(curve[:, 0] / b, curve[:, 1] / c, ".-", label=label)
 ax.axhline(2 + math.pi, c="k", ls="--", label="Prandtl 2 + π")
 ax.set(xlabel="settlement / b", ylabel="q / c")

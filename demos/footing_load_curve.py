@@ -26,7 +26,8 @@ OUT = Path(os.environ.get("NPFEM_GALLERY_OUT", "out/gallery")) / "footing_load_c
 OUT.mkdir(parents=True, exist_ok=True)
 
 summary = npfem.run_scene(
-    "strip-footing", {"material": "tresca", "footing": "smooth", "c": 10e3, "steps": 20}
+    "strip-footing",
+    {"material": "tresca", "interface": "smooth", "c": 10e3, "steps": 20},
 )
 m = summary["metrics"]
 bearing_factor = m["bearing_factor"]
@@ -40,7 +41,7 @@ print(
 # The curve, in the dimensionless form q/c against settlement / b, from the
 # unloaded start.
 c = summary["parameters"]["c"]
-b = summary["parameters"]["half_width"]
+b = summary["parameters"]["width"] / 2
 curve = np.vstack([[0.0, 0.0], m["load_curve"]])
 fig, ax = plt.subplots(figsize=(5, 3.5))
 ax.plot(curve[:, 0] / b, curve[:, 1] / c, "o-", ms=4, label="N-PFEM")

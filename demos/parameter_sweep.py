@@ -27,7 +27,7 @@ if __name__ == "__main__":
     table = npfem.sweep(
         "strip-footing",
         {"spacing": [0.5, 0.25, 0.125]},
-        fixed={"material": "tresca", "footing": "smooth"},
+        fixed={"material": "tresca", "interface": "smooth"},
         out=OUT,
         workers=2,
         progress=False,

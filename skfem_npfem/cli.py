@@ -2,8 +2,9 @@
 
 Commands
 --------
-``skfem-npfem scenes``
-    List scenes with every parameter, unit and default, and the summary metrics.
+``skfem-npfem scenes [SCENE]``
+    List scenes (or one) with every parameter, unit and default, and the
+    summary metrics; ``skfem-npfem run SCENE --help`` lists them too.
 ``skfem-npfem run SCENE [--set name=value ...] [--out DIR] [--summary FILE.json]``
     Run a scene; write a VTU per output step plus ``result.pvd`` to DIR and a JSON
     summary to FILE.json.  ``--resume`` continues from the latest checkpoint in
@@ -84,10 +85,42 @@ def _format_default(p) -> str:
     return str(p.default).lower() if isinstance(p.default, bool) else str(p.default)
 
 
+def _chosen_scenes(name: str | None) -> dict:
+    """All scenes, or the one named (refused if there is none of that name)."""
+    if name is None:
+        return dict(SCENES)
+    if name not in SCENES:
+        raise ParameterError("scene", name, "one of " + ", ".join(SCENES))
+    return {name: SCENES[name]}
+
+
+def scene_text(name: str) -> str:
+    """One scene's parameters and summary metrics as plain text.
+
+    Examples
+    --------
+    >>> print(scene_text("elastic-column").splitlines()[0])
+    elastic-column: soil column under self-weight (oedometric).
+    """
+    s = SCENES[name]
+    lines = [
+        f"{name}: {s.description}",
+        f"  {'parameter':<18} {'default':<12} {'unit':<8} description",
+    ]
+    lines += [
+        f"  {p.name:<18} {_format_default(p):<12} {p.unit:<8} {p.help} [{p.allowed()}]"
+        for p in s.params
+    ]
+    lines.append("  summary metrics:")
+    lines += [f"    {k}: {v}" for k, v in s.metrics_doc.items()]
+    return "\n".join(lines)
+
+
 def cmd_scenes(args: argparse.Namespace) -> int:
-    """Print the scene catalogue."""
+    """Print the scene catalogue (or one scene's part of it)."""
+    chosen = _chosen_scenes(args.name)
     if args.markdown:
-        print(scenes_markdown())
+        print(scenes_markdown(list(chosen)))
         return 0
     if args.json:
         cat = {
@@ -104,27 +137,21 @@ def cmd_scenes(args: argparse.Namespace) -> int:
                 },
                 "metrics": s.metrics_doc,
             }
-            for name, s in SCENES.items()
+            for name, s in chosen.items()
         }
         print(dumps(cat, indent=1))
         return 0
-    for name, s in SCENES.items():
-        print(f"{name}: {s.description}")
-        print(f"  {'parameter':<18} {'default':<12} {'unit':<8} description")
-        for p in s.params:
-            print(
-                f"  {p.name:<18} {_format_default(p):<12} {p.unit:<8} {p.help} "
-                f"[{p.allowed()}]"
-            )
-        print("  summary metrics:")
-        for k, v in s.metrics_doc.items():
-            print(f"    {k}: {v}")
+    for name in chosen:
+        print(scene_text(name))
         print()
     return 0
 
 
-def scenes_markdown() -> str:
-    """The scene catalogue as Markdown (this is docs/scenes.md)."""
+def scenes_markdown(names: Sequence[str] | None = None) -> str:
+    """The scene catalogue as Markdown (this is docs/scenes.md).
+
+    ``names`` restricts it to those scenes (default: all).
+    """
     lines = [
         "# Scenes",
         "",
@@ -133,7 +160,8 @@ def scenes_markdown() -> str:
         "of `metrics` in the JSON written by `--summary`.",
         "",
     ]
-    for name, s in SCENES.items():
+    for name in SCENES if names is None else names:
+        s = SCENES[name]
         lines += [
             f"## `{name}`",
             "",
@@ -273,8 +301,23 @@ def cmd_plot(args: argparse.Namespace) -> int:
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argparse parser of ``skfem-npfem``."""
+def _help_scene(argv: Sequence[str]) -> str | None:
+    """The scene of ``run SCENE ... --help`` (None for any other command line)."""
+    argv = list(argv)
+    if "run" not in argv or not {"-h", "--help"} & set(argv):
+        return None
+    after = argv[argv.index("run") + 1 :]
+    valued = {"--set", "--out", "--summary"}  # options followed by a value
+    words = [a for i, a in enumerate(after) if i == 0 or after[i - 1] not in valued]
+    name = next((a for a in words if not a.startswith("-")), None)
+    return name if name in SCENES else None
+
+
+def build_parser(scene: str | None = None) -> argparse.ArgumentParser:
+    """The argparse parser of ``skfem-npfem``.
+
+    ``scene``: the help of ``run`` lists that scene's parameters and metrics.
+    """
     parser = argparse.ArgumentParser(
         prog="skfem-npfem",
         description="Nodal-integration particle FEM (N-PFEM) for scikit-fem.",
@@ -283,10 +326,20 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help="show tracebacks")
     sub = parser.add_subparsers(dest="command", required=True)
     p_sc = sub.add_parser("scenes", help="list scenes and their parameters")
+    p_sc.add_argument(
+        "name", nargs="?", default=None, help="list only this scene (default: all)"
+    )
     p_sc.add_argument("--json", action="store_true", help="machine-readable output")
     p_sc.add_argument("--markdown", action="store_true", help="Markdown tables")
     p_sc.set_defaults(func=cmd_scenes)
-    p_run = sub.add_parser("run", help="run a scene")
+    p_run = sub.add_parser(
+        "run",
+        help="run a scene",
+        description="Run a scene. 'skfem-npfem run SCENE --help' lists the "
+        "scene's parameters (set them with --set name=value) and metrics.",
+        epilog=None if scene is None else scene_text(scene),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p_run.add_argument("scene", help="scene name (see 'skfem-npfem scenes')")
     p_run.add_argument(
         "--set",
@@ -344,7 +397,8 @@ def _silence_stdout() -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit code."""
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(_help_scene(argv))
     args = parser.parse_args(argv)
     try:
         return int(args.func(args))

@@ -173,3 +173,42 @@ def test_python_m_version():
     )
     assert proc.returncode == 0
     assert proc.stdout.strip() == __version__
+
+
+@pytest.mark.parametrize("name", ["footing-penetration", "slope"])
+def test_one_scene_help(name, capsys):
+    """`scenes NAME` and `run NAME --help` list that scene's parameters only."""
+    scene = SCENES[name]
+    assert main(["scenes", name]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"{name}: ")
+    for p in scene.params:
+        assert f"  {p.name} " in out
+    for metric in scene.metrics_doc:
+        assert f"    {metric}: " in out
+    others = [s for s in SCENES if s != name]
+    assert not any(out.count(f"{s}: ") for s in others if s not in name)
+    with pytest.raises(SystemExit) as done:
+        main(["run", name, "--help"])
+    assert done.value.code == 0
+    help_text = capsys.readouterr().out
+    assert "--set NAME=VALUE" in help_text
+    for p in scene.params:
+        assert f"  {p.name} " in help_text
+    assert main(["scenes", name, "--json"]) == 0
+    assert list(json.loads(capsys.readouterr().out)) == [name]
+
+
+def test_one_scene_help_refuses_an_unknown_scene(capsys):
+    assert main(["scenes", "no-such-scene"]) == 2
+    err = capsys.readouterr().err
+    assert "invalid scene='no-such-scene'" in err and "footing-penetration" in err
+    with pytest.raises(SystemExit):  # the generic help: no scene, no listing
+        main(["run", "--help"])
+    assert "parameter  " not in capsys.readouterr().out
+
+
+def test_run_help_finds_the_scene_after_options(capsys):
+    with pytest.raises(SystemExit):
+        main(["run", "--set", "spacing=0.1", "--out", "x", "cone-penetration", "-h"])
+    assert "cone-penetration: " in capsys.readouterr().out

@@ -47,7 +47,12 @@ OLD_SETTLEMENT = 0.01  # the scene's fixed settlement before the plateau rule
 def overrides(phi: float, footing: str, domain: float) -> dict:
     """Scene parameters of one row (defaults otherwise)."""
     material = "tresca" if phi == 0 else "mohr-coulomb"
-    return {"material": material, "phi": phi, "footing": footing, "domain": domain}
+    return {
+        "material": material,
+        "phi": phi,
+        "interface": footing,
+        "domain_width": domain,
+    }
 
 
 def run_row(phi: float, footing: str, domain: float) -> dict:

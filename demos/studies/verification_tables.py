@@ -50,8 +50,8 @@ FOOTINGS = [
     {"spacing": 0.0625},
     {"spacing": 0.03125},
     {"spacing": 0.125, "material": "drucker-prager"},
-    {"spacing": 0.125, "footing": "rough"},
-    {"spacing": 0.0625, "footing": "rough"},
+    {"spacing": 0.125, "interface": "rough"},
+    {"spacing": 0.0625, "interface": "rough"},
 ]
 
 
@@ -164,6 +164,12 @@ def column_period() -> str:
     )
 
 
+def _interface(overrides: dict) -> str:
+    """A footing run's interface (records measured before the parameter was
+    named ``interface`` hold it as ``footing``)."""
+    return overrides.get("interface", overrides.get("footing", "smooth"))
+
+
 @docs_table(VERIFICATION)
 def prandtl() -> str:
     """The Prandtl footing against 2 + pi (verification_tables.py)."""
@@ -171,7 +177,7 @@ def prandtl() -> str:
     for f in docs_tables.load(VERIFICATION)["footings"]:
         o = f["overrides"]
         names = {"tresca": "Tresca", "drucker-prager": "Drucker–Prager (φ = 0)"}
-        kind = [names.get(o.get("material", "tresca")), o.get("footing", "smooth")]
+        kind = [names.get(o.get("material", "tresca")), _interface(o)]
         out.append(
             [
                 f"{f['elements_across']} ({docs_tables.count(f['n_particles'])})",
@@ -293,7 +299,7 @@ def vv_summary() -> str:
     )
     for f in ver["footings"]:
         o = f["overrides"]
-        rough = o.get("footing") == "rough"
+        rough = _interface(o) == "rough"
         dp = o.get("material") == "drucker-prager"
         mat = "Drucker–Prager φ = 0" if dp else "Tresca"
         name = (

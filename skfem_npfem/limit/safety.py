@@ -170,14 +170,7 @@ def strength_reduction(
     width = math.log1p(max(tol, BISECTION_TOL))
     while True:
         if len(iterates) >= max_programs:
-            raise NpfemError(
-                f"strength reduction found no factor of safety in {max_programs} "
-                f"cone programs (last F = {iterates[-1][0]:.6g}, multiplier "
-                f"{iterates[-1][1]:.6g}): no reduction F brings the gravity "
-                "multiplier to 1, as for a body that its supports do not carry "
-                "(a region resting on nothing) or one whose multiplier jumps "
-                "between 0 and the cap; check the supports and regions"
-            )
+            raise _no_factor(max_programs, *iterates[-1])
         res = solve(math.exp(x))
         lam = res.multiplier
         iterates.append((math.exp(x), lam))
@@ -217,6 +210,17 @@ def strength_reduction(
         multiplier_unreduced=iterates[0][1],
         iterations=sum(n for _, n in runs),
         statuses=[status for status, _ in runs],
+    )
+
+
+def _no_factor(programs: int, F: float, lam: float) -> NpfemError:
+    """The error of a strength reduction that ran out of cone programs."""
+    return NpfemError(
+        f"strength reduction found no factor of safety in {programs} cone "
+        f"programs (last F = {F:.6g}, multiplier {lam:.6g}): no reduction F "
+        "brings the gravity multiplier to 1, as for a body that its supports do "
+        "not carry (a region resting on nothing) or one whose multiplier jumps "
+        "between 0 and the cap; check the supports and regions"
     )
 
 

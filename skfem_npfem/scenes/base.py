@@ -49,12 +49,17 @@ class SceneRun:
         Arguments of :meth:`Simulation.run` (``steps``, ``t_end`` or ``stop``).
     metrics : callable
         ``metrics(sim) -> dict`` of documented scene metrics.
+    derived : dict
+        Values of derived parameters known only once the run is built (e.g.
+        the slope's ``reduction``, from its factor of safety); the summary's
+        ``parameters`` records them in place of their null.
     """
 
     simulation: Any
     run_kwargs: dict
     metrics: Callable[[Any], dict]
     history: list = field(default_factory=list)
+    derived: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -88,6 +93,11 @@ class Scene:
         run's end, ``t_end`` or, where the end is where a body has got to, its
         ``penetration``); the step-count error names them.  None for a scene
         whose runs count their ``steps`` instead.
+    ignored : callable or None
+        ``ignored(values: dict, given: frozenset) -> None``: refuses (raises
+        :class:`~skfem_npfem.errors.ParameterError`) or warns about given
+        parameters that the chosen material, analysis or option does not use
+        (e.g. ``phi`` with ``material=tresca``), before anything is derived.
     """
 
     name: str
@@ -98,6 +108,7 @@ class Scene:
     scenery: Callable[..., Any] | None = None
     derive: Callable[[dict[str, Any]], Any] | None = None
     time_params: tuple[str, str] | None = ("dt", "t_end")
+    ignored: Callable[[dict[str, Any], frozenset[str]], None] | None = None
 
     def resolve(self, overrides: Mapping[str, Any] | None = None) -> Values:
         """The values of a run: defaults, validated overrides, derived defaults.
@@ -128,6 +139,8 @@ class Scene:
                     f"scene '{self.name}' has parameters: " + ", ".join(by_name),
                 )
             values[key] = by_name[key].check(val)
+        if self.ignored is not None:
+            self.ignored(values, frozenset(overrides or {}))
         return values
 
     def run(
@@ -214,7 +227,8 @@ class Scene:
         sim = srun.simulation
         result = {
             "scene": self.name,
-            "parameters": dict(values),
+            "parameters": dict(values)
+            | {k: v for k, v in srun.derived.items() if values.get(k) is None},
             "metrics": srun.metrics(sim),
             "solver": sim.summary(),
             "wall_time_total": time.perf_counter() - start,

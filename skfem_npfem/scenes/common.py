@@ -8,7 +8,8 @@ The up-front size and step-count checks live in :mod:`.limits`
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+import warnings
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -253,6 +254,20 @@ def fidelity_from(
     return out
 
 
+def fill_at_rest(values: dict[str, Any]) -> None:
+    """Fill ``K0`` left at None with Jaky's ``1 - sin phi`` (in place).
+
+    Examples
+    --------
+    >>> v = {"phi": 30.0, "K0": None}
+    >>> fill_at_rest(v)
+    >>> v["K0"]
+    0.5
+    """
+    if values["K0"] is None:
+        values["K0"] = 1.0 - math.sin(math.radians(values["phi"]))
+
+
 def check_soil(values: Mapping[str, Any]) -> None:
     """Psi <= phi, and a cohesionless Mohr-Coulomb K0 inside the yield cone.
 
@@ -271,3 +286,44 @@ def check_soil(values: Mapping[str, Any]) -> None:
             raise ParameterError(
                 "K0", K0, f"in [{lo:.4g}, {hi:.4g}] (inside the yield cone)"
             )
+
+
+def refuse_frictional(values: Mapping[str, Any], given: frozenset[str]) -> None:
+    """Refuse ``phi`` or ``psi`` given (non-zero) with ``material=tresca``.
+
+    Tresca has neither a friction nor a dilation angle, so the value would be
+    ignored while the summary records it.
+
+    Raises
+    ------
+    ParameterError
+        Naming the angle, its value and the materials that use it.
+    """
+    if values["material"] != "tresca":
+        return
+    for name, what in (("phi", "friction"), ("psi", "dilation")):
+        if name in given and values[name]:
+            raise ParameterError(
+                name,
+                values[name],
+                f"0 or left out with material=tresca (Tresca has no {what} "
+                f"angle); choose material=mohr-coulomb for {name} = "
+                f"{values[name]:g} degrees",
+            )
+
+
+def warn_unused(given: frozenset[str], names: Iterable[str], why: str) -> None:
+    """Warn that the given ones of ``names`` are not used, and why.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     warn_unused(frozenset({"E", "c"}), ("E", "nu"), "analysis=limit")
+    >>> str(w[0].message)
+    'E not used: analysis=limit'
+    """
+    unused = [name for name in names if name in given]
+    if unused:
+        warnings.warn(f"{', '.join(unused)} not used: {why}", stacklevel=5)

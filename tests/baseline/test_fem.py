@@ -89,7 +89,8 @@ def footing(element: str, spacing: float, steps: int) -> list[float]:
     values = scene.resolve({"spacing": spacing, "steps": steps})
     sim = scene.build(values).simulation
     p, model, mesh_source = sim.particles, sim.model, sim.mesh_source
-    L, b = values["domain"] * values["half_width"], values["half_width"]
+    b = values["width"] / 2
+    L = values["domain_width"] * b
     foot = np.isclose(p.x[:, 1], L) & (p.x[:, 0] <= b * (1 + 1e-9))
     method = FemRemap(element)
     state = method.initial_state(p, mesh_source)

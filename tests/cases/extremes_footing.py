@@ -120,7 +120,13 @@ _PHI = {
     10.0: ({"settlement": 0.1, "steps": 4}, -1e-2, 1e-2),
     30.0: ({"settlement": 0.1, "steps": 4}, -5e-2, 0.0),
     50.0: (
-        {"settlement": 0.5, "steps": 5, "domain": 45.0, "grading": 1.3, "E": 1e10},
+        {
+            "settlement": 0.5,
+            "steps": 5,
+            "domain_width": 45.0,
+            "grading": 1.3,
+            "E": 1e10,
+        },
         -0.12,
         0.0,
     ),
@@ -154,15 +160,15 @@ for _phi, (_extra, _lo, _hi) in _PHI.items():
     "footing-phi-30-refined",
     "phi",
     "strip-footing",
-    {"material": "mohr-coulomb", "phi": 30, "spacing": 0.0625, "domain": 10},
+    {"material": "mohr-coulomb", "phi": 30, "spacing": 0.0625, "domain_width": 10},
     "N_c footing convergence: N_c(30) error shrinks under refinement, within [-3 %, 0]",
     slow=True,
 )
 def _foot_phi30_fine():
     # Measured -2.93 % (spacing 0.125) -> -1.52 % (0.0625), domain 10 b.
     o = {"material": "mohr-coulomb", "phi": 30.0, "settlement": 0.1, "steps": 4}
-    _, m1, _, _ = footing({**o, "domain": 10.0})
-    _, m2, _q, its = footing({**o, "domain": 10.0, "spacing": 0.0625})
+    _, m1, _, _ = footing({**o, "domain_width": 10.0})
+    _, m2, _q, its = footing({**o, "domain_width": 10.0, "spacing": 0.0625})
     e1, e2 = (m["bearing_factor"] / m["bearing_factor_reference"] - 1 for m in (m1, m2))
     return Outcome(
         within(e2, -3e-2, 0.0) and abs(e2) < abs(e1),
@@ -178,14 +184,14 @@ def _foot_phi30_fine():
     "footing-phi-50-graded",
     "phi",
     "strip-footing",
-    {"material": "mohr-coulomb", "phi": 50, "domain": 45, "grading": 1.2},
+    {"material": "mohr-coulomb", "phi": 50, "domain_width": 45, "grading": 1.2},
     "N_c footing convergence: N_c(50) error shrinks with a finer far field, within "
     "[-9 %, 0]",
     slow=True,
 )
 def _foot_phi50_fine():
     o = {"material": "mohr-coulomb", "phi": 50.0, "settlement": 0.5, "steps": 5}
-    o |= {"domain": 45.0, "E": 1e10}
+    o |= {"domain_width": 45.0, "E": 1e10}
     _, m1, _, _ = footing({**o, "grading": 1.3})
     _, m2, _q, its = footing({**o, "grading": 1.2})
     e1, e2 = (m["bearing_factor"] / m["bearing_factor_reference"] - 1 for m in (m1, m2))
@@ -210,7 +216,7 @@ for _foot in ("smooth", "rough"):
             "c": 0,
             "phi": 30,
             "rho": 2e4 / 9.81,
-            "footing": _foot,
+            "interface": _foot,
             "settlement": 0.1,
             "steps": 5,
         },
@@ -221,7 +227,7 @@ for _foot in ("smooth", "rough"):
     def _foot_ngamma(footing_=_foot):
         # Measured 8.139 (+6.4 %, smooth) and 14.874 (+0.8 %, rough).
         o = {"material": "mohr-coulomb", "c": 0.0, "phi": 30.0, "rho": 2e4 / 9.81}
-        o |= {"footing": footing_, "settlement": 0.1, "steps": 5}
+        o |= {"interface": footing_, "settlement": 0.1, "steps": 5}
         _, m, q, its = footing(o)
         ref = N_GAMMA_30[footing_]
         err = m["bearing_factor"] / ref - 1
@@ -301,14 +307,14 @@ for _b in (1.0e-3, 100.0):
         f"footing-scale-{_b:g}m",
         "length",
         "strip-footing",
-        {"material": "tresca", "half_width": _b, "spacing": _b / 8},
+        {"material": "tresca", "width": 2 * _b, "spacing": _b / 8},
         "same dimensionless footing as b = 1 m (settlement/b fixed): q/c equal "
         "to 1e-8 relative",
     )
     def _foot_scale(b=_b):
         o = {"steps": 4}
         _, m, _, its = footing(
-            {**o, "half_width": b, "spacing": b / 8, "settlement": 0.01 * b}
+            {**o, "width": 2 * b, "spacing": b / 8, "settlement": 0.01 * b}
         )
         _, m0, _, _ = footing(o | {"settlement": 0.01})
         dev = abs(m["bearing_factor"] / m0["bearing_factor"] - 1)

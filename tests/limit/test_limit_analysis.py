@@ -38,7 +38,7 @@ COARSE_TOL = 0.045
 def footing_problem(spacing: float = 0.125, domain: float = 5.0):
     """Mesh, supports, rigid-footing tie and unit-pressure load of the half model."""
     values = {p.name: p.default for p in PARAMS}
-    values.update(spacing=spacing, domain=domain, size_check=False)
+    values.update(spacing=spacing, domain_width=domain, size_check=False)
     mesh = soil_mesh(values)
     x = mesh.p.T
     n = x.shape[0]
@@ -92,7 +92,7 @@ def test_matches_the_incremental_plateau():
     n_limit = limit["metrics"]["bearing_factor"]
     n_steps = steps["metrics"]["bearing_factor"]
     assert limit["metrics"]["cone_programs"] == 1
-    assert limit["parameters"]["domain"] == 10.0  # the limit mode's default block
+    assert limit["parameters"]["domain_width"] == 10.0  # the limit mode's default block
     assert n_limit == pytest.approx(n_steps, rel=1.5e-3)
 
 
@@ -105,7 +105,7 @@ def test_scene_limit_mode_phi30():
             "material": "mohr-coulomb",
             "phi": 30.0,
             "spacing": 0.0625,
-            "domain": 5.0,
+            "domain_width": 5.0,
         },
     )
     m = s["metrics"]

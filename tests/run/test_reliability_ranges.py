@@ -55,7 +55,7 @@ REFUSED = {
     ("column-collapse", "half_width", "lo"): "spacing",
     # (the axisymmetric column of height 1e-4 m: its radius 5e-5 m)
     ("column-collapse", "height", "lo"): "radius",
-    ("strip-footing", "half_width", "lo"): "spacing",
+    ("strip-footing", "width", "lo"): "spacing",
     ("elastic-column", "height", "lo"): "spacing",
 }
 
@@ -74,6 +74,8 @@ def _scaled(scene: str, name: str, value: float) -> dict:
         over.update(geometry="axisymmetric", radius=value / 2, spacing=value / 8)
     elif name == "height":  # a square column, 4 elements high
         over["spacing"], over["width"] = value / 4, value
+    elif name == "width" and scene == "strip-footing":  # spacing b/4
+        over["spacing"] = value / 8
     elif name == "width":  # 4 times as high (at most 1e4 m), 4 elements high
         over["height"] = min(4 * value, 1e4)
         over["spacing"] = over["height"] / 4

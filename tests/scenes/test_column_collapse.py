@@ -296,3 +296,16 @@ def test_mass_front_is_a_mass_quantile():
     x3 = np.vstack([x, [[50.0, 0.0]]])
     m3 = np.append(m, 5.0)
     assert abs(mass_front(x3, m3, True) - mass_front(x, m, True)) < 0.01
+
+
+@pytest.mark.parametrize("geometry", ["plane-strain", "axisymmetric", "box"])
+def test_default_k0_follows_phi(geometry):
+    """phi = 15 runs: the default K0 is Jaky's 1 - sin phi, inside the cone."""
+    values = get_scene("column-collapse").resolve({"geometry": geometry, "phi": 15.0})
+    assert values["K0"] == pytest.approx(1 - math.sin(math.radians(15.0)))
+    s = math.sin(math.radians(15.0))
+    assert (1 - s) / (1 + s) <= values["K0"] <= (1 + s) / (1 - s)
+    assert get_scene("column-collapse").resolve({"geometry": geometry})["K0"] == 0.5
+    srun = build(SCENE.resolve({"phi": 15.0, "spacing": 0.05, "t_end": 0.01}))
+    srun.simulation.run(**srun.run_kwargs)
+    assert srun.simulation.step >= 1

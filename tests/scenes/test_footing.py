@@ -37,7 +37,7 @@ def exact_n_c(phi: float) -> float:
 
 def overrides(phi: float, footing: str = "smooth") -> dict:
     material = "tresca" if phi == 0 else "mohr-coulomb"
-    return {"material": material, "phi": phi, "footing": footing}
+    return {"material": material, "phi": phi, "interface": footing}
 
 
 def rigid_plastic(o: dict) -> float:

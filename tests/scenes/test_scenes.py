@@ -173,7 +173,7 @@ def test_prandtl_smooth_tresca_and_drucker_prager():
 
 
 def test_prandtl_rough_footing():
-    nc, curve = footing({"footing": "rough"})
+    nc, curve = footing({"interface": "rough"})
     # Rough footing: same exact value 2 + π; within 2 % (measured +1.65 %).
     assert abs(nc / PRANDTL - 1) < 0.02
     q = [v for _, v in curve]
@@ -245,9 +245,10 @@ def test_parameter_help_says_what_each_scene_does():
     footing_steps = params["strip-footing"]["steps"].help
     assert "first stage" in footing_steps and "max_steps counting all" in footing_steps
     assert "steps" not in params["column-collapse"]  # the collapse runs to t_end
-    # K0: why the collapse keeps 0.5 and the footing follows phi.
-    assert "not recomputed from phi" in params["column-collapse"]["K0"].help
-    assert "1 - sin phi" in params["strip-footing"]["K0"].help
+    # K0: every scene's default follows phi (Jaky's 1 - sin phi).
+    for s in ("column-collapse", "strip-footing"):
+        assert "1 - sin phi" in params[s]["K0"].help
+        assert params[s]["K0"].default is None
 
 
 def test_resolved_values_are_read_only_with_derived_defaults_filled():
@@ -257,7 +258,7 @@ def test_resolved_values_are_read_only_with_derived_defaults_filled():
     assert slope["spacing"] == slope.spacing == 10.0 / 10
     assert slope["dt"] is not None and slope["t_end"] is not None
     footing = get_scene("strip-footing").resolve({"analysis": "limit"})
-    assert footing["spacing"] is not None and footing["domain"] is not None
+    assert footing["spacing"] is not None and footing["domain_width"] is not None
     column = get_scene("column-collapse").resolve({"geometry": "box"})
     assert column["depth"] is not None
     for values in (slope, footing, column):

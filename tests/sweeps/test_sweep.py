@@ -469,7 +469,7 @@ def test_another_set_value_in_the_same_folder_is_refused(grid_sweep):
     with pytest.raises(ParameterError, match=r"--out.*fixed"):
         sweep(SCENE, GRID, fixed={**FIXED, "steps": 2}, out=out, progress=False)
     with pytest.raises(ParameterError, match=r"--out.*scene"):
-        sweep("strip-footing", {"phi": [20]}, out=out, progress=False)
+        sweep("strip-footing", {"c": [2e4]}, out=out, progress=False)
 
 
 def test_run_names_are_the_same_from_the_command_line_and_python():

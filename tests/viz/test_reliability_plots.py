@@ -173,8 +173,8 @@ def footing_dir(tmp_path_factory) -> Path:
         "c": 1e4,
         "phi": 0.0,
         "rho": 0.0,
-        "half_width": b,
-        "domain": domain,
+        "width": 2 * b,
+        "domain_width": domain,
     }
     (folder / "scene.json").write_text(
         json.dumps({"scene": "strip-footing", "parameters": params})

@@ -28,13 +28,14 @@ which parameters were given; :mod:`.runs` builds the runs.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from ...errors import ParameterError, warn_user
 from ..base import Scene
-from ..common import check_soil
+from ..common import check_soil, fill_at_rest
 from ..limits import LENGTH, check_size
 from ..params import POSITIVE, Param, Values
 from .box_column import DEPTH_SPACINGS
@@ -235,6 +236,7 @@ def finalize(
         why = _unused_reason(geo, name)
         raise ParameterError(name, values[name], why)
     if geo == "plane-strain":
+        fill_column_defaults(values)
         return
     if geo in CYLINDRICAL:
         _cylinder_sizes(values, given)
@@ -248,11 +250,30 @@ def finalize(
         if values["depth"] is None:
             values["depth"] = DEPTH_SPACINGS * h
     _material(values, given)
+    fill_column_defaults(values)
     _check_values(values)
     n = lattice_particles(geo, values, values["spacing"])
     blame = "spacing" if "spacing" in given or geo == "box" else "radius"
     dim = 2 if geo == "axisymmetric" else 3
     check_size(n, dim, values, blame, "use a larger spacing or a smaller column")
+
+
+def fill_column_defaults(values: dict[str, Any]) -> None:
+    """Fill the column's ``K0``, ``floor_friction`` and ``min_time`` (in place).
+
+    Jaky's ``K0 = 1 - sin phi``, a floor as rough as the soil (``phi``), and
+    the earliest stop at rest ``2 sqrt(H0 / g)`` (with ``rest_fraction > 0``)
+    once the column's height is known.
+    """
+    fill_at_rest(values)
+    if values["floor_friction"] is None:
+        values["floor_friction"] = values["phi"]
+    if values["min_time"] is None and values["rest_fraction"] > 0:
+        if values.get("geometry", "plane-strain") in CYLINDRICAL:
+            H0 = values["height"]
+        else:
+            H0 = values["aspect"] * values["half_width"]
+        values["min_time"] = 2 * math.sqrt(H0 / values["gravity"])
 
 
 def _unused_reason(geometry: str, name: str) -> str:

@@ -116,13 +116,11 @@ PARAMS = [
     ),
     Param(
         "K0",
-        0.5,
+        None,
         "-",
-        "initial s_xx / s_yy (at-rest coefficient). 0.5 is Jaky's 1 - sin phi "
-        "at the default phi = 30; it is not recomputed from phi (unlike "
-        "strip-footing's default 1 - sin phi), so a change of phi changes the "
-        "material, not the initial stresses. For phi < 19.5 it lies outside "
-        "the yield cone and is refused: set K0 too (e.g. 1 - sin phi)",
+        "initial s_xx / s_yy (at-rest coefficient; default Jaky's 1 - sin phi: "
+        "0.5 at the default phi = 30). A cohesionless Mohr-Coulomb K0 outside "
+        "the yield cone is refused",
         float,
         **POSITIVE,
     ),

@@ -60,11 +60,17 @@ from ...run.simulation import Simulation
 from ...step.model import Model
 from ...step.records import Step
 from ..base import Scene, SceneRun
-from ..common import check_soil, fidelity_from, make_writer, solver_from
+from ..common import (
+    check_soil,
+    fidelity_from,
+    make_writer,
+    solver_from,
+)
 from ..limits import check_size
 from ..methods import with_method
 from ..params import Values
 from ..scenery import Scenery, box, number, time_label
+from .geometry import fill_column_defaults
 from .params import (
     COLLAPSE_STABILISATION,
     COLLAPSE_VOLUME_CORRECTION,
@@ -381,4 +387,5 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=collapse_scenery,
+    derive=fill_column_defaults,
 )

@@ -55,13 +55,15 @@ from ..limits import check_size
 from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
 from .penetration_common import (
-    ALPHA,
+    ADHESION,
     axis_count,
+    derive_cone,
     graded_axis,
     interface_adhesion,
     lattice_gap,
     lattice_params,
     penetration_warnings,
+    refuse_adhesion,
     steady_factor,
     step_dt,
 )
@@ -126,7 +128,7 @@ PARAMS = [
         str,
         INTERFACES,
     ),
-    ALPHA,
+    ADHESION,
     Param(
         "penetration",
         None,
@@ -147,7 +149,7 @@ PARAMS = [
         **POSITIVE,
     ),
     Param(
-        "below",
+        "domain_below",
         8.0,
         "-",
         "soil below the tip's final position / D",
@@ -228,7 +230,7 @@ def _sizes(values: Mapping[str, Any]) -> dict[str, float]:
     h = values["spacing"] if values["spacing"] is not None else D / 12
     w = values["penetration"] if values["penetration"] is not None else 6 * D
     depth = values["depth"] if values["depth"] is not None else 10 * D
-    z_tip = values["below"] * D + w  # the tip's height at time 0
+    z_tip = values["domain_below"] * D + w  # the tip's height at time 0
     return {
         "D": D,
         "h": h,
@@ -364,9 +366,7 @@ def build(
         solver=solver_from(values),
         **fidelity_from(values, 0.0),
     )
-    mesher = AlphaShapeMesher(
-        g["h"], values["alpha_shape"], spacing=spacing, walls=[axis]
-    )
+    mesher = AlphaShapeMesher(g["h"], values["alpha"], spacing=spacing, walls=[axis])
     sim = Simulation(
         particles,
         model,
@@ -412,10 +412,22 @@ def cone_scenery(p: dict, folder: Path | None = None) -> Scenery:
     """Base, rollers, the axis, the cone and its shaft where they are."""
     s = Scenery(scene="cone-penetration")
     default = {q.name: q.default for q in PARAMS}
-    names = ("diameter", "spacing", "penetration", "depth", "below", "domain_radius")
+    names = (
+        "diameter",
+        "spacing",
+        "penetration",
+        "depth",
+        "domain_below",
+        "domain_radius",
+    )
     values = {k: number(p, k, default[k]) for k in names}
     speed = number(p, "speed", default["speed"])
-    if None in (values["diameter"], values["below"], values["domain_radius"], speed):
+    if None in (
+        values["diameter"],
+        values["domain_below"],
+        values["domain_radius"],
+        speed,
+    ):
         return s
     g = _sizes(values)
     s.floor, s.floor_label = 0.0, "fixed base"
@@ -440,6 +452,8 @@ SCENE = Scene(
     params=PARAMS,
     build=build,
     metrics_doc=METRICS,
+    ignored=refuse_adhesion,
+    derive=derive_cone,
     scenery=cone_scenery,
     time_params=("dt", "penetration"),
 )

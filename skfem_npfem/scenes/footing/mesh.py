@@ -1,6 +1,6 @@
 """The strip footing's soil block: a graded mesh and its particles.
 
-The block is ``domain * b`` wide and deep, with elements of ``spacing`` under
+The block is ``domain_width * b`` wide and deep, with elements of ``spacing`` under
 the footing growing by ``grading`` away from it; the particles carry the
 geostatic stress with the at-rest coefficient K0, and those under the footing
 move down at unit pseudo-speed.
@@ -55,13 +55,13 @@ def graded_count(b: float, h: float, length: float, ratio: float) -> float:
 
 
 def soil_mesh(values: Mapping[str, Any]) -> MeshTri:
-    """The graded ``domain*b`` square block, surface at ``y = domain*b``."""
-    b, h = values["half_width"], values["spacing"]
+    """The graded ``domain_width*b`` square block, surface at its top."""
+    b, h = values["width"] / 2, values["spacing"]
     if h > b / 2:
-        raise ParameterError("spacing", h, f"at most half_width/2 = {b / 2:g} m")
-    L = values["domain"] * b
+        raise ParameterError("spacing", h, f"at most width/4 = {b / 2:g} m")
+    L = values["domain_width"] * b
     n = graded_count(b, h, L, values["grading"])
-    check_size(n * n, 2, values, advice="use a larger spacing, grading or domain")
+    check_size(n * n, 2, values, advice="use a larger spacing, grading or domain_width")
     xs = graded_coordinates(b, h, L, values["grading"])
     ys = L - graded_coordinates(b, h, L, values["grading"])[::-1]
     return MeshTri.init_tensor(xs, ys)
@@ -75,8 +75,8 @@ def soil_particles(
     The footing particles move down at unit pseudo-speed (1 m per unit of
     pseudo-time), so a step's ``dt`` is its settlement increment.
     """
-    b, rho = values["half_width"], values["rho"]
-    L, gamma = values["domain"] * b, unit_weight(values)
+    b, rho = values["width"] / 2, values["rho"]
+    L, gamma = values["domain_width"] * b, unit_weight(values)
     ni = nodal_integration(mesh)
     x = mesh.p.T.copy()
     fixed = np.zeros_like(x, dtype=bool)
@@ -84,7 +84,7 @@ def soil_particles(
     fixed[np.isclose(x[:, 0], 0.0) | np.isclose(x[:, 0], L), 0] = True
     foot = np.isclose(x[:, 1], L) & (x[:, 0] <= b * (1 + 1e-9))
     fixed[foot, 1] = True
-    if values["footing"] == "rough":
+    if values["interface"] == "rough":
         fixed[foot, 0] = True
     K0 = values["K0"] if values["K0"] is not None else 1.0 - math.sin(math.radians(phi))
     stress = np.zeros((x.shape[0], 4))
@@ -105,10 +105,10 @@ def unit_weight(values: Mapping[str, Any]) -> float:
 
 
 def resolve_defaults(values: dict[str, Any]) -> dict[str, Any]:
-    """Fill ``spacing`` and ``domain`` left at None (they depend on ``analysis``)."""
+    """Fill ``spacing`` and ``domain_width`` left at None (they follow ``analysis``)."""
     limit = values.get("analysis") == "limit"
     if values.get("spacing") is None:
         values["spacing"] = LIMIT_SPACING if limit else DEFAULT_SPACING
-    if values.get("domain") is None:
-        values["domain"] = LIMIT_DOMAIN if limit else DEFAULT_DOMAIN
+    if values.get("domain_width") is None:
+        values["domain_width"] = LIMIT_DOMAIN if limit else DEFAULT_DOMAIN
     return values

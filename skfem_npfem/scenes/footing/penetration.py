@@ -54,14 +54,16 @@ from ..methods import METHOD_METRICS_NO_SPFEM, method_params, with_method
 from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
 from .penetration_common import (
-    ALPHA,
+    ADHESION,
     axis_count,
+    derive_footing,
     graded_axis,
     interface_adhesion,
     lattice_gap,
     lattice_params,
     locking_warnings,
     penetration_warnings,
+    refuse_adhesion,
     step_dt,
 )
 
@@ -96,7 +98,7 @@ PARAMS = [
     ),
     Param("su", 1.0e3, "Pa", "undrained shear strength s_u", float, **POSITIVE),
     Param("interface", "smooth", "-", "footing-soil interface", str, INTERFACES),
-    ALPHA,
+    ADHESION,
     Param(
         "penetration",
         None,
@@ -239,7 +241,7 @@ def build(
         solver=solver_from(values),
         **fidelity_from(values, 0.0),
     )
-    mesher = AlphaShapeMesher(values["spacing"], values["alpha_shape"], spacing=spacing)
+    mesher = AlphaShapeMesher(values["spacing"], values["alpha"], spacing=spacing)
     sim = Simulation(
         particles,
         model,
@@ -374,6 +376,8 @@ SCENE = Scene(
     params=PARAMS,
     build=build,
     metrics_doc=METRICS,
+    ignored=refuse_adhesion,
+    derive=derive_footing,
     scenery=penetration_scenery,
     time_params=("dt", "penetration"),
 )

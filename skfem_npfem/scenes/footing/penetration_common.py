@@ -19,9 +19,11 @@ from ...errors import ParameterError, warn_user
 from ..params import Param
 
 __all__ = [
-    "ALPHA",
+    "ADHESION",
     "Steady",
     "axis_count",
+    "derive_cone",
+    "derive_footing",
     "graded_axis",
     "grow_axis",
     "grown_count",
@@ -30,15 +32,16 @@ __all__ = [
     "lattice_params",
     "locking_warnings",
     "penetration_warnings",
+    "refuse_adhesion",
     "steady_factor",
 ]
 
-#: The ``alpha`` parameter of ``interface=adhesion`` (footing and cone).
-ALPHA = Param(
-    "alpha",
+#: The ``adhesion`` parameter of ``interface=adhesion`` (footing and cone).
+ADHESION = Param(
+    "adhesion",
     0.5,
     "-",
-    "adhesion factor (interface=adhesion): |t| <= alpha s_u",
+    "adhesion factor alpha of interface=adhesion: |t| <= alpha s_u",
     float,
     lo=0.0,
     hi=1.0,
@@ -102,7 +105,7 @@ def lattice_gap(x: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
 
 
 def lattice_params(body: str) -> list[Param]:
-    """``grading`` of the lattice away from the ``body`` and ``alpha_shape``."""
+    """``grading`` of the lattice away from the ``body`` and ``alpha`` (the shape)."""
     return [
         Param(
             "grading",
@@ -114,7 +117,7 @@ def lattice_params(body: str) -> list[Param]:
             hi=2.0,
         ),
         Param(
-            "alpha_shape",
+            "alpha",
             1.3,
             "-",
             "alpha-shape factor of the remeshing",
@@ -153,7 +156,50 @@ def interface_adhesion(values: Mapping[str, Any]) -> float:
         return 0.0
     if choice == "rough":
         return values["su"]
-    return values["alpha"] * values["su"]
+    return values["adhesion"] * values["su"]
+
+
+def derive_cone(values: dict[str, Any]) -> None:
+    """cone-penetration's derived defaults, in place.
+
+    ``spacing`` D/12, ``penetration`` 6 D, ``depth`` 10 D, and ``dt``: the
+    cone moves half a spacing per step.
+    """
+    D = values["diameter"]
+    if values["spacing"] is None:
+        values["spacing"] = D / 12
+    if values["penetration"] is None:
+        values["penetration"] = 6 * D
+    if values["depth"] is None:
+        values["depth"] = 10 * D
+    if values["dt"] is None:
+        values["dt"] = 0.5 * values["spacing"] / values["speed"]
+
+
+def derive_footing(values: dict[str, Any]) -> None:
+    """footing-penetration's ``penetration`` (B) and ``dt`` (spacing/4 a step)."""
+    if values["penetration"] is None:
+        values["penetration"] = values["width"]
+    if values["dt"] is None:
+        values["dt"] = 0.25 * values["spacing"] / values["speed"]
+
+
+def refuse_adhesion(values: Mapping[str, Any], given: frozenset[str]) -> None:
+    """Refuse ``adhesion`` given with an interface other than ``adhesion``.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``adhesion``, its value and the interface that uses it.
+    """
+    if "adhesion" in given and values["interface"] != "adhesion":
+        raise ParameterError(
+            "adhesion",
+            values["adhesion"],
+            f"left out with interface={values['interface']} (the adhesion "
+            "factor is used by interface=adhesion only); choose "
+            "interface=adhesion for |t| <= adhesion x s_u",
+        )
 
 
 def penetration_warnings(

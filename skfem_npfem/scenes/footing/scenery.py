@@ -30,9 +30,10 @@ def footing_scenery(p: dict, folder: Path | None = None) -> Scenery:
     """
     s = Scenery(scene="strip-footing")
     p = resolve_defaults(dict(p))
-    b, domain = number(p, "half_width"), number(p, "domain")
-    if b is None or domain is None:
+    B, domain = number(p, "width"), number(p, "domain_width")
+    if B is None or domain is None:
         return s
+    b = B / 2
     L = domain * b
     s.half_width = b
     s.floor, s.floor_label = 0.0, "fixed base"

@@ -1,8 +1,9 @@
 """Scene ``strip-footing``: rigid strip footing pushed to its collapse load.
 
 Half model (symmetry at ``x = 0``), plane strain, quasi-static steps.  The soil
-block is ``domain*b`` wide and deep with a mesh graded from ``spacing`` under the
-footing; base fixed, far side on rollers.  The footing (half-width ``b``) pushes
+block is ``domain_width*b`` wide and deep with a mesh graded from ``spacing``
+under the footing; base fixed, far side on rollers.  The footing (``width``
+``B = 2b``; half-width ``b``) pushes
 the surface particles at ``x <= b`` down; it is smooth (horizontal motion free)
 or rough (horizontal motion fixed).  The footing pressure is the sum of the
 vertical reactions over ``b``.
@@ -41,6 +42,7 @@ from ..common import (
     elastic_params,
     fidelity_from,
     fidelity_params,
+    fill_at_rest,
     make_writer,
     solver_from,
     solver_params,
@@ -67,6 +69,7 @@ from .mesh import (
 )
 from .plateau import PlateauRule
 from .scenery import footing_scenery
+from .usage import ignored
 
 MATERIALS = ("tresca", "mohr-coulomb", "drucker-prager")
 
@@ -84,11 +87,18 @@ PARAMS = [
         "c",
         1.0e4,
         "Pa",
-        "cohesion (tresca: > 0; c = 0 needs rho > 0)",
+        "cohesion (tresca: the undrained strength s_u, > 0; c = 0 needs rho > 0)",
         float,
         lo=0,
     ),
-    Param("phi", 0.0, "deg", "friction angle (ignored by tresca)", float, **ANGLE),
+    Param(
+        "phi",
+        0.0,
+        "deg",
+        "friction angle (tresca: 0; another value is refused)",
+        float,
+        **ANGLE,
+    ),
     Param(
         "psi", None, "deg", "dilation angle (default: phi, associated)", float, **ANGLE
     ),
@@ -118,8 +128,10 @@ PARAMS = [
         float,
         **POSITIVE,
     ),
-    Param("footing", "smooth", "-", "footing-soil interface", str, ("smooth", "rough")),
-    Param("half_width", 1.0, "m", "footing half-width b", float, **POSITIVE),
+    Param(
+        "interface", "smooth", "-", "footing-soil interface", str, ("smooth", "rough")
+    ),
+    Param("width", 2.0, "m", "footing width B = 2b", float, **POSITIVE),
     Param(
         "spacing",
         None,
@@ -139,11 +151,12 @@ PARAMS = [
         hi=2.0,
     ),
     Param(
-        "domain",
+        "domain_width",
         None,
         "-",
-        f"soil block size / b (width and depth; default {DEFAULT_DOMAIN:g}, "
-        f"{LIMIT_DOMAIN:g} with analysis=limit)",
+        "soil width / B (half of it modelled: the half block is as deep as it "
+        f"is wide; default {DEFAULT_DOMAIN:g}, {LIMIT_DOMAIN:g} with "
+        "analysis=limit)",
         float,
         lo=2.0,
         hi=50.0,
@@ -267,23 +280,37 @@ def soil_material(values: Mapping[str, Any]) -> tuple[Material, float]:
     return mat, phi
 
 
-def plateau_rule(values: Mapping[str, Any]) -> PlateauRule:
-    """The stepping and stop rule from the resolved parameters."""
-    b = values["half_width"]
-    settlement = values["settlement"]
-    if settlement is None:
+def derive(values: dict[str, Any]) -> None:
+    """The strip footing's derived defaults, in place.
+
+    ``spacing`` and ``domain_width`` (:func:`resolve_defaults`); Jaky's ``K0``
+    and the associated ``psi = phi`` of the soil; the stepping:
+    ``settlement`` (``100 (c + gamma b) b / E``), ``plateau_tol``
+    (1e-3, 0 with large_deformation) and ``max_settlement`` (100 x
+    settlement).
+    """
+    resolve_defaults(values)
+    fill_at_rest(values)
+    if values["psi"] is None:
+        values["psi"] = values["phi"]
+    b = values["width"] / 2
+    if values["settlement"] is None:
         strength = values["c"] + unit_weight(values) * b
-        settlement = SETTLEMENT_SCALE * strength * b / values["E"]
-    tol = values["plateau_tol"]
-    if tol is None:
-        tol = 0.0 if values["large_deformation"] else 1e-3
-    cap = values["max_settlement"]
+        values["settlement"] = SETTLEMENT_SCALE * strength * b / values["E"]
+    if values["plateau_tol"] is None:
+        values["plateau_tol"] = 0.0 if values["large_deformation"] else 1e-3
+    if values["max_settlement"] is None:
+        values["max_settlement"] = MAX_SETTLEMENT_FACTOR * values["settlement"]
+
+
+def plateau_rule(values: Mapping[str, Any]) -> PlateauRule:
+    """The stepping and stop rule from the resolved parameters (:func:`derive`)."""
     return PlateauRule(
-        settlement=settlement,
+        settlement=values["settlement"],
         steps=values["steps"],
-        tol=tol,
+        tol=values["plateau_tol"],
         growth=values["growth"],
-        max_settlement=MAX_SETTLEMENT_FACTOR * settlement if cap is None else cap,
+        max_settlement=values["max_settlement"],
         max_steps=values["max_steps"],
     )
 
@@ -297,7 +324,7 @@ def build(
     mat, phi = soil_material(values)
     rule = plateau_rule(values)
     particles, foot = soil_particles(values, mesh, phi)
-    b, c, gamma = values["half_width"], values["c"], unit_weight(values)
+    b, c, gamma = values["width"] / 2, values["c"], unit_weight(values)
     model = Model(
         dim=2,
         materials=[mat],
@@ -400,7 +427,7 @@ def footing_limit(
     distribution.  The soil's weight is the dead load.  The multiplier is then
     the bearing factor ``q / c`` (``q / (gamma b)``).
     """
-    b, c, gamma = values["half_width"], values["c"], unit_weight(values)
+    b, c, gamma = values["width"] / 2, values["c"], unit_weight(values)
     ni = nodal_integration(mesh, (0, 1, 2, 3) if mat.needs_zz(2) else (0, 1, 3))
     n = particles.n
     fixed = np.asarray(particles.fixed, bool).copy()
@@ -447,6 +474,7 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=footing_scenery,
-    derive=resolve_defaults,
+    derive=derive,
+    ignored=ignored,
     time_params=None,  # a run counts its steps
 )

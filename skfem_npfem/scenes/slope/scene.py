@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from ...constants import GRAVITY
+from ...errors import ParameterError
 from ...mesh.regions import CrossSection, fill_regions
 from ...mesh.smoothing import nodal_integration
 from ...mesh.sources import AlphaShapeMesher, FixedMesh
@@ -46,7 +47,14 @@ from ...particles import Particles
 from ...run.rest import AtRest
 from ...run.simulation import Simulation
 from ..base import Scene, SceneRun
-from ..common import elastic_params, fidelity_params, make_writer, solver_params
+from ..common import (
+    elastic_params,
+    fidelity_params,
+    make_writer,
+    refuse_frictional,
+    solver_params,
+    warn_unused,
+)
 from ..limit_mode import LIMIT_METRICS, analysis_param
 from ..params import ANGLE, POSITIVE, Param, Values
 from ..scenery import Scenery, number
@@ -91,7 +99,14 @@ PARAMS = [
     Param("material", "mohr-coulomb", "-", "yield criterion", str, MATERIALS),
     *elastic_params(2.0e7),
     Param("c", 1.0e4, "Pa", "cohesion", float, lo=0),
-    Param("phi", 20.0, "deg", "friction angle (tresca: 0)", float, **ANGLE),
+    Param(
+        "phi",
+        20.0,
+        "deg",
+        "friction angle (tresca: 0; another value is refused)",
+        float,
+        **ANGLE,
+    ),
     Param(
         "psi",
         0.0,
@@ -246,9 +261,73 @@ def base_metrics(
     }
 
 
+#: Parameters only the failure and run-out stage uses.
+RUNOUT_ONLY = (
+    "psi",
+    "reduction",
+    "margin",
+    "dt",
+    "t_end",
+    "rest_fraction",
+    "alpha",
+    "max_displacement",
+)
+
+#: The cross-section's own parameters (a geometry file replaces them).
+SECTION = ("height", "angle", "foundation_depth", "crest_length", "toe_length")
+
+
+def ignored(values: dict[str, Any], given: frozenset[str]) -> None:
+    """Refuse what the chosen material, section or analysis would ignore silently.
+
+    ``phi``/``psi`` with Tresca, Tresca with a cross-section file (whose
+    regions are Mohr-Coulomb) and ``runout=true`` with ``analysis=limit`` are
+    refused; parameters of a stage that does not run are warned about.
+    """
+    refuse_frictional(values, given)
+    limit = values["analysis"] == "limit"
+    if values["geometry"]:
+        if values["material"] == "tresca":
+            raise ParameterError(
+                "material",
+                "tresca",
+                "mohr-coulomb with geometry (the regions of a cross-section "
+                "file are Mohr-Coulomb: give a material phi = 0 there for an "
+                "undrained clay)",
+            )
+        warn_unused(given, SECTION, "geometry (the cross-section file) replaces them")
+    if limit and values["runout"]:
+        raise ParameterError(
+            "runout",
+            True,
+            "false with analysis=limit (one cone program: no failure and "
+            "run-out stage); choose analysis=incremental for the run-out",
+        )
+    if limit:
+        warn_unused(
+            given,
+            ("E", "nu", "initial_stress", "K0"),
+            "analysis=limit solves one rigid-plastic cone program (no "
+            "elasticity, no initial stresses)",
+        )
+    elif values["initial_stress"] == "gravity":
+        warn_unused(
+            given, ("K0",), "initial_stress=gravity (K0 sets initial_stress=k0)"
+        )
+    if limit or not values["runout"]:
+        warn_unused(
+            given,
+            RUNOUT_ONLY,
+            "the run-out stage does not run (it needs runout=true with "
+            "analysis=incremental)",
+        )
+
+
 def resolve_values(values: dict[str, Any]) -> None:
     """The slope's derived defaults, in place: ``spacing``, ``dt``, ``t_end``.
 
+    The parametric slope's ``crest_length`` (1.5 H) and ``toe_length`` (2.5 H)
+    are filled first.
     The spacing defaults to H/10 (a section file: its tallest region / 20);
     ``dt`` to ``0.02 sqrt(H/g)`` and ``t_end`` to ``15 sqrt(H/g)`` with the
     height H of the section filled at that spacing.  A section too large for
@@ -259,6 +338,12 @@ def resolve_values(values: dict[str, Any]) -> None:
     values : dict
         The checked parameter values (defaults and overrides).
     """
+    if not values["geometry"]:
+        H = values["height"]
+        if values["crest_length"] is None:
+            values["crest_length"] = 1.5 * H
+        if values["toe_length"] is None:
+            values["toe_length"] = 2.5 * H
     sec, default_h = section_of(values)
     h = values["spacing"] if values["spacing"] is not None else default_h
     values["spacing"] = h
@@ -334,11 +419,20 @@ def build(
             m.update(runout_metrics(sim_, state, values, body.h, *toe_crest))
         return m
 
+    derived = {}
+    phis = {getattr(m, "phi", 0.0) for m in body.mats}
+    if values["initial_stress"] == "k0" and not limit_only and len(phis) == 1:
+        derived["K0"] = float(1 - np.sin(np.radians(phis.pop())))  # as used
     if not run_out:
-        return SceneRun(sim, {"steps": 0}, metrics)
+        return SceneRun(sim, {"steps": 0}, metrics, derived=derived)
     stop = AtRest(values["rest_fraction"], 2 * math.sqrt(H / GRAVITY))
     state["stop"] = stop
-    return SceneRun(sim, {"t_end": values["t_end"], "stop": stop}, metrics)
+    return SceneRun(
+        sim,
+        {"t_end": values["t_end"], "stop": stop},
+        metrics,
+        derived=derived | {"reduction": state["reduction"]},
+    )
 
 
 def _toe_and_crest(sec: CrossSection, values: Mapping[str, Any]):
@@ -381,4 +475,5 @@ SCENE = Scene(
     metrics_doc=METRICS,
     scenery=slope_scenery,
     derive=resolve_values,
+    ignored=ignored,
 )
