@@ -36,7 +36,7 @@ class SplitPoints:
     base: NodalIntegration
 
     def __post_init__(self) -> None:
-        b, ns = self.base, self.base.n_stress
+        b, ns = self.base, len(self.base.components)
         self.dim, self.components = b.dim, b.components
         self.volumes = np.repeat(0.5 * b.volumes, 2)
         # Point p -> points 2p, 2p+1; each column block of G taken half.
