@@ -312,7 +312,7 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="*",
         default=None,
         help="times to render (normalised by sqrt(H0/g) unless --absolute; "
-        "strip-footing: settlements in m)",
+        "strip-footing: settlements in m; cone-penetration: w/D)",
     )
     p_plot.add_argument(
         "--absolute", action="store_true", help="--times are in seconds"
