@@ -149,7 +149,8 @@ def plot_results(
         ``scene.json``; if the folder has no such parameters the times are
         absolute seconds and a ``UserWarning`` says so. For the strip footing
         the times are settlements in m (its pseudo-time), for the cone the
-        penetration w/D, whatever ``normalised``. A time outside the
+        penetration w/D (``footing-penetration``: w/B), whatever
+        ``normalised``. A time outside the
         stored steps draws the nearest step, with a ``UserWarning`` in the
         same unit, and is labelled with that step's time. None or empty: 5
         times evenly spaced from the first to the last step.
@@ -188,7 +189,8 @@ def plot_results(
         in the unit of ``times``, up to 4 significant digits: as requested, or
         the drawn step's time when the request is outside the stored steps;
         ``<field>_s<settlement>.png`` for the strip footing, settlement in m;
-        ``<field>_wD<w/D>.png`` for the cone), then ``<field>.gif`` or
+        ``<field>_wD<w/D>.png`` for the cone, ``<field>_wB<w/B>.png`` for
+        ``footing-penetration``), then ``<field>.gif`` or
         ``<field>.mp4``; for the strip footing (2D) finally
         ``load_settlement.png``, for the cone ``cone_factor.png`` (N_c against
         w/D and the depth pushed), for a limit analysis ``mechanism.png``.

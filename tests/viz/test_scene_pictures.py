@@ -193,3 +193,20 @@ def test_slope_runout_field_pictures_show_the_scenery(tmp_path):
     y = outline.get_ydata()
     # the default slope: H = 10 m on a foundation 5 m deep
     assert np.nanmax(y) == pytest.approx(15.0) and np.nanmin(y) == 0.0
+
+
+def test_footing_penetration_times_are_in_w_over_b():
+    from skfem_npfem.scenes import SCENES
+    from skfem_npfem.viz.snapshots import _pick_snapshots, _time_unit
+
+    scene = SCENES["footing-penetration"]
+    params = {q.name: q.default for q in scene.params} | {"speed": 0.5}
+    sc = scene.scenery(params, None)
+    unit = _time_unit(sc, normalised=True)
+    B = params["width"]
+    assert (unit.prefix, unit.name) == ("wB", "w/B")
+    # steps every 0.1 s at 0.5 m/s: w/B = 0.05 / B per step; ask for w/B = 0.5
+    ts = np.arange(0.0, 2.0 * B / 0.5, 0.1)
+    snaps = _pick_snapshots(ts, [0.5], unit)
+    (i,) = snaps
+    assert 0.5 * ts[i] / B == pytest.approx(0.5, abs=0.05 / B)
