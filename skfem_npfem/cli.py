@@ -365,7 +365,8 @@ def build_parser(scene: str | None = None) -> argparse.ArgumentParser:
         nargs="*",
         default=None,
         help="times to render (normalised by sqrt(H0/g) unless --absolute; "
-        "strip-footing: settlements in m)",
+        "strip-footing: settlements in m; cone-penetration: w/D; "
+        "footing-penetration: w/B)",
     )
     p_plot.add_argument(
         "--absolute", action="store_true", help="--times are in seconds"

@@ -11,13 +11,14 @@ drawing code (:mod:`skfem_npfem.viz`) reads it and holds no scene knowledge.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Scenery", "box", "number", "time_label"]
+__all__ = ["Scenery", "box", "number", "section_lines", "time_label"]
 
 
 @dataclass
@@ -74,6 +75,24 @@ class Scenery:
         Footing: Prandtl-Reissner ``N_c c`` of a weightless soil, Pa.
     half_width : float or None
         Footing half width b, m.
+    boundaries : ndarray (n, 2) or None
+        Lines between the regions of a cross-section (layer boundaries), a
+        polyline whose pieces are separated by rows of NaN.
+    window : (float, float, float, float) or None
+        ``(x0, x1, y0, y1)``: the part of the domain the pictures show, m
+        (None: every particle; the cone: a few D around the tip's path).
+    window_note : str
+        What the window is, said in the picture's title.
+    factor_curve : ndarray (n, 2) or None
+        Cone: ``w/D`` and the cone factor ``N_c`` per step.
+    factor_reference : float or None
+        Cone: Teh & Houlsby's cone factor.
+    diameter : float or None
+        Cone diameter D, m (the depth axis of the factor curve).
+    unit : (str, str, float) or None
+        The scene's own unit of ``--times`` and file names: file-name prefix,
+        name and seconds per unit (the cone: ``("wD", "w/D", D / speed)``);
+        None: time (or the footing's settlement).
     bodies : list of (ndarray (m, 2), ndarray (2,), str)
         Rigid bodies: the outline at time 0, the velocity (m/s) and the legend
         text; a picture of time t draws the outline moved by ``velocity * t``.
@@ -100,6 +119,13 @@ class Scenery:
     load_curve: np.ndarray | None = None
     q_reference: float | None = None
     half_width: float | None = None
+    boundaries: np.ndarray | None = None
+    window: tuple[float, float, float, float] | None = None
+    window_note: str = ""
+    factor_curve: np.ndarray | None = None
+    factor_reference: float | None = None
+    diameter: float | None = None
+    unit: tuple[str, str, float] | None = None
     bodies: list[tuple[np.ndarray, np.ndarray, str]] = field(default_factory=list)
     label: Callable[[float], str] = field(default=lambda t: f"t = {t:.4g} s")
 
@@ -128,3 +154,66 @@ def number(params: dict, name: str, default: float | None = None) -> float | Non
 def time_label(tau: float, height: str = "H0") -> Callable[[float], str]:
     """A step label with the time in s and normalised by ``tau = sqrt(H/g)``."""
     return lambda t: f"t = {t:.3g} s   (t/\u221a({height}/g) = {t / tau:.2f})"
+
+
+def section_lines(polygons: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """The outline and the layer boundaries of a cross-section's regions.
+
+    Each region's edges are cut at the other regions' vertices lying on
+    them; a piece along another region's edge is a boundary between layers,
+    the others are the section's outline.  Both are polylines whose pieces
+    are separated by rows of NaN (empty: no row).
+
+    Examples
+    --------
+    >>> low = box(0.0, 4.0, 0.0, 1.0)[:-1]
+    >>> up = np.array([[0.0, 1.0], [2.0, 1.0], [0.0, 2.0]])
+    >>> outline, between = section_lines([low, up])
+    >>> between[~np.isnan(between[:, 0])].tolist()
+    [[2.0, 1.0], [0.0, 1.0]]
+    """
+    edges = []  # (region, a, b)
+    for k, poly in enumerate(polygons):
+        p = np.asarray(poly, float)
+        for a, b in zip(p, np.roll(p, -1, axis=0), strict=True):
+            if np.linalg.norm(b - a) > 0:
+                edges.append((k, a, b))
+    size = max((float(np.ptp(np.asarray(q, float))) for q in polygons), default=1.0)
+    tol = 1e-9 * max(size, 1.0)
+    outer, inner = [], []
+    for k, a, b in edges:
+        d = b - a
+        ts = [0.0, 1.0]
+        for j, poly in enumerate(polygons):
+            if j == k:
+                continue
+            q = np.asarray(poly, float)
+            t = (q - a) @ d / (d @ d)
+            off = np.linalg.norm(q - (a + np.outer(t, d)), axis=1)
+            ts += [float(v) for v in t[(off < tol) & (t > 0) & (t < 1)]]
+        ts = sorted(set(ts))
+        for t0, t1 in itertools.pairwise(ts):
+            p0, p1 = a + t0 * d, a + t1 * d
+            mid = 0.5 * (p0 + p1)
+            shared = any(_on_edge(mid, e[1], e[2], tol) for e in edges if e[0] != k)
+            (inner if shared else outer).append((p0, p1))
+    return _polyline(outer), _polyline(inner)
+
+
+def _on_edge(x: np.ndarray, a: np.ndarray, b: np.ndarray, tol: float) -> bool:
+    """Whether point ``x`` lies on the segment ``a``-``b``."""
+    d = b - a
+    t = float((x - a) @ d / (d @ d))
+    return -tol <= t <= 1 + tol and float(np.linalg.norm(a + t * d - x)) < tol
+
+
+def _polyline(pieces: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    """Segments as one polyline, NaN rows between them (shared edges once)."""
+    seen, rows = set(), []
+    for p0, p1 in pieces:
+        key = tuple(sorted([tuple(np.round(p0, 9)), tuple(np.round(p1, 9))]))
+        if key in seen:
+            continue
+        seen.add(key)
+        rows += [p0, p1, np.full(2, np.nan)]
+    return np.array(rows, float).reshape(-1, 2)

@@ -9,8 +9,9 @@ strip footing the load-settlement curve beside it with the current point marked.
 frame is cropped to every particle (detached grains included, so the run-out line the
 legend names is in the picture) and the scenery; the colour bar says when values beyond
 its range were clipped.  :func:`load_settlement_figure` is the footing's main result on
-its own.  Both return matplotlib figures (no pyplot, no display), so tests can look at
-what is drawn; :meth:`Frames2D.image` renders one to pixels.
+its own, :func:`factor_curve_figure` the cone's.  They return matplotlib
+figures (no pyplot, no display), so tests can look at what is drawn;
+:meth:`Frames2D.image` renders one to pixels.
 """
 
 from __future__ import annotations
@@ -24,7 +25,12 @@ from ..io import atomic_path
 from ..scenes.scenery import Scenery
 from .render import Step, Style
 
-__all__ = ["Frames2D", "View", "load_settlement_figure", "mechanism_figure"]
+__all__ = [
+    "Frames2D",
+    "View",
+    "factor_curve_figure",
+    "load_settlement_figure",
+]
 
 _DPI = 100
 _BODY = "#303030"
@@ -56,7 +62,8 @@ def crop(steps: list[Step], sc: Scenery, window: tuple[int, int] | None) -> View
 
     The detached grains (in no cell) are inside the frame too: they are drawn
     and named in the legend, and they can set the 99 % mass front whose line
-    the legend labels.
+    the legend labels.  A scenery with a ``window`` (the cone: a few D
+    around the tip's path) shows that window instead.
     """
     boxes = []
     for s in steps:
@@ -64,12 +71,14 @@ def crop(steps: list[Step], sc: Scenery, window: tuple[int, int] | None) -> View
             p = s.points[:, :2]
             boxes.append(np.r_[p.min(axis=0), p.max(axis=0)])
     if sc.outline is not None:
-        boxes.append(np.r_[sc.outline.min(axis=0), sc.outline.max(axis=0)])
+        boxes.append(np.r_[np.nanmin(sc.outline, 0), np.nanmax(sc.outline, 0)])
     if not boxes:
         boxes.append(np.array([0.0, 0.0, 1.0, 1.0]))
     b = np.array(boxes)
     x0, y0 = b[:, 0].min(), b[:, 1].min()
     x1, y1 = b[:, 2].max(), b[:, 3].max()
+    if sc.window is not None:
+        x0, x1, y0, y1 = sc.window
     if sc.runout_reference is not None:
         x1 = max(x1, sc.runout_reference)
     span = max(x1 - x0, y1 - y0, 1e-12)
@@ -78,12 +87,13 @@ def crop(steps: list[Step], sc: Scenery, window: tuple[int, int] | None) -> View
     ylim = (y0 - 1.5 * pad if sc.floor is not None else y0 - pad, y1 + 2.5 * pad)
     if window is None:
         ratio = (ylim[1] - ylim[0]) / (xlim[1] - xlim[0])
-        share = 0.55 if sc.load_curve is not None else 0.88  # of the width
-        w = 1500.0 if sc.load_curve is not None else 1100.0
+        curve = sc.load_curve is not None or sc.factor_curve is not None
+        share = 0.55 if curve else 0.88  # of the width
+        w = 1500.0 if curve else 1100.0
         h = share * w * ratio + 230.0  # title, axis labels and colour bar
         if h > 1100.0:  # a tall body: narrower
             h = 1100.0
-            w = max(640.0 if sc.load_curve is None else 1100.0, 870.0 / ratio / share)
+            w = max(1100.0 if curve else 640.0, 870.0 / ratio / share)
         window = (16 * int(np.ceil(w / 16)), 16 * int(np.ceil(max(h, 420.0) / 16)))
     return View(xlim, ylim, (int(window[0]), int(window[1])))
 
@@ -104,8 +114,9 @@ def _scenery(ax, sc: Scenery, view: View) -> None:
     from matplotlib.patches import Rectangle
 
     (x0, x1), (y0, y1) = view.xlim, view.ylim
-    depth = 0.6 * (sc.floor - y0) if sc.floor is not None else 0.0
-    if sc.floor is not None:
+    floor = sc.floor if sc.floor is not None and sc.floor > y0 else None
+    depth = 0.6 * (floor - y0) if floor is not None else 0.0
+    if floor is not None:  # not when a window leaves it out (the cone)
         ax.add_patch(
             Rectangle(
                 (x0, sc.floor - depth),
@@ -118,8 +129,10 @@ def _scenery(ax, sc: Scenery, view: View) -> None:
         )
         ax.axhline(sc.floor, color="black", lw=1.5, zorder=2)
     width = 0.02 * (x1 - x0)
-    base = y0 if sc.floor is None else sc.floor
+    base = y0 if floor is None else floor
     for x, side, text in sc.walls:
+        if not x0 <= x <= x1:
+            continue
         ax.add_patch(
             Rectangle(
                 (x - width if side > 0 else x, base),
@@ -132,15 +145,13 @@ def _scenery(ax, sc: Scenery, view: View) -> None:
         )
     if sc.symmetry is not None:
         ax.axvline(sc.symmetry, color="black", lw=1.0, ls="-.", label=sc.symmetry_label)
-    if sc.outline is not None:
-        ax.plot(
-            *sc.outline.T,
-            color="black",
-            lw=1.2,
-            ls="--",
-            zorder=6,
-            label="initial outline",
-        )
+    lines = (
+        (sc.outline, "black", "--", "initial outline"),
+        (sc.boundaries, "#7b3294", "-.", "layer boundaries (initial)"),
+    )
+    for xy, colour, ls, text in lines:
+        if xy is not None and len(xy):
+            ax.plot(*xy.T, color=colour, lw=1.2, ls=ls, zorder=6, label=text)
     if sc.runout_reference is not None:
         ax.axvline(
             sc.runout_reference,
@@ -209,40 +220,48 @@ def load_settlement_figure(
     return fig
 
 
-def mechanism_figure(
-    x: np.ndarray,
-    triangles: np.ndarray,
-    velocity: np.ndarray,
-    dissipation: np.ndarray,
-    volumes: np.ndarray | None = None,
-    title: str = "collapse mechanism",
-    size: tuple[int, int] = (900, 420),
+def factor_curve_figure(
+    sc: Scenery, size: tuple[int, int] = (800, 600), ax=None, mark: float | None = None
 ):
-    """A limit analysis's mechanism: dissipation density and velocity arrows.
+    """The cone's factor ``N_c`` against ``w/D`` (and the depth pushed, m).
 
-    ``x`` (N, 2), ``triangles`` (3, m), ``velocity`` (N, 2) and
-    ``dissipation`` (N,) as :class:`~skfem_npfem.LimitResult` gives them; the
-    colour is the dissipation per cell volume (``volumes``, default 1), the
-    fastest arrow is a tenth of the section's width long.
+    ``mark`` is a ``w/D`` to mark on the curve.  With ``ax`` the curve is
+    drawn there (and its figure returned); otherwise in a new figure.
     """
-    fig = _new_figure(size)
-    ax = fig.add_subplot(1, 1, 1)
-    dens = dissipation / (1.0 if volumes is None else volumes)
-    pc = ax.tripcolor(
-        x[:, 0], x[:, 1], triangles.T, dens, shading="gouraud", cmap="magma_r"
-    )
-    fig.colorbar(pc, ax=ax, label="dissipation density")
-    speed = float(np.max(np.linalg.norm(velocity, axis=1), initial=0.0))
-    if speed > 0:
-        scale = speed / (0.1 * float(np.ptp(x[:, 0])))
-        ax.quiver(
-            x[:, 0], x[:, 1], velocity[:, 0], velocity[:, 1],
-            color=_REF, width=0.002, angles="xy", scale_units="xy", scale=scale,
-        )  # fmt: skip
-    ax.set_aspect("equal")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.set_title(title)
+    fig = _new_figure(size) if ax is None else ax.figure
+    ax = fig.add_subplot(1, 1, 1) if ax is None else ax
+    curve = sc.factor_curve if sc.factor_curve is not None else np.zeros((0, 2))
+    ax.plot(curve[:, 0], curve[:, 1], "-o", color="black", ms=3, lw=1.5)
+    ax.lines[-1].set_label("N-PFEM")
+    if sc.factor_reference is not None:
+        ax.axhline(
+            sc.factor_reference,
+            color=_REF,
+            ls="--",
+            lw=1.5,
+            label=f"Teh & Houlsby N_c = {sc.factor_reference:.3g}",
+        )
+    if mark is not None and curve.size:
+        ax.plot(
+            [mark],
+            [np.interp(mark, curve[:, 0], curve[:, 1])],
+            "o",
+            color=_FRONT,
+            ms=8,
+            zorder=5,
+            label="this picture",
+        )
+    ax.set_xlabel("penetration w/D")
+    ax.set_ylabel("cone factor N_c = (q_c - sigma_0) / s_u")
+    ax.set_xlim(left=0.0)
+    ax.set_ylim(bottom=0.0)
+    if sc.diameter:
+        D = sc.diameter
+        depth = ax.secondary_xaxis("top", functions=(lambda v: v * D, lambda v: v / D))
+        depth.set_xlabel("depth pushed w [m]")
+    ax.grid(True, lw=0.4, alpha=0.6)
+    ax.set_title("cone factor against penetration", fontsize=10)
+    ax.legend(loc="lower right", fontsize=9)
     return fig
 
 
@@ -284,7 +303,7 @@ class Frames2D:
         self.title, self.sc, self.view = title, sc, view
         self.size = view.size
         self.fig = _new_figure(view.size)
-        if sc.load_curve is not None:
+        if sc.load_curve is not None or sc.factor_curve is not None:
             grid = self.fig.add_gridspec(1, 2, width_ratios=[1.6, 1.0], wspace=0.25)
             self.ax = self.fig.add_subplot(grid[0])
             self.curve_ax = self.fig.add_subplot(grid[1])
@@ -392,7 +411,10 @@ class Frames2D:
             )
             ax.add_patch(poly)
             self.dynamic.append(poly)
-        if self.curve_ax is not None:
+        if self.curve_ax is not None and sc.factor_curve is not None:
+            mark = step.time / sc.unit[2] if sc.unit else None
+            factor_curve_figure(sc, ax=self.curve_ax, mark=mark)
+        elif self.curve_ax is not None:
             load_settlement_figure(sc, ax=self.curve_ax, mark=step.time)
 
     def draw(self, index: int) -> None:
@@ -406,7 +428,10 @@ class Frames2D:
             leg = self.ax.legend(loc="upper right", fontsize=8, framealpha=0.9)
             leg.set_zorder(10)
             self.dynamic.append(leg)
-        self.fig.suptitle(f"{self.title}\n{self.sc.label(step.time)}", fontsize=12)
+        note = f"   [{self.sc.window_note}]" if self.sc.window_note else ""
+        self.fig.suptitle(
+            f"{self.title}\n{self.sc.label(step.time)}{note}", fontsize=12
+        )
 
     def image(self, path: Path | None = None) -> np.ndarray:
         """Render and return the RGB image (and save it as PNG if path given)."""

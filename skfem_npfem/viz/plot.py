@@ -33,7 +33,7 @@ from .colours import (
     _extend,
     _style,
 )
-from .figures import Frames2D, crop, load_settlement_figure
+from .figures import Frames2D, crop, factor_curve_figure, load_settlement_figure
 from .loading import (
     FIELDS,
     _load_reporting,
@@ -148,11 +148,12 @@ def plot_results(
         ``H0 = aspect * half_width`` and ``g = gravity`` (9.81 m/s² if absent) from
         ``scene.json``; if the folder has no such parameters the times are
         absolute seconds and a ``UserWarning`` says so. For the strip footing
-        the times are settlements in m (its pseudo-time), whatever
-        ``normalised``. A time outside the stored steps draws the nearest
-        step, with a ``UserWarning`` in the same unit, and is labelled with
-        that step's time. None or empty: 5 times evenly spaced from the first
-        to the last step.
+        the times are settlements in m (its pseudo-time), for the cone the
+        penetration w/D (``footing-penetration``: w/B), whatever
+        ``normalised``. A time outside the
+        stored steps draws the nearest step, with a ``UserWarning`` in the
+        same unit, and is labelled with that step's time. None or empty: 5
+        times evenly spaced from the first to the last step.
     normalised : bool, default True
         Whether ``times`` are normalised (see above) or in seconds.
     field : str or sequence of str, default "stress_yy"
@@ -187,9 +188,12 @@ def plot_results(
         Files written, per field: ``<field>_t<time>.png`` per snapshot (time
         in the unit of ``times``, up to 4 significant digits: as requested, or
         the drawn step's time when the request is outside the stored steps;
-        ``<field>_s<settlement>.png`` for the strip footing, settlement in m),
-        then ``<field>.gif`` or ``<field>.mp4``; for the strip footing (2D)
-        finally ``load_settlement.png``.
+        ``<field>_s<settlement>.png`` for the strip footing, settlement in m;
+        ``<field>_wD<w/D>.png`` for the cone, ``<field>_wB<w/B>.png`` for
+        ``footing-penetration``), then ``<field>.gif`` or
+        ``<field>.mp4``; for the strip footing (2D) finally
+        ``load_settlement.png``, for the cone ``cone_factor.png`` (N_c against
+        w/D and the depth pushed), for a limit analysis ``mechanism.png``.
 
     Raises
     ------
@@ -211,8 +215,11 @@ def plot_results(
     the run-out (99 % mass front) of the step and the final run-out of Lube et al.
     (2005); for the strip footing the load-settlement curve beside the field with
     the step marked (and ``load_settlement.png`` on its own), and the settlement
-    instead of the pseudo-time in titles. The frame holds every particle of the
-    drawn steps (detached grains included) and everything the legend names. 3D
+    instead of the pseudo-time in titles; for the cone a window a few D around
+    the tip's path (said in the title) and its N_c-w/D curve beside the field;
+    for the slope the section's supports and the boundaries between its layers.
+    The frame holds every particle of the drawn steps (detached grains
+    included) and everything the legend names (the cone: its window). 3D
     results are shown in an isometric view (pyvista, surface of the tetrahedra). The
     colour range is the same in every picture of a field, over all stored steps: for
     stresses the 1-99 % range, ``min..0`` (compression only), ``0..max`` (tension
@@ -230,16 +237,15 @@ def plot_results(
     req = _check_args(animation, max_frames, window_size, clim, times)
     pvd = _find_pvd_or_mechanism(Path(result_dir))
     if pvd.name == "mechanism.npz":  # a limit analysis alone: its mechanism
-        return [
-            plot_mechanism(pvd, pvd.parent / "plots" if out_dir is None else out_dir)
-        ]
+        out = pvd.parent / "plots" if out_dir is None else out_dir
+        return [plot_mechanism(pvd, out, scenery(pvd.parent))]
     folder = pvd.parent
     entries = read_pvd(pvd)
     if not entries:
         raise CheckpointError(f"{pvd}: the collection lists no steps")
     sc = scenery(folder)
     unit = _time_unit(sc, normalised)
-    if normalised and sc.tau is None and sc.footing is None and req:
+    if normalised and sc.tau is None and sc.footing is None and sc.unit is None and req:
         warn_user(
             f"{folder}: scene.json has no 'aspect' and 'half_width' parameters, so "
             "times are taken as absolute seconds instead of t/sqrt(H0/g)",
@@ -322,14 +328,18 @@ def _find_pvd_or_mechanism(result_dir: Path) -> Path:
 
 
 def _extra_pictures(folder: Path, sc, out: Path, dim: int) -> list[Path]:
-    """The footing's load-settlement curve (2D) and a limit analysis's mechanism."""
+    """The footing's load-settlement curve, the cone's factor, the mechanism."""
     written = []
-    if dim == 2 and sc.load_curve is not None:
-        path = out / "load_settlement.png"
-        fig = load_settlement_figure(sc)
-        fig.canvas.draw()
-        save_rgb(np.asarray(fig.canvas.buffer_rgba())[..., :3], path)
-        written.append(path)
+    curves = (
+        (sc.factor_curve, "cone_factor.png", factor_curve_figure),
+        (sc.load_curve, "load_settlement.png", load_settlement_figure),
+    )
+    for curve, name, figure in curves:
+        if dim == 2 and curve is not None:
+            fig = figure(sc)
+            fig.canvas.draw()
+            save_rgb(np.asarray(fig.canvas.buffer_rgba())[..., :3], out / name)
+            written.append(out / name)
     if (folder / "mechanism.npz").is_file():
-        written.append(plot_mechanism(folder / "mechanism.npz", out))
+        written.append(plot_mechanism(folder / "mechanism.npz", out, sc))
     return written

@@ -1,8 +1,8 @@
 """Which stored steps a picture shows, and how their times are named.
 
 Requested times are in the scene's unit (normalised time of a collapse,
-settlement of the footing, seconds otherwise); a request outside the stored
-steps draws the nearest step and names it by the time it shows.
+settlement of the footing, w/D of the cone, seconds otherwise); a request
+outside the stored steps draws the nearest step and names it by the time it shows.
 """
 
 from __future__ import annotations
@@ -37,8 +37,9 @@ class _TimeUnit:
     Attributes
     ----------
     prefix : str
-        File-name prefix of the value: ``t`` (time) or ``s`` (the footing's
-        settlement, its pseudo-time).
+        File-name prefix of the value: ``t`` (time), ``s`` (the footing's
+        settlement, its pseudo-time) or the scene's own (``wD``: the cone's
+        penetration w/D).
     name : str
         Unit in messages (``t/sqrt(H0/g)``, ``s``, ``m of settlement``).
     scale : float
@@ -60,6 +61,8 @@ class _TimeUnit:
 
 def _time_unit(sc, normalised: bool) -> _TimeUnit:
     """The unit of ``times`` for a result with scenery ``sc``."""
+    if sc.unit is not None:  # the scene's own unit, whatever ``normalised``
+        return _TimeUnit(*sc.unit)
     if sc.footing is not None:  # pseudo-time is the settlement, m
         return _TimeUnit("s", "m of settlement")
     if normalised and sc.tau is not None:

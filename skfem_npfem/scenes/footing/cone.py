@@ -67,6 +67,7 @@ from .penetration_common import (
     steady_factor,
     step_dt,
 )
+from .scenery import saved_factor_curve
 
 __all__ = ["INTERFACES", "SCENE", "cone_body"]
 
@@ -408,8 +409,20 @@ def build(
     return SceneRun(sim, {"t_end": g["w"] / values["speed"]}, metrics)
 
 
+#: The cone's pictures show r <= WINDOW_R D, from WINDOW_Z D below the end of the
+#: tip's path to WINDOW_Z D above its start: the cone and its plastic zone
+#: (the whole domain, 30 D x 24 D, left them about 10 px wide).
+WINDOW_R, WINDOW_Z = 4.0, 3.0
+
+
 def cone_scenery(p: dict, folder: Path | None = None) -> Scenery:
-    """Base, rollers, the axis, the cone and its shaft where they are."""
+    """Base, rollers, the axis, the cone and its shaft, the N_c-w/D curve.
+
+    The pictures show a window a few D around the tip's path
+    (:data:`WINDOW_R`, :data:`WINDOW_Z`); steps and ``--times`` are in w/D.
+    The curve comes from ``folder``'s ``summary.json``, else from the latest
+    checkpoint there.
+    """
     s = Scenery(scene="cone-penetration")
     default = {q.name: q.default for q in PARAMS}
     names = (
@@ -443,6 +456,24 @@ def cone_scenery(p: dict, folder: Path | None = None) -> Scenery:
     s.bodies.append((outline, np.array([0.0, -speed]), "cone"))
     D = g["D"]
     s.label = lambda t: f"w/D = {speed * t / D:.3g}"
+    s.unit = ("wD", "w/D", D / speed)
+    s.window = (
+        0.0,
+        min(WINDOW_R * D, g["radius"]),
+        max(g["z_tip"] - g["w"] - WINDOW_Z * D, 0.0),
+        min(g["z_tip"] + WINDOW_Z * D, g["top"]),
+    )
+    s.window_note = (
+        f"window: r \u2264 {WINDOW_R:g} D, {WINDOW_Z:g} D around the tip's path"
+    )
+    s.diameter = D
+    su = number(p, "su", default["su"])
+    s0 = number(p, "sigma0", default["sigma0"])
+    ir = number(p, "rigidity_index", default["rigidity_index"])
+    if ir is not None:
+        s.factor_reference = teh_houlsby_nc(ir)
+    if folder is not None and su and s0 is not None:
+        s.factor_curve = saved_factor_curve(Path(folder), D, su, s0)
     return s
 
 

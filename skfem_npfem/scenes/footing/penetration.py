@@ -352,6 +352,7 @@ def penetration_scenery(p: dict, folder: Path | None = None) -> Scenery:
         )
     )
     s.label = lambda t: f"w/B = {speed * t / B:.3g}"
+    s.unit = ("wB", "w/B", B / speed)
     su = number(p, "su")
     if su:
         s.q_reference = prandtl_nc(0.0) * su

@@ -6,6 +6,7 @@ The fixed base, the rollers, the symmetry axis, the footing and the load curve.
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +20,7 @@ from .mesh import (
     resolve_defaults,
 )
 
-__all__ = ["footing_scenery", "saved_load_curve"]
+__all__ = ["footing_scenery", "saved_factor_curve", "saved_load_curve"]
 
 
 def footing_scenery(p: dict, folder: Path | None = None) -> Scenery:
@@ -56,9 +57,44 @@ def footing_scenery(p: dict, folder: Path | None = None) -> Scenery:
 
 def saved_load_curve(folder: Path) -> np.ndarray | None:
     """``[settlement, pressure]`` rows of a result folder (summary, else checkpoint)."""
+    records = _saved(folder, "load_curve")
+    if not isinstance(records, list):
+        return records
+    rows = []
+    for r in records:
+        extra = r.get("extra", r) if isinstance(r, dict) else {}
+        if "settlement" in extra and "pressure" in extra:
+            rows.append([extra["settlement"], extra["pressure"]])
+    return np.array(rows, dtype=float).reshape(-1, 2) if rows else None
+
+
+def saved_factor_curve(
+    folder: Path, D: float, su: float, s0: float
+) -> np.ndarray | None:
+    """The cone's ``[w/D, N_c]`` rows of a result folder (summary, else checkpoint).
+
+    From a checkpoint's step records as the scene's ``curve`` metric is:
+    ``w/D = -cone_y / D``, ``N_c = (F / (pi D^2 / 4) - sigma_0) / s_u``.
+    """
+    records = _saved(folder, "curve")
+    if not isinstance(records, list):
+        return records
+    area = math.pi * D**2 / 4
+    rows = []
+    for r in records:
+        extra = r.get("extra", r) if isinstance(r, dict) else {}
+        if "cone_force_y" in extra and "cone_y" in extra:
+            rows.append(
+                [-extra["cone_y"] / D, (extra["cone_force_y"] / area - s0) / su]
+            )
+    return np.array(rows, dtype=float).reshape(-1, 2) if rows else None
+
+
+def _saved(folder: Path, key: str) -> np.ndarray | list | None:
+    """The summary's ``metrics[key]`` rows, else the latest checkpoint's records."""
     try:
         data = json.loads((folder / "summary.json").read_text())
-        return np.array(data["metrics"]["load_curve"], dtype=float).reshape(-1, 2)
+        return np.array(data["metrics"][key], dtype=float).reshape(-1, 2)
     except (OSError, ValueError, KeyError, TypeError):
         pass
     path = latest_checkpoint(folder)
@@ -66,12 +102,6 @@ def saved_load_curve(folder: Path) -> np.ndarray | None:
         return None
     try:
         _, meta = load_checkpoint(path)
-        records = list(meta.get("records", []))
+        return list(meta.get("records", []))
     except CheckpointError:
         return None
-    rows = []
-    for r in records:
-        extra = r.get("extra", {}) if isinstance(r, dict) else {}
-        if "settlement" in extra and "pressure" in extra:
-            rows.append([extra["settlement"], extra["pressure"]])
-    return np.array(rows, dtype=float).reshape(-1, 2) if rows else None

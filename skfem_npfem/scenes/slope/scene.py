@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 
 from ...constants import GRAVITY
-from ...errors import ParameterError
+from ...errors import NpfemError, ParameterError
 from ...mesh.regions import CrossSection, fill_regions
 from ...mesh.smoothing import nodal_integration
 from ...mesh.sources import AlphaShapeMesher, FixedMesh
@@ -57,7 +57,7 @@ from ..common import (
 )
 from ..limit_mode import LIMIT_METRICS, analysis_param
 from ..params import ANGLE, POSITIVE, Param, Values
-from ..scenery import Scenery, number
+from ..scenery import Scenery, number, section_lines
 from .runout import (
     runout_metrics,
 )
@@ -459,11 +459,32 @@ def _toe_and_crest(sec: CrossSection, values: Mapping[str, Any]):
 
 
 def slope_scenery(p: dict, folder: Path | None = None) -> Scenery:
-    """The slope's scenery: the fixed base."""
+    """The slope's scenery: base, side rollers, outline and layer boundaries.
+
+    The section is the run's (its ``geometry`` file, else the parametric
+    slope); a file that cannot be read any more leaves the fixed base alone.
+    """
     s = Scenery(scene="slope")
     if number(p, "height") is None:
         return s
     s.floor, s.floor_label = 0.0, "fixed base"
+    values = {q.name: q.default for q in PARAMS} | dict(p)
+    try:
+        sec, _ = section_of(values)
+    except (NpfemError, OSError, ValueError, KeyError, TypeError):
+        return s
+    polygons = [r.polygon for r in sec.regions]
+    pts = np.concatenate(polygons)
+    s.outline, between = section_lines(polygons)
+    s.boundaries = between if len(between) else None
+    s.floor = float(pts[:, 1].min())
+    if sec.supports.get("base") != "fixed":
+        s.floor_label = f"base ({sec.supports.get('base')})"
+    if sec.supports.get("sides") == "rollers":
+        s.walls += [
+            (float(pts[:, 0].min()), 1, "side rollers"),
+            (float(pts[:, 0].max()), -1, ""),
+        ]
     return s
 
 
