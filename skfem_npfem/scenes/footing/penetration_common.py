@@ -22,6 +22,7 @@ __all__ = [
     "ADHESION",
     "Steady",
     "axis_count",
+    "count_drops",
     "derive_cone",
     "derive_footing",
     "graded_axis",
@@ -283,6 +284,20 @@ def steady_factor(curve: list[list[float]], window: float) -> Steady | None:
     qs = np.interp(ws, c[:, 0], c[:, 1])
     mean = float(np.sum(0.5 * (qs[1:] + qs[:-1]) * np.diff(ws)) / (hi - lo))
     steps = c[(c[:, 0] > lo) & (c[:, 0] <= hi), 1]
-    median = float(np.median(steps))
-    drops = int(np.sum(steps < 0.8 * median))
+    median, drops = count_drops(steps)
     return Steady(median, mean, [float(qs.min()), float(qs.max())], drops)
+
+
+def count_drops(loads: np.ndarray) -> tuple[float, int]:
+    """The median of ``loads`` and how many are under 0.8 times it.
+
+    A load drop: a step where the soil round the body gives way (the cone's
+    and the footing's definition).
+
+    Examples
+    --------
+    >>> count_drops(np.array([5.0, 6.0, 3.0, 6.0]))
+    (5.5, 1)
+    """
+    median = float(np.median(loads))
+    return median, int(np.sum(loads < 0.8 * median))
