@@ -56,7 +56,6 @@ from ..scenery import Scenery, box, number
 from .penetration_common import (
     ADHESION,
     axis_count,
-    count_drops,
     derive_footing,
     graded_axis,
     interface_adhesion,
@@ -65,6 +64,7 @@ from .penetration_common import (
     locking_warnings,
     penetration_warnings,
     refuse_adhesion,
+    running_drops,
     step_dt,
 )
 
@@ -79,9 +79,6 @@ INTERFACES = ("smooth", "rough", "adhesion")
 #: at 1000); from 300 on that is at most half of w/B = 0.1, so the window
 #: lies on the plastic branch the reference describes.
 RIGID_ENOUGH = 300.0
-
-#: Where the load-drop count starts, w/B: past the elastic rise.
-DROPS_FROM = 0.1
 
 
 PARAMS = [
@@ -158,8 +155,9 @@ METRICS = {
     "below (at the default 100 the soil still settles elastically at w/B = 0.1 "
     "and reaches 2 + pi near w/B = 0.15: the reference does not apply there)",
     "final_bearing_factor": "q/s_u at the final penetration",
-    "load_drops": "steps past w/B = 0.1 whose q/s_u is under 0.8 x the median "
-    "of those steps (the cone's cone_factor_drops); 0 before w/B = 0.1",
+    "load_drops": "steps whose q/s_u is under 0.8 x the median of the steps "
+    "over the last B/2 of penetration up to it (a step where the soil under "
+    "the footing gave way; the cone's load_drops)",
     "max_body_penetration": "deepest a particle got inside the footing before "
     "being put back on its outline, m (over the run)",
     "max_heave": "largest upward displacement of the soil surface / B",
@@ -289,7 +287,7 @@ def build(
             "bearing_factor_reference": ref,
             "relative_error": factor / ref - 1.0 if compared else None,
             "final_bearing_factor": curve[-1][1] if curve else None,
-            "load_drops": load_drops(curve, DROPS_FROM),
+            "load_drops": running_drops(curve),
             "max_body_penetration": max(pen, default=0.0),
             "max_heave": heave,
             "warnings": notes,
@@ -307,21 +305,6 @@ def penetration_curve(records, B: float, su: float) -> list[list[float]]:
         for r in records
         if "footing_force_y" in r.extra
     ]
-
-
-def load_drops(curve: list[list[float]], start: float) -> int:
-    """Steps past ``start`` (w/B) under 0.8 times their median q/s_u.
-
-    The cone's definition (:func:`.count_drops`) over the steps whose
-    ``w/B`` is above ``start``.
-
-    Examples
-    --------
-    >>> load_drops([[0.05, 1.0], [0.2, 5.0], [0.3, 3.0], [0.4, 5.5]], 0.1)
-    1
-    """
-    loads = np.array([q for w, q in curve if w > start], float)
-    return count_drops(loads)[1] if loads.size else 0
 
 
 def _window(
