@@ -15,6 +15,8 @@ shaft's volume raises it.
 
 from __future__ import annotations
 
+import statistics
+
 import numpy as np
 import pytest
 
@@ -131,6 +133,13 @@ def test_cone_factor_coarse_is_near_teh_houlsby():
     m = run_scene(SCENE, over)["metrics"]
     assert m["relative_error"] == pytest.approx(0.0, abs=0.10)
     assert m["max_body_penetration"] <= 0.5 * D / 8
+    # load drops: the footing's definition (a step under 0.8 x the median of
+    # the steps over the last D/2 of push up to it), over the whole push
+    c = m["curve"]
+    by_hand = sum(
+        n < 0.8 * statistics.median(k for v, k in c if w - 0.5 <= v <= w) for w, n in c
+    )
+    assert m["load_drops"] == by_hand
 
 
 @pytest.mark.slow

@@ -64,6 +64,7 @@ from .penetration_common import (
     lattice_params,
     penetration_warnings,
     refuse_adhesion,
+    running_drops,
     steady_factor,
     step_dt,
 )
@@ -214,6 +215,9 @@ METRICS = {
     "cone_factor_mean": "mean of N_c over that window (trapezoidal)",
     "cone_factor_drops": "steps of that window whose N_c is under 0.8 x "
     "cone_factor (a step where the soil round the cone gave way)",
+    "load_drops": "steps of the whole push whose N_c is under 0.8 x the median "
+    "of the steps over the last D/2 of push up to it (the footing's "
+    "load_drops)",
     "cone_factor_reference": "Teh & Houlsby (1991): 1.25 + 1.84 ln I_r",
     "relative_error": "cone_factor / reference - 1",
     "max_body_penetration": "deepest a particle got inside the cone "
@@ -398,6 +402,7 @@ def build(
             "cone_factor_range": None if steady is None else steady.range,
             "cone_factor_mean": None if steady is None else steady.mean,
             "cone_factor_drops": None if steady is None else steady.drops,
+            "load_drops": running_drops(curve),
             "cone_factor_reference": ref,
             "relative_error": None if factor is None else factor / ref - 1.0,
             "max_body_penetration": max(pen, default=0.0),

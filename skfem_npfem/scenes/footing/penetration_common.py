@@ -20,8 +20,11 @@ from ..params import Param
 
 __all__ = [
     "ADHESION",
+    "DROP",
+    "DROP_WINDOW",
     "Steady",
     "axis_count",
+    "count_drops",
     "derive_cone",
     "derive_footing",
     "graded_axis",
@@ -33,6 +36,7 @@ __all__ = [
     "locking_warnings",
     "penetration_warnings",
     "refuse_adhesion",
+    "running_drops",
     "steady_factor",
 ]
 
@@ -46,6 +50,14 @@ ADHESION = Param(
     lo=0.0,
     hi=1.0,
 )
+
+
+#: A load drop: a step whose load is under this fraction of the median load
+#: of the steps around it (the footing's and the cone's definition).
+DROP = 0.8
+
+#: The window of :func:`running_drops`, in body widths (B or D) of push.
+DROP_WINDOW = 0.5
 
 
 def graded_axis(fine: float, h: float, length: float, ratio: float) -> np.ndarray:
@@ -283,6 +295,41 @@ def steady_factor(curve: list[list[float]], window: float) -> Steady | None:
     qs = np.interp(ws, c[:, 0], c[:, 1])
     mean = float(np.sum(0.5 * (qs[1:] + qs[:-1]) * np.diff(ws)) / (hi - lo))
     steps = c[(c[:, 0] > lo) & (c[:, 0] <= hi), 1]
-    median = float(np.median(steps))
-    drops = int(np.sum(steps < 0.8 * median))
+    median, drops = count_drops(steps)
     return Steady(median, mean, [float(qs.min()), float(qs.max())], drops)
+
+
+def count_drops(loads: np.ndarray) -> tuple[float, int]:
+    """The median of ``loads`` and how many are under 0.8 times it.
+
+    A load drop: a step where the soil round the body gives way (the cone's
+    and the footing's definition).
+
+    Examples
+    --------
+    >>> count_drops(np.array([5.0, 6.0, 3.0, 6.0]))
+    (5.5, 1)
+    """
+    median = float(np.median(loads))
+    return median, int(np.sum(loads < DROP * median))
+
+
+def running_drops(curve: list[list[float]], window: float = DROP_WINDOW) -> int:
+    """Load drops along a whole ``[push, load]`` curve.
+
+    A step is a drop when its load is under :data:`DROP` times the median of
+    the steps over the last ``window`` of push up to it (itself included), so
+    a rising curve (the elastic start) has none and a single step where the
+    soil round the body gives way is one.
+
+    Examples
+    --------
+    >>> running_drops([[0.1, 1.0], [0.2, 4.0], [0.3, 4.0], [0.4, 2.0], [0.5, 4.0]])
+    1
+    """
+    if not curve:
+        return 0
+    c = np.asarray(curve, float)
+    first = np.searchsorted(c[:, 0], c[:, 0] - window * (1 + 1e-9))
+    medians = np.array([np.median(c[a : i + 1, 1]) for i, a in enumerate(first)])
+    return int(np.sum(c[:, 1] < DROP * medians))
