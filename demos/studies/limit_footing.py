@@ -110,8 +110,8 @@ fixed base cuts it off carries more than the exact N_c, with status `Solved`:
 | 70 | 91 b | 2.57e6 (x39, `AlmostSolved`) | |
 | 80 | 9.0e3 b | 2.95e7 (-98 %, `AlmostSolved`) | |
 
-So `strip-footing --set analysis=limit` refuses a block (`domain`) shallower
-than 1.2 times the mechanism's depth and names the `domain` that holds it
+So `strip-footing --set analysis=limit` refuses a block (`domain_width`) shallower
+than 1.2 times the mechanism's depth and names the `domain_width` that holds it
 (`scenes/limit_mode.py`, `MECHANISM_MARGIN`); the default 10 b holds it up to
 about 50 degrees, and the largest block it allows (50 b) up to about 66.
 """

@@ -87,7 +87,7 @@ def check_limit_method(values: Mapping[str, Any]) -> None:
     """Refuse what ``analysis=limit`` cannot do, before anything is built.
 
     A baseline method (limit analysis is one N-PFEM cone program), and a
-    footing's soil block (``domain``, in half-widths) shallower than
+    footing's soil block (``domain_width`` half-widths ``b`` deep) shallower than
     :data:`MECHANISM_MARGIN` times the depth of Prandtl's mechanism at the
     friction angle (:func:`~skfem_npfem.laws.prandtl_depth`).
     """
@@ -98,19 +98,19 @@ def check_limit_method(values: Mapping[str, Any]) -> None:
         raise ParameterError(
             "method", method, "npfem with analysis=limit (one N-PFEM cone program)"
         )
-    domain, phi = values.get("domain"), values.get("phi")
+    domain, phi = values.get("domain_width"), values.get("phi")
     if domain is None or phi is None or values.get("material") == "tresca":
         return
     need = MECHANISM_MARGIN * prandtl_depth(phi)
     if domain < need:
         raise ParameterError(
-            "domain",
+            "domain_width",
             domain,
             f"at least {need:.3g} half-widths with phi = {phi:g}: the collapse "
             f"mechanism reaches {prandtl_depth(phi):.3g} b deep, and a block whose "
             "fixed base cuts it off gives a collapse load too high with no failed "
             "status (N_c +8.3 % at 55 degrees, +68 % at 60 in a 10 b block); "
-            f"set domain={math.ceil(need)} where the scene allows it (the mesh "
+            f"set domain_width={math.ceil(need)} where the scene allows it (the mesh "
             f"grows with it), or phi <= {_steepest(domain):.1f} for this block",
         )
 

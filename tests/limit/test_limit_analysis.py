@@ -286,7 +286,7 @@ def test_strip_footing_refuses_a_block_the_mechanism_does_not_fit(phi):
          "--set", "material=mohr-coulomb", "--set", f"phi={phi:g}"]
     )  # fmt: skip
     need = MECHANISM_MARGIN * prandtl_depth(phi)
-    check_cli_error(code, err, "domain=10.0", f"at least {need:.3g} half-widths")
+    check_cli_error(code, err, "domain_width=10.0", f"at least {need:.3g} half-widths")
 
 
 def test_the_refusal_names_a_block_and_a_phi_that_hold_the_mechanism():
@@ -295,7 +295,9 @@ def test_the_refusal_names_a_block_and_a_phi_that_hold_the_mechanism():
         ["run", "strip-footing", "--set", "analysis=limit",
          "--set", "material=mohr-coulomb", "--set", "phi=55"]
     )  # fmt: skip
-    line = check_cli_error(code, err, "set domain=14", "phi <= 50.5 for this block")
+    line = check_cli_error(
+        code, err, "set domain_width=14", "phi <= 50.5 for this block"
+    )
     assert (
         MECHANISM_MARGIN * prandtl_depth(50.5)
         <= 10
@@ -304,17 +306,21 @@ def test_the_refusal_names_a_block_and_a_phi_that_hold_the_mechanism():
     res = npfem.run_scene(
         "strip-footing",
         {"analysis": "limit", "material": "mohr-coulomb", "phi": 55.0,
-         "domain": 14.0, "spacing": 0.125},
+         "domain_width": 14.0, "spacing": 0.125},
     )  # fmt: skip
     assert res["metrics"]["limit_status"] == "Solved"
     assert abs(res["metrics"]["bearing_factor"] / prandtl_nc(55.0) - 1) < COARSE_TOL
 
 
-def test_tresca_ignores_phi_and_is_not_refused():
-    values = npfem.get_scene("strip-footing").resolve(
-        {"analysis": "limit", "material": "tresca", "phi": 60.0}
-    )
-    check_limit_method(values)
+def test_the_block_check_leaves_tresca_alone():
+    """Tresca has no friction angle: a 2 b block is not refused for Tresca,
+    though it is for Mohr-Coulomb at phi = 20 (needs 1.2 x 2.32 b)."""
+    scene = npfem.get_scene("strip-footing")
+    shallow = {"analysis": "limit", "domain_width": 2.0}
+    check_limit_method(scene.resolve({**shallow, "material": "tresca"}))
+    frictional = {**shallow, "material": "mohr-coulomb", "phi": 20.0}
+    with pytest.raises(npfem.ParameterError, match="domain_width"):
+        check_limit_method(scene.resolve(frictional))
 
 
 @pytest.mark.parametrize("status", STATUSES)

@@ -388,7 +388,7 @@ def test_theta2_note_is_one_warning_line():
 
 def test_tresca_cohesion_range_is_stated_and_c_zero_runs_with_friction():
     param = {p.name: p for p in npfem.get_scene("strip-footing").params}["c"]
-    assert "tresca: > 0" in param.help
+    assert "tresca: the undrained strength s_u, > 0" in param.help
     m = run_scene(
         "strip-footing",
         {

@@ -118,10 +118,13 @@ def test_friction_angle_orders_the_runout():
 
 
 def test_initial_stress_outside_the_cone_is_refused():
-    # K0 = 0.5 with phi = 10 deg puts the geostatic stress outside the yield
-    # cone: a ParameterError naming K0 and the admissible interval.
+    # K0 = 0.5 given with phi = 10 deg puts the geostatic stress outside the
+    # yield cone: a ParameterError naming K0 and the admissible interval.
     with pytest.raises(npfem.ParameterError, match="K0"):
-        collapse(1, phi=10.0)
+        collapse(1, phi=10.0, K0=0.5)
+    # Left to its default, K0 is 1 - sin(phi) = 0.826, inside the cone.
+    sim, _, _ = collapse(1, phi=10.0)
+    assert sim.step == 1
 
 
 def test_cohesive_column_stands():
