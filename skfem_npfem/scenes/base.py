@@ -227,8 +227,7 @@ class Scene:
         sim = srun.simulation
         result = {
             "scene": self.name,
-            "parameters": dict(values)
-            | {k: v for k, v in srun.derived.items() if values.get(k) is None},
+            "parameters": _used(values, srun),
             "metrics": srun.metrics(sim),
             "solver": sim.summary(),
             "wall_time_total": time.perf_counter() - start,
@@ -353,3 +352,22 @@ def _attach_checkpoints(sim: Any, out: str | Path | None, values: Values) -> Non
         sim.checkpoint_every = int(
             values.get("checkpoint_every") or DEFAULT_CHECKPOINT_EVERY
         )
+
+
+#: Parameters a scene may leave to the model it builds: the values of the run.
+_FROM_MODEL = ("stabilisation", "stabilisation_mode", "volume_correction")
+
+
+def _used(values: Values, srun: SceneRun) -> dict[str, Any]:
+    """The run's parameters with every derived default at the value it used.
+
+    ``values`` as resolved, then what the build derived (:attr:`SceneRun.derived`)
+    and the fidelity options the model was built with, for those left at None.
+    """
+    model = srun.simulation.model
+    built = {k: getattr(model, k) for k in _FROM_MODEL if k in values}
+    used = dict(values)
+    for key, value in (srun.derived | built).items():
+        if used.get(key) is None:
+            used[key] = value
+    return used

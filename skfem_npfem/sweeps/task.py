@@ -90,10 +90,15 @@ def has_checkpoint(folder: Path) -> bool:
 
 
 def same_parameters(saved: dict[str, Any], values: dict[str, Any]) -> bool:
-    """Whether a stored summary ran with ``values`` (solver threads may differ)."""
+    """Whether a stored summary ran with ``values`` (solver threads may differ).
+
+    A value left at None (a derived default) matches the value the stored run
+    derived for it: the summary records derived defaults at the values used,
+    which follow from the other parameters.
+    """
     now = json.loads(json.dumps(values, default=str))
     keys = (set(saved) | set(now)) - {"threads"}
-    return all(saved.get(k) == now.get(k) for k in keys)
+    return all(now.get(k) is None or saved.get(k) == now.get(k) for k in keys)
 
 
 def run_one(

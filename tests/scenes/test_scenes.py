@@ -266,10 +266,30 @@ def test_resolved_values_are_read_only_with_derived_defaults_filled():
             values["spacing"] = 1.0  # type: ignore[index]
         with pytest.raises(AttributeError):
             values.spacing = 1.0  # type: ignore[misc]
-    # The summary's parameters are the resolved values, as a plain dict.
+    # The summary's parameters are the resolved values, as a plain dict, with
+    # the defaults the build derived at the values it used (the slope's
+    # stabilisation and volume correction: off, its documented defaults).
     given = {"analysis": "limit", "spacing": 2.0}
-    summary = run_scene("slope", given)
-    assert summary["parameters"] == dict(get_scene("slope").resolve(given))
+    params = run_scene("slope", given)["parameters"]
+    resolved = dict(get_scene("slope").resolve(given))
+    assert params.keys() == resolved.keys()
+    assert all(params[k] == v for k, v in resolved.items() if v is not None)
+    assert params["stabilisation"] == 0.0 and params["volume_correction"] == 0.0
+
+
+def test_a_collapse_summary_records_the_spacing_and_fidelity_it_used():
+    # Left to their defaults: L0/22 (docs/scenes.md), and N-PFEM's default
+    # stabilisation and volume correction of the plane-strain collapse.
+    scene = get_scene("column-collapse")
+    params = run_scene("column-collapse", {"t_end": 0.005})["parameters"]
+    assert params["spacing"] == pytest.approx(0.2 / 22, rel=1e-15)
+    defaults = scene.resolve({"t_end": 0.005})
+    assert defaults["spacing"] is None and defaults["stabilisation"] is None
+    assert params["stabilisation"] > 0 and params["volume_correction"] > 0
+    fem = run_scene(
+        "column-collapse", {"t_end": 0.005, "spacing": 0.05, "method": "fem-remap"}
+    )["parameters"]
+    assert fem["stabilisation"] == 0.0 and fem["volume_correction"] == 0.0
 
 
 # ------------------------------------------------- the step-count message ----

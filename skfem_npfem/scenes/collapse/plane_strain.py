@@ -316,7 +316,8 @@ def build(
     sim = collapse_simulation(particles, model, mesher, values, out, progress, resume)
     sim.callbacks.append(_front_recorder(h, symmetric))
     run_kwargs, stop = run_control(values, H0)
-    return with_method(values, SceneRun(sim, run_kwargs, _metrics(values, h, stop)))
+    srun = SceneRun(sim, run_kwargs, _metrics(values, h, stop), derived={"spacing": h})
+    return with_method(values, srun)
 
 
 def collapse_simulation(
