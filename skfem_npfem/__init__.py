@@ -81,6 +81,7 @@ from .step.records import Step, StepRecord, StepState, skfem_fields
 from .step.solver import SolverOptions
 from .step.stages import advance
 from .sweeps import sweep
+from .water import Water, WaterTable
 
 #: Run a scene.
 __all__ = ["SCENES", "AtRest", "Simulation", "__version__", "get_scene", "run_scene"]
@@ -122,6 +123,8 @@ __all__ += [
     "surface_load",
     "wall_x",
 ]
+#: Water: pore pressure and effective stress.
+__all__ += ["Water", "WaterTable"]
 #: One step.
 __all__ += [
     "ConeInput",

@@ -8,7 +8,7 @@ function takes particles and returns *new* particles.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 from skfem import Mesh
@@ -51,6 +51,15 @@ class Particles:
     wall_force : ndarray (N, n_walls)
         Normal force of each wall on the particle from the previous step (N), the
         lagged bound of Coulomb friction.
+    pore_pressure : ndarray (N,) or None
+        Pore pressure after the last step, Pa (compression positive): the
+        static field plus the excess.  None for a dry soil; with water
+        (:class:`~skfem_npfem.water.Water`) ``stress`` is the *effective*
+        stress and the total stress is ``stress - pore_pressure`` on the
+        normal components.
+    excess_pore_pressure : ndarray (N,) or None
+        The part of ``pore_pressure`` above the static field, Pa: the state an
+        undrained step carries to the next (zero when drained).
     """
 
     x: np.ndarray
@@ -64,6 +73,8 @@ class Particles:
     fixed: np.ndarray
     v_prescribed: np.ndarray
     wall_force: np.ndarray
+    pore_pressure: np.ndarray | None = field(default=None, kw_only=True)
+    excess_pore_pressure: np.ndarray | None = field(default=None, kw_only=True)
 
     @classmethod
     def create(
@@ -298,6 +309,13 @@ class Particles:
         if self.wall_force.ndim != 2 or self.wall_force.shape[0] != n:
             raise ParameterError("wall_force", self.wall_force.shape, "(N, n_walls)")
         _check_finite("wall_force", self.wall_force)
+        for name in ("pore_pressure", "excess_pore_pressure"):
+            arr = getattr(self, name)
+            if arr is None:
+                continue
+            if arr.shape != (n,):
+                raise ParameterError(name, arr.shape, f"expected shape ({n},) or None")
+            _check_finite(name, arr)
         if np.any(self.mass <= 0):
             i = int(np.argmin(self.mass))
             raise ParameterError(
@@ -313,18 +331,29 @@ class Particles:
             )
 
     def arrays(self) -> dict[str, np.ndarray]:
-        """All fields as a dict of arrays (used by checkpoints)."""
-        return {f.name: getattr(self, f.name) for f in fields(self)}
+        """All fields as a dict of arrays (used by checkpoints; None left out)."""
+        out = {f.name: getattr(self, f.name) for f in fields(self)}
+        return {k: v for k, v in out.items() if v is not None}
 
     @classmethod
     def from_arrays(cls, arrays: dict[str, np.ndarray]) -> Particles:
         """Inverse of :meth:`arrays`; validates the result."""
         try:
-            p = cls(**{f.name: np.asarray(arrays[f.name]) for f in fields(cls)})
+            p = cls(
+                **{
+                    f.name: np.asarray(arrays[f.name])
+                    for f in fields(cls)
+                    if f.name not in _OPTIONAL or f.name in arrays
+                }
+            )
         except KeyError as err:
             raise ParameterError("arrays", sorted(arrays), f"missing {err}") from None
         p.validate()
         return p
+
+
+#: Fields that may be None (left out of :meth:`Particles.arrays`).
+_OPTIONAL = ("pore_pressure", "excess_pore_pressure")
 
 
 def _describe(value: object) -> object:

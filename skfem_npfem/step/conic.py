@@ -95,6 +95,10 @@ class ConeSolution:
         Seconds spent in ``assembly``, ``setup`` and ``solve``.
     sizes : dict
         Variables, rows and nonzeros of the program, and the linear solver.
+    pore_pressure : ndarray (n_p,) or None
+        Excess pore pressure at the end of the step, Pa (compression
+        positive; None in a dry step).  With water, ``sigma`` is the
+        effective stress.
     """
 
     du: np.ndarray
@@ -107,6 +111,7 @@ class ConeSolution:
     iterations: int
     timings: dict = field(default_factory=dict)
     sizes: dict = field(default_factory=dict)
+    pore_pressure: np.ndarray | None = None
 
 
 def solve_step(
@@ -280,8 +285,15 @@ def recover(
         sigma[:, 2] = data.sigma_n[:, 2] + nu * (dsig[:, 0] + dsig[:, 1])
     # Reactions on prescribed dofs: R = G s + r - f~.
     reaction = np.zeros(d * N)
+    pore = None
+    if data.pore is not None:
+        pore = np.asarray(data.pore.excess, float).copy()
+        if prog.size("pore"):
+            pore = pore + x[prog.slice("pore")]
     if prog.pres.size:
         gs = op.G[prog.pres] @ sig_sel.reshape(-1)
+        if pore is not None and np.any(pore):
+            gs = gs - prog.Q[prog.pres] @ pore
         r_p = 0.0
         if data.dynamic:
             r_p = prog.mt[prog.pres] * prog.ubar / data.dt**2
@@ -297,6 +309,7 @@ def recover(
         lambda_t=lam_t,
         status=status,
         iterations=iterations,
+        pore_pressure=pore,
     )
 
 

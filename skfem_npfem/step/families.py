@@ -10,12 +10,16 @@ Objective terms (docs/theory.md, "The mixed step"; in the stress increments ``ds
 * :func:`~skfem_npfem.step.stabilisation.residual_penalty` the element-residual
   stabilisation of the stresses (when ``stabilisation > 0``);
 * :func:`~skfem_npfem.step.volume.eigenstrain_work` ``sum_p V_p e_p . ds_p``, a
-  prescribed eigenstrain (the volume correction, when ``volume_correction > 0``).
+  prescribed eigenstrain (the volume correction, when ``volume_correction > 0``);
+* :func:`pore_projection` ``1/2 dp_w^T (tau/2G) L dp_w``, the pressure-projection
+  stabilisation of the excess pore pressure (undrained water), and its
+  prescribed work ``+dp_w^T Q_P^T ubar``.
 
 Row families, each a finished :class:`~skfem_npfem.step.program.Block`:
 
-* :func:`equilibrium` ``(G ds + r - N lambda_n - T lambda_t)_F = f~_F - (G s_n)_F``
-  (zero cone; its duals are ``-du_F``);
+* :func:`equilibrium` ``(G ds + r - N lambda_n - T lambda_t - Q dp_w)_F = f~_F -
+  (G s_n - Q p_w,n)_F`` (zero cone; its duals are ``-du_F``; the ``Q`` terms only
+  with water, ``dp_w`` only undrained);
 * :func:`contact` ``lambda_n >= 0``;
 * :func:`friction` ``|lambda_t| <= mu lambda_bar_n`` (two rows in 2D, an SOC(3)
   in 3D);
@@ -49,6 +53,7 @@ __all__ = [
     "equilibrium",
     "friction",
     "inertia",
+    "pore_projection",
     "prescribed_work",
     "yield_cones",
 ]
@@ -90,6 +95,30 @@ def prescribed_work(prog: Program) -> Term:
     q = np.zeros(prog.nx)
     q[prog.slice("sigma")] -= prog.data.operator.G[prog.pres].T @ prog.ubar
     return Term(q=q)
+
+
+def pore_projection(prog: Program) -> Term:
+    """Undrained water: the pressure projection on ``dp_w`` and its prescribed work.
+
+    ``1/2 dp_w^T (tau/2G) L dp_w`` (:func:`~skfem_npfem.water.projection_matrix`)
+    and ``+dp_w^T Q_P^T ubar``: the excess pore pressure's share of the work of
+    prescribed displacements (its columns in equilibrium are ``-Q``).
+    """
+    n = prog.size("pore")
+    if not n:
+        return Term()
+    off = prog.slice("pore").start
+    P = None
+    proj = prog.data.pore.projection
+    if proj is not None:
+        L = proj.tocoo()
+        n = prog.nx
+        P = sp.coo_matrix((L.data, (L.row + off, L.col + off)), shape=(n, n))
+    q = None
+    if prog.pres.size:
+        q = np.zeros(prog.nx)
+        q[prog.slice("pore")] = prog.Q[prog.pres].T @ prog.ubar
+    return Term(P=P, q=q)
 
 
 def contact_gap(prog: Program) -> Term:
@@ -153,7 +182,11 @@ def equilibrium(prog: Program) -> Block:
     blocks += [-Nmat[free], -Tmat[free]]
     if prog.size("mean_stress"):  # not in the equilibrium rows
         blocks.append(sp.csc_matrix((free.size, prog.size("mean_stress"))))
+    if prog.size("pore"):  # total stress: sigma' - p m
+        blocks.append(-prog.Q[free])
     rhs = prog.ftilde[free] - G[free] @ prog.sig_n.reshape(-1)
+    if prog.Q is not None and np.any(prog.data.pore.excess):
+        rhs = rhs + prog.Q[free] @ np.asarray(prog.data.pore.excess, float)
     A = sp.hstack(blocks, format="csc")
     return Block(A, rhs, [clarabel.ZeroConeT(rhs.size)], "force")
 
@@ -265,6 +298,7 @@ OBJECTIVE_TERMS = (
     contact_slip,
     residual_penalty,
     eigenstrain_work,
+    pore_projection,
 )
 #: Row families, stacked in this order within each cone kind.
 ROW_FAMILIES = (equilibrium, contact, friction, cutoff, yield_cones, mean_stress_link)

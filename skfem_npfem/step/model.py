@@ -19,6 +19,7 @@ from ..boundary import (
 from ..constants import GRAVITY
 from ..errors import ParameterError
 from ..materials import Material
+from ..water.model import Water
 from .solver import SolverOptions
 from .stabilisation import STABILISATION_MODES
 
@@ -111,6 +112,12 @@ class Model:
         (:func:`~skfem_npfem.loads.surface_load`).  Full-ring
         forces (``2 pi r`` times the load per unit length) in axisymmetry.
         N-PFEM only; None (default) applies none.
+    water : Water or None
+        The pore water (:mod:`skfem_npfem.water`): its drainage mode, water
+        table and density.  With it the particles' stresses are effective
+        stresses, the cones act on them and equilibrium is written in the
+        total stress; the materials' ``rho`` is the saturated density.  None
+        (default): a dry soil.  N-PFEM only.
     """
 
     dim: int
@@ -131,6 +138,7 @@ class Model:
     volume_correction: float = 0.0
     stabilisation_mode: str = "full"
     loads: np.ndarray | None = None
+    water: Water | None = None
 
     def __post_init__(self) -> None:
         if self.dim not in (2, 3):
@@ -196,6 +204,12 @@ class Model:
             self._check_axisymmetric()
         if self.loads is not None:
             self._check_loads()
+        if self.water is not None and not isinstance(self.water, Water):
+            raise ParameterError(
+                "water",
+                self.water,
+                "a Water(drainage, table) or None (a dry soil)",
+            )
 
     def _check_loads(self) -> None:
         """Dead loads: a finite array with one column per dimension."""
@@ -216,7 +230,16 @@ class Model:
         self.loads = f
 
     def refuse_loads(self, method: str) -> None:
-        """Raise :class:`ParameterError` if a method without dead loads got some."""
+        """Raise :class:`ParameterError` if a method without dead loads got some.
+
+        Pore water is N-PFEM's only too: a model with water is refused the same way.
+        """
+        if self.water is not None:
+            raise ParameterError(
+                "water",
+                f"{self.water.drainage} water",
+                f"None with {method} (pore water is modelled by N-PFEM only)",
+            )
         if self.loads is not None:
             raise ParameterError(
                 "loads",

@@ -21,6 +21,7 @@ from ..mesh.operators import strain_operator
 from ..mesh.smoothing import NodalIntegration
 from ..mesh.sources import MeshSource
 from ..particles import Particles
+from ..water.forces import projection_matrix, water_force
 from .boundary_jobs import (
     particle_nodes,
     step_contacts,
@@ -28,11 +29,11 @@ from .boundary_jobs import (
     without_spanned,
 )
 from .model import Model
-from .program import ConeInput
+from .program import ConeInput, PoreInput
 from .records import StepState
 from .volume import volume_eigenstrain, volume_strains
 
-__all__ = ["StepOperators", "build_operators"]
+__all__ = ["StepOperators", "build_operators", "pore_input"]
 
 
 @dataclass
@@ -113,6 +114,10 @@ def build_operators(
     contacts, wall_ids = step_contacts(boundaries, nodes, dt, h, time)
     mass = model.node_masses(p.mass[active], p.material[active], op.volumes)
     force = model.external_force(p.x.shape[0], active, mass)
+    pore = None
+    if model.water is not None:
+        pore, water = pore_input(model, p, active, op)
+        force = force + water
     strains = volume_strains(
         model.volume_correction,
         p.mass[active],
@@ -147,8 +152,36 @@ def build_operators(
         stabilisation_mode=model.stabilisation_mode,
         a_n=p.a[active],
         eigenstrain=eigenstrain,
+        pore=pore,
     )
     columns = nodes.lagged.shape[1]
     return StepOperators(
         active, local_t, op, wall_ids, data, strains, time, dropped, columns
     )
+
+
+def pore_input(
+    model: Model, p: Particles, active: np.ndarray, op: NodalIntegration
+) -> tuple[PoreInput, np.ndarray]:
+    """The pore water of a step and the force of its static pore pressure.
+
+    The static field (the water table's hydrostatic pressure at the nodes)
+    loads the skeleton through :func:`~skfem_npfem.water.water_force`; the
+    excess pore pressure the particles carry enters the program as
+    :class:`~skfem_npfem.step.program.PoreInput`, with its increments as
+    variables in an undrained step.
+    """
+    water = model.water
+    x = p.x[active]
+    static = water.static_pressure(x, model.gravity)
+    force = water_force(op, x, static)
+    excess = np.zeros(active.size)
+    if p.excess_pore_pressure is not None:
+        excess = np.asarray(p.excess_pore_pressure, float)[active]
+    projection = None
+    if water.undrained and water.projection > 0:
+        shear = np.array([m.E / (2.0 * (1.0 + m.nu)) for m in model.materials])
+        compliance = 1.0 / (2.0 * shear[p.material[active]])
+        projection = projection_matrix(op, compliance, water.projection)
+    pore = PoreInput(excess, water.undrained, projection, static)
+    return pore, force

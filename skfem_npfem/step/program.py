@@ -37,7 +37,7 @@ has its own ``n_p``.
 Variables and blocks
 --------------------
 ``x = [ds (n_p*n_s) | r (n_free, dynamic) | lambda_n (n_c) | lambda_t (n_t)
-| p (n_p, mean-stress stabilisation only)]``
+| p (n_p, mean-stress stabilisation only) | dp_w (n_p, undrained water only)]``
 (:class:`Layout`).  A row family returns a :class:`Block` ``A x + s = b, s in
 cones`` with the unit of its rows (force or stress, for scaling); an objective
 term returns a :class:`Term` ``(P, q)``.  New physics is one more function of
@@ -55,12 +55,14 @@ import scipy.sparse as sp
 
 from ..boundary import Contacts
 from ..materials import ConeRows, Material
+from ..water.forces import coupling_matrix
 
 __all__ = [
     "Assembled",
     "Block",
     "ConeInput",
     "Layout",
+    "PoreInput",
     "Program",
     "StrainOperator",
     "Term",
@@ -92,6 +94,36 @@ class StrainOperator(Protocol):
 
     def check(self) -> None:  # noqa: D102
         ...
+
+
+@dataclass
+class PoreInput:
+    """The pore water of one step (:mod:`skfem_npfem.water`).
+
+    The static pore pressure's force is already part of
+    :attr:`ConeInput.force`; what the program needs besides is the excess
+    pore pressure and, in undrained steps, its variables.
+
+    Attributes
+    ----------
+    excess : ndarray (n_p,)
+        Excess pore pressure at the start of the step, Pa (compression
+        positive); its force ``Q p_ex`` enters equilibrium.
+    undrained : bool
+        The excess pore-pressure increments are variables of the step: the
+        multipliers of the cells' volume constraint.
+    projection : scipy.sparse matrix (n_p, n_p) or None
+        Upper triangle of the pressure-projection term ``tau / (2G) L`` on the
+        increments (undrained steps; None: none).
+    static : ndarray (n_p,) or None
+        The static pore pressure of the step, Pa (reported, not used by the
+        program).
+    """
+
+    excess: np.ndarray
+    undrained: bool = False
+    projection: sp.spmatrix | None = None
+    static: np.ndarray | None = None
 
 
 @dataclass
@@ -146,6 +178,9 @@ class ConeInput:
     stabilisation_mode : {"full", "vertical", "sigma_v", "mean"}
         Which stress increments the stabilisation's residual couples
         (:data:`~skfem_npfem.step.stabilisation.STABILISATION_MODES`).
+    pore : PoreInput or None
+        The pore water (None: a dry step).  With it, ``sigma_n`` and the
+        stress variables are effective stresses.
     """
 
     operator: StrainOperator
@@ -167,6 +202,7 @@ class ConeInput:
     a_n: np.ndarray | None = None
     eigenstrain: np.ndarray | None = None
     stabilisation_mode: str = "full"
+    pore: PoreInput | None = None
 
 
 @dataclass
@@ -284,6 +320,11 @@ class Program:
         # (skfem_npfem.step.stabilisation); zero-size otherwise.
         mean = data.stabilisation and data.stabilisation_mode == "mean"
         self.layout.add("mean_stress", self.n_points if mean else 0, "stress")
+        # Undrained water: one excess pore-pressure increment per point.
+        pore = data.pore
+        self.Q = None if pore is None else coupling_matrix(op)
+        undrained = pore is not None and pore.undrained
+        self.layout.add("pore", self.n_points if undrained else 0, "stress")
         self.compliance = np.empty((self.n_points, self.ns, self.ns))
         self.yield_cones: list[tuple[np.ndarray, ConeRows]] = []
         for m_id, mat in enumerate(data.materials):

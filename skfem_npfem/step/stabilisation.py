@@ -308,7 +308,15 @@ def element_residual(prog: Program) -> tuple[sp.csr_matrix, np.ndarray, np.ndarr
         m = np.repeat(np.asarray(data.mass, float), d)
         f = f - m * np.asarray(data.a_n, float).reshape(-1)
     density = f / np.repeat(np.asarray(op.volumes, float), d)
-    c = B @ prog.sig_n.reshape(-1) + element_mean(t, d) @ density
+    sig_n = prog.sig_n
+    pore = getattr(data, "pore", None)
+    if pore is not None and np.any(pore.excess):
+        # The residual is one of total stress: sigma' - p_ex m (the static
+        # pore pressure is in the load as its water force); the excess is
+        # taken at the start of the step, like the inertia.
+        m = np.array([1.0 if c in (0, 1, 2) else 0.0 for c in prog.comp])
+        sig_n = sig_n - np.asarray(pore.excess, float)[:, None] * m[None, :]
+    c = B @ sig_n.reshape(-1) + element_mean(t, d) @ density
     shear = np.array([m.E / (2.0 * (1.0 + m.nu)) for m in data.materials])
     g_e = shear[np.asarray(data.material)][t].min(axis=0)
     h2 = (math.factorial(d) * area) ** (2.0 / d)

@@ -68,6 +68,15 @@ def update_particles(
         p, model, dt, active, sol.du, ops.data.dynamic, boundaries, ops.time + dt
     )
     new = p.replace(**motion, stress=stress, eps_p=eps_p, wall_force=wall_force)
+    pore = ops.data.pore
+    if pore is not None:
+        # Effective stress on the particles; the pore pressure beside it (a
+        # grain in free flight carries none).
+        excess = np.zeros(p.n)
+        excess[active] = sol.pore_pressure
+        total = np.zeros(p.n)
+        total[active] = pore.static + sol.pore_pressure
+        new = new.replace(pore_pressure=total, excess_pore_pressure=excess)
     return new, marks
 
 

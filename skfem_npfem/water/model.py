@@ -1,0 +1,87 @@
+"""What a model is told about the water (:class:`Water`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ParameterError
+from .table import WaterTable
+
+__all__ = ["DRAINAGE", "Water"]
+
+#: Drainage modes of a model with water (``dry`` is a model without one).
+DRAINAGE = ("drained", "undrained")
+
+
+@dataclass
+class Water:
+    """The pore water of a model.
+
+    Parameters
+    ----------
+    drainage : {"drained", "undrained"}
+        ``"drained"``: the pore pressure is the static field (the water
+        table's hydrostatic pressure) at every step, whatever the soil does.
+        ``"undrained"``: no water leaves a particle's cell within a step, so
+        the mixture keeps its volume; the excess pore pressure over the
+        static field is the multiplier of that constraint in the step's cone
+        program, and it is carried by the particles from step to step.
+    table : WaterTable, optional
+        The phreatic surface; None: no static pore pressure (an undrained
+        soil without a water table).
+    rho_w : float
+        Density of the water, kg/m^3.
+    projection : float
+        Factor ``tau >= 0`` of the pressure-projection stabilisation of the
+        excess pore pressure in undrained steps (docs/theory.md, "Water:
+        undrained steps"); 0 switches it off.
+
+    Examples
+    --------
+    >>> w = Water("drained", WaterTable(level=1.0))
+    >>> w.static_pressure(np.array([[0.0, 0.0]]), gravity=10.0)
+    array([10000.])
+    """
+
+    drainage: str = "drained"
+    table: WaterTable | None = None
+    rho_w: float = 1000.0
+    projection: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.drainage not in DRAINAGE:
+            raise ParameterError(
+                "drainage", self.drainage, f"one of {', '.join(DRAINAGE)} (or no water)"
+            )
+        if self.table is not None and not isinstance(self.table, WaterTable):
+            raise ParameterError("table", self.table, "a WaterTable or None")
+        for name, what in (
+            ("rho_w", "a density > 0 (kg/m^3)"),
+            ("projection", "a number >= 0"),
+        ):
+            v = getattr(self, name)
+            ok = isinstance(v, int | float) and not isinstance(v, bool)
+            ok = ok and math.isfinite(v) and (v > 0 if name == "rho_w" else v >= 0)
+            if not ok:
+                raise ParameterError(name, v, what)
+        if self.drainage == "drained" and self.table is None:
+            raise ParameterError(
+                "water",
+                "drained without a water table",
+                "a water table (level or line) for drained water",
+            )
+
+    @property
+    def undrained(self) -> bool:
+        """The excess pore pressure is a variable of the step."""
+        return self.drainage == "undrained"
+
+    def static_pressure(self, x: np.ndarray, gravity: float) -> np.ndarray:
+        """The static pore pressure at positions ``x`` (N, d), Pa."""
+        x = np.asarray(x, float)
+        if self.table is None:
+            return np.zeros(x.shape[0])
+        return self.table.pressure(x, self.rho_w, gravity)
