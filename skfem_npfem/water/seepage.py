@@ -270,10 +270,19 @@ def _darcy(u, v, w):
 
 
 def _stiffness(mesh: MeshTri, k_e: np.ndarray):
-    """``K_ij = integral k grad phi_i . grad phi_j`` (P1, element-constant k)."""
+    """``K_ij = integral k grad phi_i . grad phi_j`` (P1, element-constant k).
+
+    N x N for all the mesh's points, those of no triangle included (their
+    rows are empty; scikit-fem numbers only the vertices up to the last
+    one used).
+    """
     basis = Basis(mesh, ElementTriP1())
     k_q = np.repeat(np.asarray(k_e, float)[:, None], basis.X.shape[1], axis=1)
-    return asm(_darcy, basis, k=k_q)
+    K = asm(_darcy, basis, k=k_q).tocsr()
+    n = mesh.p.shape[1]
+    if K.shape[0] < n:
+        K.resize((n, n))
+    return K
 
 
 def solve_heads(
@@ -305,7 +314,9 @@ def solve_heads(
     -------
     ndarray (N,)
         The total head at every node, m; the other boundaries are
-        impermeable (the natural condition).
+        impermeable (the natural condition).  A node of no triangle (a
+        particle outside the step's mesh) takes its own elevation as head:
+        no pore pressure.
     """
     fixed_nodes = np.asarray(fixed_nodes, int)
     fixed_heads = np.asarray(fixed_heads, float)
@@ -318,11 +329,16 @@ def solve_heads(
         raise ParameterError("heads", "NaN or inf", "finite heads (m)")
     if not (np.all(np.isfinite(k_e)) and np.all(k_e > 0)):
         raise ParameterError("k", float(k_e.min()), "conductivities > 0 (m/s)")
+    x = np.asarray(x, float)
     if mesh is None:
-        mesh = MeshTri(np.ascontiguousarray(np.asarray(x, float).T), np.asarray(t))
+        mesh = MeshTri(np.ascontiguousarray(x.T), np.ascontiguousarray(t))
     K = _stiffness(mesh, k_e)
-    head = np.zeros(K.shape[0])
+    head = x[:, -1].copy()
     head[fixed_nodes] = fixed_heads
-    if fixed_nodes.size == head.size:
+    orphan = np.ones(head.size, bool)
+    orphan[np.asarray(t).ravel()] = False
+    orphan[fixed_nodes] = False
+    D = np.union1d(fixed_nodes, np.flatnonzero(orphan))
+    if D.size == head.size:
         return head
-    return solve(*condense(K, x=head, D=fixed_nodes))
+    return solve(*condense(K, x=head, D=D))

@@ -92,35 +92,53 @@ def test_solve_heads_takes_element_conductivities():
     np.testing.assert_allclose(h, exact, rtol=0, atol=1e-13)
 
 
-def _column_run(water, rho: float):
+def test_a_node_outside_the_mesh_has_no_pore_pressure():
+    x, t = _strip(1.0, 2.0, 2, 4)
+    x = np.vstack([x, [[0.5, 3.0]]])  # a particle flying above the soil
+    base = HeadBoundary([[0.0, 0.0], [1.0, 0.0]], 4.0)
+    p = Seepage([base]).pressure(x, t, None, RHO_W, G)
+    np.testing.assert_allclose(p[:-1], RHO_W * G * (4.0 - x[:-1, 1]), rtol=1e-12)
+    assert p[-1] == 0.0
+
+
+def _column_run(water, rho: float, axisymmetric: bool = False):
     mesh = MeshTri.init_tensor(np.linspace(0, 1, 5), np.linspace(0, 2, 9))
     x = mesh.p.T
     fixed = np.zeros_like(x, bool)
     fixed[:, 1] = x[:, 1] == 0.0
     fixed[:, 0] = (x[:, 0] == 0.0) | (x[:, 0] == 1.0)
     soil = npfem.LinearElastic(E=1e7, nu=0.3, rho=rho)
-    p = npfem.Particles.from_mesh(mesh, soil, fixed=fixed)
-    model = npfem.Model(dim=2, materials=[soil], mode="static", gravity=G, water=water)
+    p = npfem.Particles.from_mesh(mesh, soil, fixed=fixed, axisymmetric=axisymmetric)
+    model = npfem.Model(
+        dim=2,
+        materials=[soil],
+        mode="static",
+        gravity=G,
+        water=water,
+        axisymmetric=axisymmetric,
+    )
     p, step = npfem.advance(p, model, dt=1.0, mesh_source=mesh)
     assert step.record.status == "Solved"
     return x, p
 
 
-def test_uniform_head_is_the_water_table_at_that_level():
+@pytest.mark.parametrize("drainage", ["drained", "undrained"])
+def test_uniform_head_is_the_water_table_at_that_level(drainage):
     level = 3.0  # a metre of free water over the block's top at z = 2
     heads = [
         HeadBoundary([[0.0, 2.0], [1.0, 2.0]], level, "surface"),
         HeadBoundary([[0.0, 0.0], [0.0, 2.0]], level, "left side"),
     ]
-    seep = npfem.Water("drained", seepage=Seepage(heads, k=1e-4), rho_w=RHO_W)
-    table = npfem.Water("drained", npfem.WaterTable(level=level), rho_w=RHO_W)
+    seep = npfem.Water(drainage, seepage=Seepage(heads, k=1e-4), rho_w=RHO_W)
+    table = npfem.Water(drainage, npfem.WaterTable(level=level), rho_w=RHO_W)
     x, wet = _column_run(seep, RHO_SAT)
     _, ref = _column_run(table, RHO_SAT)
     scale = np.abs(ref.stress).max()
     assert np.abs(wet.stress - ref.stress).max() <= 1e-12 * scale
-    np.testing.assert_allclose(
-        wet.pore_pressure, RHO_W * G * (level - x[:, 1]), rtol=1e-13
-    )
+    static = wet.pore_pressure - wet.excess_pore_pressure
+    np.testing.assert_allclose(static, RHO_W * G * (level - x[:, 1]), rtol=1e-13)
+    excess = wet.excess_pore_pressure - ref.excess_pore_pressure
+    assert np.abs(excess).max() <= 1e-12 * scale
 
 
 def test_upward_flow_lightens_the_soil_by_the_seepage_force():
@@ -168,5 +186,8 @@ def test_bad_input_is_refused_with_the_parameter_named():
         far.solve(x, t)
     with pytest.raises(ParameterError, match="one of a water table and a seepage"):
         npfem.Water("drained", npfem.WaterTable(level=1.0), seepage=far)
+    wet = npfem.Water("drained", seepage=Seepage([HeadBoundary(line, 3.0)]))
+    with pytest.raises(ParameterError, match=r"seepage.*plane-strain section"):
+        _column_run(wet, RHO_SAT, axisymmetric=True)
     with pytest.raises(ParameterError, match="one conductivity per material"):
         Seepage([HeadBoundary(line, 1.0)], k=[1.0]).solve(x, t, np.ones(len(x), int))
