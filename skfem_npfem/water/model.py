@@ -33,6 +33,12 @@ class Water:
     table : WaterTable, optional
         The phreatic surface; None: no static pore pressure (an undrained
         soil without a water table).
+    rho_w : float
+        Density of the water, kg/m^3.
+    projection : float
+        Factor ``tau >= 0`` of the pressure-projection stabilisation of the
+        excess pore pressure in undrained steps (docs/theory.md, "Water:
+        undrained steps"); 0 switches it off.
     seepage : Seepage, optional
         A steady flow through the soil instead of a table: the static pore
         pressure is ``rho_w g (h - z)`` (no suction) with the head ``h`` of
@@ -40,12 +46,6 @@ class Water:
         water boundaries (:mod:`skfem_npfem.water.seepage`; plane sections).
         Free water over a head boundary needs no table: the boundary's
         pressure already loads the surface.  Exclusive with ``table``.
-    rho_w : float
-        Density of the water, kg/m^3.
-    projection : float
-        Factor ``tau >= 0`` of the pressure-projection stabilisation of the
-        excess pore pressure in undrained steps (docs/theory.md, "Water:
-        undrained steps"); 0 switches it off.
 
     Examples
     --------
@@ -56,9 +56,9 @@ class Water:
 
     drainage: str = "drained"
     table: WaterTable | None = None
-    seepage: Seepage | None = None
     rho_w: float = 1000.0
     projection: float = 1.0
+    seepage: Seepage | None = None
 
     def __post_init__(self) -> None:
         if self.drainage not in DRAINAGE:
