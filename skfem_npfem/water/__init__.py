@@ -20,7 +20,14 @@ the total stress (docs/theory.md, "Water: effective stress").
 
 from __future__ import annotations
 
-from .forces import coupling_matrix, projection_matrix, surface_force, water_force
+from .forces import (
+    coupling_matrix,
+    darcy_matrix,
+    drained_nodes,
+    projection_matrix,
+    surface_force,
+    water_force,
+)
 from .model import DRAINAGE, Water
 from .seepage import HeadBoundary, Seepage, SeepageField, solve_heads
 from .table import WaterTable
@@ -33,6 +40,8 @@ __all__ = [
     "Water",
     "WaterTable",
     "coupling_matrix",
+    "darcy_matrix",
+    "drained_nodes",
     "projection_matrix",
     "solve_heads",
     "surface_force",

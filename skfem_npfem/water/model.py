@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,7 +15,7 @@ from .table import WaterTable
 __all__ = ["DRAINAGE", "Water"]
 
 #: Drainage modes of a model with water (``dry`` is a model without one).
-DRAINAGE = ("drained", "undrained")
+DRAINAGE = ("drained", "undrained", "coupled")
 
 
 @dataclass
@@ -23,13 +24,17 @@ class Water:
 
     Parameters
     ----------
-    drainage : {"drained", "undrained"}
+    drainage : {"drained", "undrained", "coupled"}
         ``"drained"``: the pore pressure is the static field (the water
         table's hydrostatic pressure) at every step, whatever the soil does.
         ``"undrained"``: no water leaves a particle's cell within a step, so
         the mixture keeps its volume; the excess pore pressure over the
         static field is the multiplier of that constraint in the step's cone
         program, and it is carried by the particles from step to step.
+        ``"coupled"``: consolidation: the excess pore pressure is a variable
+        as in an undrained step, and water flows by Darcy's law within the
+        step (backward Euler), drained at the free surface; needs
+        ``permeability`` (docs/theory.md, "Water: consolidation").
     table : WaterTable, optional
         The phreatic surface; None: no static pore pressure (an undrained
         soil without a water table).
@@ -47,6 +52,14 @@ class Water:
         Free water over a head boundary needs no table: the boundary's
         pressure already loads the surface.  Exclusive with ``table``.
 
+    permeability : float or sequence of float, optional
+        Hydraulic conductivity ``k`` of the soil, m/s (one, or one per
+        material): Darcy's flow of a ``coupled`` step.
+    storage : float
+        Storage coefficient ``n / K_w`` of the pore fluid, 1/Pa (porosity over
+        the water's bulk modulus; 0: incompressible, the default).
+        Coupled and undrained steps.
+
     Examples
     --------
     >>> w = Water("drained", WaterTable(level=1.0))
@@ -59,6 +72,8 @@ class Water:
     rho_w: float = 1000.0
     projection: float = 1.0
     seepage: Seepage | None = None
+    permeability: float | Sequence[float] | None = None
+    storage: float = 0.0
 
     def __post_init__(self) -> None:
         if self.drainage not in DRAINAGE:
@@ -80,6 +95,7 @@ class Water:
         for name, what in (
             ("rho_w", "a density > 0 (kg/m^3)"),
             ("projection", "a number >= 0"),
+            ("storage", "a storage coefficient n / K_w >= 0 (1/Pa)"),
         ):
             v = getattr(self, name)
             ok = isinstance(v, int | float) and not isinstance(v, bool)
@@ -93,10 +109,52 @@ class Water:
                 "a water table (level or line) or a seepage for drained water",
             )
 
+        self._check_permeability()
+
+    def _check_permeability(self) -> None:
+        """``coupled`` needs a permeability > 0 (m/s), one or one per material."""
+        k = self.permeability
+        if k is None:
+            if self.drainage == "coupled":
+                raise ParameterError(
+                    "permeability",
+                    None,
+                    "a hydraulic conductivity k > 0 (m/s), or one per material, "
+                    "for coupled drainage",
+                )
+            return
+        ks = [k] if isinstance(k, int | float) else k
+        try:
+            ks = [float(v) for v in ks if not isinstance(v, bool)]
+        except (TypeError, ValueError):
+            ks = []
+        if not ks or not all(math.isfinite(v) and v > 0 for v in ks):
+            raise ParameterError(
+                "permeability",
+                k,
+                "a hydraulic conductivity > 0 (m/s) or one per material",
+            )
+        self.permeability = ks[0] if isinstance(k, int | float) else tuple(ks)
+
     @property
     def undrained(self) -> bool:
-        """The excess pore pressure is a variable of the step."""
-        return self.drainage == "undrained"
+        """The excess pore pressure is a variable of the step (undrained, coupled)."""
+        return self.drainage in ("undrained", "coupled")
+
+    def conductivity(self, material: np.ndarray) -> np.ndarray:
+        """Hydraulic conductivity at particles of the given material ids, m/s."""
+        material = np.asarray(material, int)
+        k = self.permeability
+        if isinstance(k, float):
+            return np.full(material.shape, k)
+        ks = np.asarray(k, float)
+        if material.size and material.max() >= ks.size:
+            raise ParameterError(
+                "permeability",
+                list(ks),
+                f"one conductivity per material ({int(material.max()) + 1} or more)",
+            )
+        return ks[material]
 
     def static_pressure(
         self,
