@@ -23,6 +23,13 @@ base is the lowest ``y`` of the section (``fixed``: both velocities zero;
 ``rollers``: vertical only), the sides its smallest and largest ``x`` (``rollers``:
 horizontal velocity zero; ``free``: no support).
 
+A section may also give its water (``"water"``: the phreatic line;
+``"heads"``: the heads of steady seepage; ``"boundaries"``: named polylines;
+:mod:`.section_water`), and may be drawn as a mesh file instead of polygons
+(``"mesh": FILE``, a gmsh ``.msh`` whose physical surface groups are the
+regions, mapped to materials by ``"regions": [{"group": ..., "material":
+...}]`` or by name; :mod:`.section_mesh`).
+
 Every error names its place in the file (``materials.fill.phi``,
 ``regions[1].polygon``, ``supports.base``); :func:`implausible_values` lists
 the values that are valid but most likely in other units.
