@@ -143,7 +143,8 @@ def _loops(edges: np.ndarray) -> list[list[int]] | None:
 def group_outlines(name: str, points: np.ndarray, tri: np.ndarray) -> list[np.ndarray]:
     """Counter-clockwise outlines (first vertex not repeated) of a group's triangles.
 
-    One polygon per connected piece of the group.
+    One polygon per connected piece of the group, from its lowest, then
+    leftmost vertex.
 
     Raises
     ------
@@ -179,7 +180,8 @@ def group_outlines(name: str, points: np.ndarray, tri: np.ndarray) -> list[np.nd
                 "regions without holes (a region is a simple polygon): split the "
                 "group into pieces that have none",
             )
-        out.append(poly)
+        # Start at the lowest, then leftmost vertex (as a section is drawn).
+        out.append(np.roll(poly, -int(np.lexsort((x, y))[0]), axis=0))
     return out
 
 
