@@ -270,8 +270,11 @@ def read_cross_section(path: str | Path) -> CrossSection:
     ------
     ParameterError
         For a file that cannot be read or parsed, a missing or unknown key, an
-        open polygon, a region whose material is not in ``materials``, or a
-        bad support.  Geometry checks that need the spacing are
+        open polygon, a region whose material is not in ``materials``, a
+        bad support; a mesh file that cannot be read or whose groups do not
+        map to materials (:func:`~.section_mesh.read_section_mesh`); a water
+        line that does not span the section, a head on a boundary it lacks
+        (:mod:`.section_water`).  Geometry checks that need the spacing are
         :func:`check_regions`.
     """
     p = Path(path)

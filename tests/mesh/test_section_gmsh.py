@@ -182,3 +182,27 @@ def test_region_with_a_hole(tmp_path):
     mesh.write(tmp_path / "s.msh", file_format="gmsh22", binary=False)
     err = _error(write_json(tmp_path, "s.msh"))
     assert err.name == "mesh group 'clay'" and "hole" in str(err)
+
+
+def _one_group(tmp_path, points, triangles) -> Path:
+    mesh = meshio.Mesh(
+        points,
+        [("triangle", np.array(triangles))],
+        cell_data={"gmsh:physical": [np.ones(len(triangles), int)]},
+        field_data={"clay": np.array([1, 2])},
+    )
+    mesh.write(tmp_path / "s.msh", file_format="gmsh22", binary=False)
+    return write_json(tmp_path, "s.msh")
+
+
+def test_pieces_touching_at_a_node(tmp_path):
+    # Two triangles of one group that share only the node (1, 1).
+    pts = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [2, 1, 0], [2, 2, 0], [1, 2, 0]]
+    err = _error(_one_group(tmp_path, np.array(pts, float), [[0, 1, 2], [2, 3, 4]]))
+    assert err.name == "mesh group 'clay'" and "node" in str(err)
+
+
+def test_mesh_out_of_the_plane(tmp_path):
+    pts = np.array([[0, 0, 0], [1, 0, 0], [0, 0, 1]], float)  # in x-z
+    err = _error(_one_group(tmp_path, pts, [[0, 1, 2]]))
+    assert err.name == "mesh" and "plane" in str(err)
