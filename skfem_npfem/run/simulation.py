@@ -24,7 +24,7 @@ from skfem import Mesh
 
 from ..boundary import check_clear
 from ..errors import ParameterError, RunInterrupted, SolverError
-from ..io import read_checkpoint, write_checkpoint
+from ..io import read_checkpoint, water_point_data, write_checkpoint
 from ..mesh.sources import MeshSource, as_mesh_source
 from ..particles import Particles
 from ..step.kinematics import energies
@@ -190,7 +190,7 @@ class Simulation:
 
     # -- output ---------------------------------------------------------------
     def point_data(self, p: Particles, active: np.ndarray | None) -> dict:
-        """Point data written to the VTU files."""
+        """Point data written to the VTU files (with water: the pore fields)."""
         act = np.zeros(p.n, bool)
         if active is not None:
             act[active] = True
@@ -202,6 +202,7 @@ class Simulation:
             "mass": p.mass,
             "active": act,
         }
+        data.update(water_point_data(p, self.model, act))
         # Mesh sources that know the free surface (AlphaShapeMesher) report it
         # for the mesh the step was solved on.
         free = getattr(self.mesh_source, "free_surface", None)
