@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..boundary import Boundary, Contacts
+from ..errors import ParameterError
 from ..mesh.delaunay import p1_mesh
 from ..mesh.operators import strain_operator
 from ..mesh.smoothing import NodalIntegration
@@ -165,15 +166,20 @@ def pore_input(
 ) -> tuple[PoreInput, np.ndarray]:
     """The pore water of a step and the force of its static pore pressure.
 
-    The static field (the water table's hydrostatic pressure at the nodes)
+    The static field (the water table's hydrostatic pressure at the nodes,
+    or the pore pressure of a steady seepage solved on the step's mesh)
     loads the skeleton through :func:`~skfem_npfem.water.water_force`; the
     excess pore pressure the particles carry enters the program as
     :class:`~skfem_npfem.step.program.PoreInput`, with its increments as
     variables in an undrained step.
     """
     water = model.water
+    if water.seepage is not None and model.axisymmetric:
+        raise ParameterError(
+            "seepage", "an axisymmetric model", "a plane-strain section (dim=2)"
+        )
     x = p.x[active]
-    static = water.static_pressure(x, model.gravity)
+    static = water.static_pressure(x, model.gravity, op.t, p.material[active])
     force = water_force(op, x, static)
     excess = np.zeros(active.size)
     if p.excess_pore_pressure is not None:

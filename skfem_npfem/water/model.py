@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
+from .seepage import Seepage
 from .table import WaterTable
 
 __all__ = ["DRAINAGE", "Water"]
@@ -38,6 +39,13 @@ class Water:
         Factor ``tau >= 0`` of the pressure-projection stabilisation of the
         excess pore pressure in undrained steps (docs/theory.md, "Water:
         undrained steps"); 0 switches it off.
+    seepage : Seepage, optional
+        A steady flow through the soil instead of a table: the static pore
+        pressure is ``rho_w g (h - z)`` (no suction) with the head ``h`` of
+        Darcy's problem solved on every step's mesh, heads fixed on its
+        water boundaries (:mod:`skfem_npfem.water.seepage`; plane sections).
+        Free water over a head boundary needs no table: the boundary's
+        pressure already loads the surface.  Exclusive with ``table``.
 
     Examples
     --------
@@ -50,6 +58,7 @@ class Water:
     table: WaterTable | None = None
     rho_w: float = 1000.0
     projection: float = 1.0
+    seepage: Seepage | None = None
 
     def __post_init__(self) -> None:
         if self.drainage not in DRAINAGE:
@@ -58,6 +67,16 @@ class Water:
             )
         if self.table is not None and not isinstance(self.table, WaterTable):
             raise ParameterError("table", self.table, "a WaterTable or None")
+        if self.seepage is not None:
+            if not isinstance(self.seepage, Seepage):
+                raise ParameterError("seepage", self.seepage, "a Seepage or None")
+            if self.table is not None:
+                raise ParameterError(
+                    "water",
+                    "a table and a seepage",
+                    "one of a water table and a seepage (the seepage's head "
+                    "boundaries stand for the free water)",
+                )
         for name, what in (
             ("rho_w", "a density > 0 (kg/m^3)"),
             ("projection", "a number >= 0"),
@@ -67,11 +86,11 @@ class Water:
             ok = ok and math.isfinite(v) and (v > 0 if name == "rho_w" else v >= 0)
             if not ok:
                 raise ParameterError(name, v, what)
-        if self.drainage == "drained" and self.table is None:
+        if self.drainage == "drained" and self.table is None and self.seepage is None:
             raise ParameterError(
                 "water",
                 "drained without a water table",
-                "a water table (level or line) for drained water",
+                "a water table (level or line) or a seepage for drained water",
             )
 
     @property
@@ -79,9 +98,26 @@ class Water:
         """The excess pore pressure is a variable of the step."""
         return self.drainage == "undrained"
 
-    def static_pressure(self, x: np.ndarray, gravity: float) -> np.ndarray:
-        """The static pore pressure at positions ``x`` (N, d), Pa."""
+    def static_pressure(
+        self,
+        x: np.ndarray,
+        gravity: float,
+        t: np.ndarray | None = None,
+        material: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """The static pore pressure at positions ``x`` (N, d), Pa.
+
+        A seepage is solved on the mesh ``t`` (3, ne) whose nodes are ``x``,
+        with the nodes' material ids ``material`` (N,) for its conductivity;
+        a table needs neither.
+        """
         x = np.asarray(x, float)
+        if self.seepage is not None:
+            if t is None:
+                raise ParameterError(
+                    "t", None, "the step's mesh (a seepage is solved on it)"
+                )
+            return self.seepage.pressure(x, t, material, self.rho_w, gravity)
         if self.table is None:
             return np.zeros(x.shape[0])
         return self.table.pressure(x, self.rho_w, gravity)
