@@ -71,7 +71,10 @@ def clean_time(time: float) -> float:
 
 
 def water_point_data(
-    particles: Any, model: Any, active: np.ndarray | None = None
+    particles: Any,
+    model: Any,
+    active: np.ndarray | None = None,
+    cells: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
     """The point data of a wet result: pore pressures, effective and total stress.
 
@@ -85,9 +88,13 @@ def water_point_data(
     model : Model
         Its ``water`` (None: a dry model) and ``gravity``: the static pore
         pressure of particles that carry none yet (the initial state).
-    active : numpy.ndarray of bool, optional
-        Particles in the mesh; the static pressure of the initial state is
-        given to these only (all if None), as a step gives it.
+    active : numpy.ndarray, optional
+        Particles in the mesh (indices or a boolean mask); the static
+        pressure of the initial state is given to these only (all if None),
+        as a step gives it.
+    cells : numpy.ndarray, optional
+        The mesh, (ne, 3) particle indices: a seepage's static pressure is
+        solved on it.
 
     Returns
     -------
@@ -103,9 +110,15 @@ def water_point_data(
         return {}
     sig = np.asarray(particles.stress, dtype=float)
     if pore is None:
-        pore = water.static_pressure(particles.x, model.gravity)
+        # A seepage is Darcy's problem on the mesh, conductivity by material.
+        t = None if cells is None else np.asarray(cells).T
+        seepage = getattr(water, "seepage", None) is not None
+        mesh = (t, particles.material) if seepage else ()
+        pore = water.static_pressure(particles.x, model.gravity, *mesh)
         if active is not None:
-            pore = np.where(active, pore, 0.0)
+            mask = np.zeros(len(pore), dtype=bool)
+            mask[active] = True
+            pore = np.where(mask, pore, 0.0)
     pore = np.asarray(pore, dtype=float)
     excess = particles.excess_pore_pressure
     total = sig.copy()

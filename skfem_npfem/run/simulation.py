@@ -190,7 +190,7 @@ class Simulation:
 
     # -- output ---------------------------------------------------------------
     def point_data(self, p: Particles, active: np.ndarray | None) -> dict:
-        """Point data written to the VTU files (with water: the pore fields)."""
+        """Point data written to the VTU files."""
         act = np.zeros(p.n, bool)
         if active is not None:
             act[active] = True
@@ -202,7 +202,6 @@ class Simulation:
             "mass": p.mass,
             "active": act,
         }
-        data.update(water_point_data(p, self.model, act))
         # Mesh sources that know the free surface (AlphaShapeMesher) report it
         # for the mesh the step was solved on.
         free = getattr(self.mesh_source, "free_surface", None)
@@ -225,7 +224,8 @@ class Simulation:
             self.time,
             self.particles.x,
             cells_global,
-            self.point_data(self.particles, active),
+            self.point_data(self.particles, active)
+            | water_point_data(self.particles, self.model, active, cells_global),
             field_data={"Axisymmetric": 1.0} if axisymmetric else None,
         )
 

@@ -52,9 +52,9 @@ WATER_METRICS_DOC = {
     "pore_pressure_max": "largest pore pressure (static plus excess, "
     "compression positive) of the last step, Pa (runs with water only)",
     "excess_pore_pressure_max": "largest excess pore pressure (above the "
-    "water table's static field) of the last step, Pa (undrained runs only)",
+    "water table's static field) of the last step, Pa (not drained runs)",
     "excess_pore_pressure_min": "smallest excess pore pressure of the last "
-    "step, Pa: negative where the soil dilates (undrained runs only)",
+    "step, Pa: negative where the soil dilates (not drained runs)",
 }
 
 
@@ -62,14 +62,14 @@ def water_metrics(sim: Any) -> dict[str, float]:
     """:data:`WATER_METRICS_DOC` of a run's last step; empty for a dry run.
 
     The last step is the last one written (a run always writes it); the
-    excess pore pressure only of an undrained run (a drained one has none).
+    excess pore pressure not of a drained run (which has none).
     Before the first step the particles carry no pore pressure: no metrics.
     """
     p, water = sim.particles, getattr(sim.model, "water", None)
     if water is None or p.pore_pressure is None:
         return {}
     out = {"pore_pressure_max": float(np.max(p.pore_pressure, initial=0.0))}
-    if water.undrained and p.excess_pore_pressure is not None and p.n:
+    if water.drainage != "drained" and p.excess_pore_pressure is not None and p.n:
         out["excess_pore_pressure_max"] = float(np.max(p.excess_pore_pressure))
         out["excess_pore_pressure_min"] = float(np.min(p.excess_pore_pressure))
     return out

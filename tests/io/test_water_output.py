@@ -193,3 +193,19 @@ def test_total_stress_is_the_effective_stress_less_the_pore_pressure():
     assert data["total_stress"].tolist() == [[-5, -7, -6, 1, 2, 3]]
     assert data["excess_pore_pressure"].tolist() == [0.0]
     assert water_point_data(p, None) == {}
+
+
+def test_initial_state_of_a_seepage_run_has_its_pore_pressure(tmp_path):
+    # A uniform head over the column's top: hydrostatic water of that head
+    # (no flow), p = rho_w g (h - z), already in the initial state's file.
+    head = 2.5
+    top = npfem.water.HeadBoundary([[0.0, H], [1.0, H]], head=head)
+    seepage = npfem.water.Seepage([top], k=1e-5)
+    water = npfem.Water("drained", rho_w=RHO_W, seepage=seepage)
+    sim = _simulation(water, writer=ResultWriter(tmp_path))
+    sim.run(steps=1)
+    for mesh in _steps(tmp_path):
+        z = mesh.points[:, 1] - mesh.point_data["displacement"][:, 1]
+        np.testing.assert_allclose(
+            mesh.point_data["pore_pressure"], RHO_W * G * (head - z), rtol=1e-10
+        )
