@@ -222,7 +222,8 @@ def plot_results(
     the tip's path (said in the title) and its N_c-w/D curve beside the field;
     for the slope the section's supports and the boundaries between its layers;
     for a run with pore water its water table (the ``water_level`` of
-    ``scene.json`` across the picture, or a section's water line).
+    ``scene.json`` across the picture, or a section's water line; in 3D a
+    translucent blue plane at the level).
     The frame holds every particle of the drawn steps (detached grains
     included) and everything the legend names (the cone: its window). 3D
     results are shown in an isometric view (pyvista, surface of the tetrahedra). The
@@ -292,6 +293,7 @@ def plot_results(
                 fast=fast,
                 view=sc.view,
                 floor=sc.floor,
+                water=sc.water_level,
             )
 
         stem = f"{name}_{unit.prefix}"

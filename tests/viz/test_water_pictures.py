@@ -13,12 +13,13 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from skfem import MeshTri
+from skfem import MeshTet, MeshTri
 
 pytest.importorskip("matplotlib")
 pytest.importorskip("PIL")
 
 import skfem_npfem as npfem
+from skfem_npfem.constants import GRAVITY
 from skfem_npfem.errors import ParameterError
 from skfem_npfem.io import ResultWriter, read_pvd
 from skfem_npfem.scenes.scenery import Scenery
@@ -26,6 +27,7 @@ from skfem_npfem.viz.colours import _style
 from skfem_npfem.viz.figures import Frames2D, crop
 from skfem_npfem.viz.loading import FIELDS, _load
 from skfem_npfem.viz.plot import plot_results
+from skfem_npfem.viz.render import Renderer, check_rendering
 from skfem_npfem.viz.scenery import scenery
 
 pytestmark = pytest.mark.viz
@@ -160,3 +162,39 @@ def test_a_cross_section_water_line_comes_before_the_level(tmp_path, monkeypatch
     params["geometry"] = str(tmp_path / "gone.json")  # no such file: the level
     (tmp_path / "scene.json").write_text(json.dumps({"parameters": params}))
     assert scenery(tmp_path).water_level == 1.0
+
+
+def test_a_3d_result_shows_its_water_level_as_a_plane(tmp_path):
+    pv = pytest.importorskip("pyvista")
+    check_rendering()
+    mesh = MeshTet.init_tensor(*(np.linspace(0, 1, 3),) * 2, np.linspace(0, 2, 5))
+    x = mesh.p.T
+    fixed = np.zeros_like(x, bool)
+    fixed[:, 2] = x[:, 2] == 0.0
+    for k in (0, 1):
+        fixed[:, k] = (x[:, k] == 0.0) | (x[:, k] == 1.0)
+    soil = npfem.LinearElastic(E=1e7, nu=0.3, rho=2000.0)
+    water = npfem.Water("drained", npfem.WaterTable(level=LEVEL), rho_w=RHO_W)
+    p = npfem.Particles.from_mesh(mesh, soil, fixed=fixed)
+    model = npfem.Model(dim=3, materials=[soil], mode="static", water=water)
+    sim = npfem.Simulation(p, model, mesh, dt=1.0, progress=False)
+    sim.writer = ResultWriter(tmp_path)
+    sim.run(steps=1)
+    params = {"drainage": "drained", "water_level": LEVEL}
+    (tmp_path / "scene.json").write_text(json.dumps({"parameters": params}))
+    paths = plot_results(
+        tmp_path, field="pore_pressure", animation="none", window_size=SIZE
+    )
+    assert [q.name for q in paths] == ["pore_pressure_t0.png", "pore_pressure_t1.png"]
+    entries = read_pvd(tmp_path / "result.pvd")
+    loaded = _load(entries, ["pore_pressure"], {1})
+    assert loaded.extremes["pore_pressure"][1] == pytest.approx(RHO_W * GRAVITY * LEVEL)
+    style = _style("pore_pressure", *loaded.ranges["pore_pressure"])
+    images, args = [], (pv, loaded.kept, 3, "pore_pressure", style, "", None, SIZE)
+    for level in (None, LEVEL):
+        r = Renderer(*args, water=level)
+        assert (r.water_actor is None) == (level is None)
+        r.draw(1)
+        images.append(r.image().astype(int))
+        r.close()
+    assert np.abs(images[1] - images[0]).max() > 40  # the plane is seen
