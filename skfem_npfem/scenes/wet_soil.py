@@ -22,11 +22,14 @@ import numpy as np
 from ..particles import Particles
 from ..step.model import Model
 from ..water import Water
+from .common import warn_unused
+from .water import is_wet
 
 __all__ = [
     "DRY_VALUES",
     "effective_vertical_stress",
     "recorded_parameters",
+    "warn_dry_water",
     "wet_column",
     "wet_geostatic",
 ]
@@ -146,3 +149,9 @@ def wet_column(
         horizontal=[i for i in (0, 1, 2) if i != vertical],
         floor=0,
     )
+
+
+def warn_dry_water(values: Mapping[str, Any], given: frozenset[str]) -> None:
+    """Warn that ``rho_w`` is not used by a dry soil (``drainage=dry``)."""
+    if not is_wet(values) and values.get("water_level") is None:
+        warn_unused(given, ("rho_w",), "a dry soil (drainage=dry) has no pore water")

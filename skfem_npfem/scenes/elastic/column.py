@@ -39,7 +39,11 @@ from ..methods import METHOD_METRICS, method_params, with_method
 from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
 from ..water import WATER_PARAMS, derive_drainage, scene_water
-from ..wet_soil import effective_vertical_stress, recorded_parameters
+from ..wet_soil import (
+    effective_vertical_stress,
+    recorded_parameters,
+    warn_dry_water,
+)
 
 PARAMS = [
     Param("dim", 2, "-", "spatial dimension (2: plane strain, 3: 3D)", int, (2, 3)),
@@ -304,5 +308,6 @@ SCENE = Scene(
     metrics_doc=METRICS,
     scenery=column_scenery,
     derive=derive,
+    ignored=warn_dry_water,
     time_params=None,  # a run counts its steps
 )

@@ -76,7 +76,7 @@ def initial_state(
         vertical=1,
         horizontal=(0, 2),
     )
-    p0 = values.get("p0", 0.0)
+    p0 = values.get("p0", 0.0) if values["rho"] == 0 else 0.0
     if p0:
         stress = np.array(particles.stress, float, copy=True)
         stress[:, :3] -= p0
@@ -88,10 +88,13 @@ def undrained_strength(values: Mapping[str, Any], phi: float) -> float | None:
     """``s_u = c cos(phi) + p0 sin(phi)`` of an undrained weightless soil, Pa.
 
     None unless ``drainage=undrained``, ``rho = 0`` and ``psi = 0`` (the
-    conditions under which the soil is a Tresca soil of that strength).
+    conditions under which the soil is a Tresca soil of that strength; the
+    limit analysis flows at constant volume whatever ``psi``).
     """
     psi = phi if values["psi"] is None else values["psi"]
-    if values["drainage"] != "undrained" or values["rho"] > 0 or psi != 0.0:
+    if values["drainage"] != "undrained" or values["rho"] > 0:
+        return None
+    if psi != 0.0 and values.get("analysis") != "limit":
         return None
     f = math.radians(phi)
     return values["c"] * math.cos(f) + values.get("p0", 0.0) * math.sin(f)
@@ -114,23 +117,25 @@ def limit_soil(values: Mapping[str, Any], mat: Material) -> tuple[Material, floa
 
     An undrained soil collapses at constant volume with the undrained strength
     of its initial effective stress.  A weightless soil with ``psi = 0`` has a
-    uniform one (:func:`undrained_strength`); a soil with weight needs a
-    strength per particle, which this limit analysis does not compute yet.
+    uniform one, ``c cos(phi) + p0 sin(phi)`` (the limit analysis flows at
+    constant volume whatever ``psi``); a soil with weight needs a strength per
+    particle from its initial effective stress, which this limit analysis does
+    not compute yet: the hook for it is here.
 
     Raises
     ------
     ParameterError
-        ``drainage=undrained`` with ``rho > 0`` or ``psi != 0``.
+        ``drainage=undrained`` with ``rho > 0``.
     """
     if values["drainage"] != "undrained":
         return mat, values["c"]
-    phi = 0.0 if values["material"] == "tresca" else values["phi"]
-    s_u = undrained_strength(values, phi)
-    if s_u is None:
+    if values["rho"] > 0:
         raise ParameterError(
             "drainage",
             "undrained",
-            "with analysis=limit: a weightless soil (rho = 0) with psi = 0 "
-            "(uniform s_u); or analysis=incremental",
+            "with analysis=limit: a weightless soil (rho = 0, uniform s_u); "
+            "or analysis=incremental",
         )
+    phi = 0.0 if values["material"] == "tresca" else math.radians(values["phi"])
+    s_u = values["c"] * math.cos(phi) + values["p0"] * math.sin(phi)
     return Tresca(mat.E, mat.nu, mat.rho, c=s_u), s_u
