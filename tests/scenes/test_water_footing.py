@@ -118,8 +118,9 @@ def test_drained_footing_carries_the_buoyant_weight(level):
     dry = run_scene("strip-footing", o | {"rho": 1000.0})
     assert wet["metrics"]["stopped_by"] == "plateau"
     assert wet["metrics"]["q_ult"] == pytest.approx(dry["metrics"]["q_ult"], rel=1e-8)
-    # A table halfway down: between the buoyant and the dry soil of rho_sat.
-    half = run_scene("strip-footing", o | {"rho": 2000.0, "water_level": 2.5})
+    # A table 1 m below the ground (b = 1 m): between the buoyant soil and
+    # the dry soil of rho_sat.
+    half = run_scene("strip-footing", o | {"rho": 2000.0, "water_level": 4.0})
     heavy = run_scene("strip-footing", o | {"rho": 2000.0})
     q = half["metrics"]["q_ult"]
     assert dry["metrics"]["q_ult"] < q < heavy["metrics"]["q_ult"]
