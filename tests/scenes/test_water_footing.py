@@ -137,6 +137,14 @@ def test_limit_analysis_with_water():
     assert wet["metrics"]["q_ult"] == pytest.approx(dry["metrics"]["q_ult"], rel=1e-6)
     with pytest.raises(ParameterError, match="drainage"):
         run_scene("strip-footing", o | {"drainage": "undrained", "rho": 2000.0})
+    # Cohesionless: N_gamma = q / (gamma' b) with the buoyant unit weight.
+    sand = o | {"c": 0.0}
+    wet = run_scene("strip-footing", sand | {"rho": 2000.0, "water_level": 5.0})
+    dry = run_scene("strip-footing", sand | {"rho": 1000.0})
+    assert wet["metrics"]["bearing_factor"] == pytest.approx(
+        dry["metrics"]["bearing_factor"], rel=1e-6
+    )
+    assert wet["metrics"]["q_ult"] == pytest.approx(dry["metrics"]["q_ult"], rel=1e-6)
 
 
 def test_water_parameters_a_run_does_not_use():

@@ -73,6 +73,7 @@ from .plateau import PlateauRule
 from .scenery import footing_scenery
 from .strip_water import (
     FOOTING_WATER_PARAMS,
+    footing_gamma,
     limit_soil,
     soil_gravity,
     undrained_strength,
@@ -243,7 +244,8 @@ PARAMS = [
 METRICS = {
     "q_ult": "footing pressure at the last step (= collapse load on the plateau), Pa",
     "bearing_factor": "q_ult / c (c > 0), else q_ult / (gamma b) = N_gamma (B = 2b, "
-    "gamma = rho g); q_ult / s_u for an undrained weightless soil with psi = 0",
+    "gamma = rho g; (rho - rho_w) g under a water table at or above the ground); "
+    "q_ult / s_u for an undrained weightless soil with psi = 0",
     "bearing_factor_reference": "Prandtl-Reissner N_c for weightless soil (2 + pi "
     "undrained, s_u = c cos phi + p0 sin phi; else null)",
     "relative_error": "bearing_factor / reference - 1 (weightless soil)",
@@ -336,7 +338,7 @@ def build(
     mat, phi = soil_material(values)
     rule = plateau_rule(values)
     particles, foot = soil_particles(values, mesh, phi)
-    b, c, gamma = values["width"] / 2, values["c"], unit_weight(values)
+    b, c, gamma = values["width"] / 2, values["c"], footing_gamma(values)
     model = Model(
         dim=2,
         materials=[mat],
@@ -375,8 +377,7 @@ def build(
         return reason is not None
 
     ref = prandtl_nc(phi) if gamma == 0 and c > 0 else None
-    s_u = undrained_strength(values, phi)
-    if s_u is not None:  # an undrained weightless soil is Tresca with s_u
+    if (s_u := undrained_strength(values, phi)) is not None:  # Tresca of s_u
         c, ref = s_u, prandtl_nc(0.0)
     if values["analysis"] == "limit":
         return limit_scene_run(
@@ -443,7 +444,7 @@ def footing_limit(
     distribution.  The soil's weight is the dead load.  The multiplier is then
     the bearing factor ``q / c`` (``q / (gamma b)``).
     """
-    b, c, gamma = values["width"] / 2, values["c"], unit_weight(values)
+    b, gamma, g_ref = values["width"] / 2, unit_weight(values), footing_gamma(values)
     mat, c = limit_soil(values, mat)
     ni = nodal_integration(mesh, (0, 1, 2, 3) if mat.needs_zz(2) else (0, 1, 3))
     n = particles.n
@@ -451,7 +452,7 @@ def footing_limit(
     foot = np.flatnonzero(foot)
     fixed[foot, 1] = False  # the footing's vertical dofs: one tied unknown
     load = np.zeros((n, 2))
-    load[foot, 1] = -(c if c > 0 else gamma * b) * b / foot.size
+    load[foot, 1] = -(c if c > 0 else g_ref * b) * b / foot.size
     dead = np.zeros((n, 2))
     dead[:, 1] = -gamma * ni.volumes
     dead += water_dead_load(values, ni, mesh.p.T)
@@ -467,7 +468,7 @@ def footing_limit(
     )
     factor = res.multiplier
     return {
-        "q_ult": factor * (c if c > 0 else gamma * b),
+        "q_ult": factor * (c if c > 0 else g_ref * b),
         "bearing_factor": factor,
         "bearing_factor_reference": ref,
         "relative_error": None if ref is None else factor / ref - 1.0,

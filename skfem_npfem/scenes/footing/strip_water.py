@@ -29,6 +29,7 @@ from ..wet_soil import wet_geostatic
 
 __all__ = [
     "FOOTING_WATER_PARAMS",
+    "footing_gamma",
     "initial_state",
     "limit_soil",
     "undrained_strength",
@@ -49,6 +50,20 @@ FOOTING_WATER_PARAMS = [
         lo=0,
     ),
 ]
+
+
+def footing_gamma(values: Mapping[str, Any]) -> float:
+    """The unit weight of ``N_gamma = q / (gamma b)``, N/m^3.
+
+    ``rho g``; the buoyant ``(rho - rho_w) g`` when drained under a water
+    table at or above the ground (the top of the ``domain_width * b`` block).
+    """
+    gamma = values["rho"] * values["gravity"]
+    level = values.get("water_level")
+    top = values["domain_width"] * values["width"] / 2
+    if values.get("drainage") == "drained" and level is not None and level >= top:
+        gamma = (values["rho"] - values["rho_w"]) * values["gravity"]
+    return gamma
 
 
 def soil_gravity(values: Mapping[str, Any]) -> float:
