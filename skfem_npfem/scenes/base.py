@@ -32,6 +32,7 @@ from ..io import (
 )
 from .limits import check_steps
 from .params import Param, Values
+from .wet_soil import DRY_VALUES
 
 __all__ = [
     "DEFAULT_CHECKPOINT_EVERY",
@@ -303,9 +304,15 @@ class Scene:
             saved = to_jsonable(saved)
             now = to_jsonable(dict(values))
             # A parameter the checkpointed version did not have yet, left at
-            # its default now, is the behaviour that version had: not a change.
+            # its default now (or at the value a dry soil derives: a dry run
+            # does not record its water), is the behaviour that version had.
             defaults = to_jsonable({p.name: p.default for p in self.params})
-            added = {k for k in set(now) - set(saved) if now[k] == defaults.get(k)}
+            dry = to_jsonable(DRY_VALUES)
+            added = {
+                k
+                for k in set(now) - set(saved)
+                if now[k] == defaults.get(k) or (k in dry and now[k] == dry[k])
+            }
             changed = sorted(
                 k
                 for k in (set(saved) | set(now)) - added

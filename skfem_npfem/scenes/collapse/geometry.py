@@ -38,6 +38,8 @@ from ..base import Scene
 from ..common import check_soil, fill_at_rest
 from ..limits import LENGTH, check_size
 from ..params import POSITIVE, Param, Values
+from ..water import derive_drainage
+from ..wet_soil import warn_dry_water
 from .box_column import DEPTH_SPACINGS
 from .cylinder import GEOMETRY_ALPHA, SEED, SEED_DIVISIONS
 from .sizing import lattice_particles
@@ -191,7 +193,7 @@ def used_parameters(
         return set(plane_names) | {"geometry"}
     common = {"geometry", "dp_match", "size_check", "strength_floor"}
     common |= {"stabilisation", "stabilisation_mode", "nodal_mass"}
-    common |= {"volume_correction"}
+    common |= {"volume_correction", "drainage", "water_level", "rho_w"}
     common |= {
         "spacing", "material", "rho", "E", "nu", "phi", "psi", "c",
         "floor_friction", "K0", "gravity", "dt", "t_end", "rest_fraction",
@@ -235,6 +237,7 @@ def finalize(
         name = unused[0]
         why = _unused_reason(geo, name)
         raise ParameterError(name, values[name], why)
+    warn_dry_water(values, given)
     if geo == "plane-strain":
         fill_column_defaults(values)
         return
@@ -259,12 +262,13 @@ def finalize(
 
 
 def fill_column_defaults(values: dict[str, Any]) -> None:
-    """Fill the column's ``K0``, ``floor_friction`` and ``min_time`` (in place).
+    """Fill the column's ``drainage``, ``K0``, ``floor_friction``, ``min_time``.
 
     Jaky's ``K0 = 1 - sin phi``, a floor as rough as the soil (``phi``), and
     the earliest stop at rest ``2 sqrt(H0 / g)`` (with ``rest_fraction > 0``)
     once the column's height is known.
     """
+    derive_drainage(values)
     fill_at_rest(values)
     if values["floor_friction"] is None:
         values["floor_friction"] = values["phi"]

@@ -16,6 +16,7 @@ from ..common import (
 from ..limits import SPACING
 from ..methods import METHOD_METRICS, METHOD_PARAMS
 from ..params import ANGLE, POSITIVE, Param
+from ..water import WATER_PARAMS
 from .runout import (
     DETACHED_WARNING,
 )
@@ -191,6 +192,7 @@ PARAMS = [
         int,
         lo=1,
     ),
+    *WATER_PARAMS,
     *METHOD_PARAMS,
     *fidelity_params(
         COLLAPSE_STABILISATION,

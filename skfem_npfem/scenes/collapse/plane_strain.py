@@ -70,6 +70,8 @@ from ..limits import check_size
 from ..methods import with_method
 from ..params import Values
 from ..scenery import Scenery, box, number, time_label
+from ..water import scene_water
+from ..wet_soil import recorded_parameters, wet_column
 from .geometry import fill_column_defaults
 from .params import (
     COLLAPSE_STABILISATION,
@@ -223,6 +225,7 @@ def _model(values: Mapping[str, Any]) -> Model:
         theta2=values["theta2"],
         walls=walls,
         solver=solver_from(values),
+        water=scene_water(values),
         **fidelity_from(values, COLLAPSE_STABILISATION, _volume_correction(values)),
     )
 
@@ -313,6 +316,7 @@ def build(
         K0=values["K0"],
         n_walls=len(model.walls),
     )
+    particles = wet_column(particles, model, values, H0)
     sim = collapse_simulation(particles, model, mesher, values, out, progress, resume)
     sim.callbacks.append(_front_recorder(h, symmetric))
     run_kwargs, stop = run_control(values, H0)
@@ -342,7 +346,7 @@ def collapse_simulation(
         checkpoint_dir=out,
         checkpoint_every=values["checkpoint_every"] if out is not None else 0,
         progress=progress,
-        meta={"scene": "column-collapse", "parameters": dict(values)},
+        meta={"scene": "column-collapse", "parameters": recorded_parameters(values)},
     )
 
 

@@ -37,6 +37,8 @@ from ..common import fidelity_from, solver_from
 from ..methods import with_method
 from ..params import Values
 from ..scenery import Scenery, box, number, time_label
+from ..water import scene_water
+from ..wet_soil import wet_column
 from .box_column import box_column
 from .cylinder import ColumnSetup, cylinder_column, mass_quantile, radial_front
 from .geometry import (
@@ -138,7 +140,10 @@ def column_setup(values: Mapping[str, Any]) -> ColumnSetup:
         fidelity = fidelity_from(values, beta, kappa, mode)
     else:
         fidelity = fidelity_from(values, 0.0)
-    return replace(setup, model=replace(setup.model, **fidelity))
+    model = replace(setup.model, water=scene_water(values), **fidelity)
+    height = values["height"] if geo in CYLINDRICAL else setup.particles.x[:, -1].max()
+    particles = wet_column(setup.particles, model, values, height)
+    return replace(setup, model=model, particles=particles)
 
 
 def _column_setup(values: Mapping[str, Any]) -> ColumnSetup:

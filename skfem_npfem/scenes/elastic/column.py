@@ -24,6 +24,7 @@ from ...mesh.sources import FixedMesh
 from ...particles import Particles
 from ...run.simulation import Simulation
 from ...step.model import Model
+from ...water import Water
 from ..base import Scene, SceneRun
 from ..common import (
     elastic_params,
@@ -37,11 +38,19 @@ from ..limits import SPACING, check_size
 from ..methods import METHOD_METRICS, method_params, with_method
 from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
+from ..water import WATER_PARAMS, derive_drainage, scene_water
+from ..wet_soil import (
+    effective_vertical_stress,
+    recorded_parameters,
+    warn_dry_water,
+)
 
 PARAMS = [
     Param("dim", 2, "-", "spatial dimension (2: plane strain, 3: 3D)", int, (2, 3)),
     *elastic_params(1.0e7),
-    Param("rho", 2000.0, "kg/m^3", "density", float, **POSITIVE),
+    Param(
+        "rho", 2000.0, "kg/m^3", "density (saturated, with water)", float, **POSITIVE
+    ),
     Param("gravity", GRAVITY, "m/s^2", "gravitational acceleration", float, lo=0),
     Param("height", 4.0, "m", "column height H", float, **POSITIVE),
     Param("width", 1.0, "m", "column width (and depth in 3D)", float, **POSITIVE),
@@ -64,16 +73,21 @@ PARAMS = [
     Param(
         "theta2", 1.0, "-", "time-integration parameter theta2", float, lo=0.5, hi=1.0
     ),
+    *WATER_PARAMS,
     *method_params(spfem="mode=dynamic only"),
     *fidelity_params(0.0),
     *solver_params(),
 ]
 
 METRICS = {
-    "sigma_v_rel_l2": "relative L2 error of the vertical stress vs -rho g (H - z)",
+    "sigma_v_rel_l2": "relative L2 error of the vertical (effective) stress vs "
+    "-rho g (H - z) (with water: the buoyant rho - rho_w below the water table)",
     "sigma_h_rel_l2": "relative L2 error of the horizontal stress vs nu/(1-nu) s_v",
+    "pore_pressure_rel_l2": "relative L2 error of the pore pressure vs rho_w g "
+    "(water_level - z) below the table (wet runs only)",
     "settlement": "mean top settlement at the end, m (positive down)",
-    "settlement_exact": "rho g H^2 / (2 M), m",
+    "settlement_exact": "rho g H^2 / (2 M), m (with water: the integral of "
+    "-s'_v / M over the height)",
     "base_sigma_v": "mean vertical stress of the base particles, Pa",
     "period": "oscillation period of the top (dynamic, >= 1 period run), s",
     "period_exact": "first oedometric period 4 H / c_p, s",
@@ -141,6 +155,12 @@ def build(
     for k in range(dim - 1):  # smooth side walls: rollers
         fixed[np.isclose(x[:, k], 0.0) | np.isclose(x[:, k], W), k] = True
     particles = Particles.create(x, mat.rho * ni.volumes, fixed=fixed)
+    water = scene_water(values)
+    if water is not None:  # stress-free skeleton, its pore water at rest
+        particles = particles.replace(
+            pore_pressure=water.static_pressure(x, values["gravity"]),
+            excess_pore_pressure=np.zeros(particles.n),
+        )
     model = Model(
         dim=dim,
         materials=[mat],
@@ -149,6 +169,7 @@ def build(
         theta1=values["theta1"],
         theta2=values["theta2"],
         solver=solver_from(values),
+        water=water,
         **fidelity_from(values, 0.0),
     )
     sim = Simulation(
@@ -158,7 +179,7 @@ def build(
         values["dt"],
         writer=make_writer(out, resume),
         progress=progress,
-        meta={"scene": "elastic-column", "parameters": dict(values)},
+        meta={"scene": "elastic-column", "parameters": recorded_parameters(values)},
     )
     top = np.isclose(x[:, -1], H)
 
@@ -173,7 +194,7 @@ def build(
         p = sim_.particles
         z0 = p.x[:, -1] - p.u[:, -1]
         g = values["gravity"]
-        sv_ex = -mat.rho * g * (H - z0)
+        sv_ex = effective_vertical_stress(z0, H, mat.rho, g, water)
         nu = mat.nu
         sv = p.stress[:, dim - 1] if dim == 2 else p.stress[:, 2]
         sh = p.stress[:, 0]
@@ -185,7 +206,7 @@ def build(
             # nu = 0: the exact s_h is 0; normalise by |s_v| instead of NaN.
             "sigma_h_rel_l2": _rel(sh, nu / (1 - nu) * sv_ex, sv_ex),
             "settlement": float(-p.u[top, -1].mean()),
-            "settlement_exact": mat.rho * g * H**2 / (2 * M),
+            "settlement_exact": exact_settlement(H, mat.rho, g, M, water),
             "base_sigma_v": float(sv[base].mean()),
             "period": oscillation_period(
                 [
@@ -196,9 +217,47 @@ def build(
             ),
             "period_exact": float(t_exact),
             "n_particles": int(p.n),
+            **pore_metrics(p, water, g),
         }
 
     return with_method(values, SceneRun(sim, {"steps": values["steps"]}, metrics))
+
+
+def pore_metrics(p: Particles, water: Water | None, g: float) -> dict[str, float]:
+    """``pore_pressure_rel_l2`` of a wet column (a dry one reports none)."""
+    if water is None:
+        return {}
+    exact = water.static_pressure(p.x - p.u, g)
+    return {"pore_pressure_rel_l2": _rel(p.pore_pressure, exact)}
+
+
+def exact_settlement(
+    H: float, rho: float, g: float, M: float, water: Water | None
+) -> float:
+    """Top settlement ``integral_0^H -s'_v / M dz`` of the column at rest, m.
+
+    Dry: ``rho g H^2 / (2 M)``.  The effective stress is linear in ``z`` but
+    for a kink at the water table, so the trapezoidal rule on ``0``, the
+    table and ``H`` is exact.
+    """
+    if water is None or water.table is None:
+        return rho * g * H**2 / (2 * M)
+    level = float(np.clip(water.table.elevation(np.zeros((1, 2)))[0], 0.0, H))
+    z = np.unique([0.0, level, H])
+    sv = effective_vertical_stress(z, H, rho, g, water)
+    return float(-np.sum(0.5 * (sv[1:] + sv[:-1]) * np.diff(z)) / M)
+
+
+def derive(values: dict[str, Any]) -> None:
+    """The column's derived defaults, in place: ``drainage`` from ``water_level``."""
+    derive_drainage(values)
+    if values["drainage"] == "undrained":
+        raise ParameterError(
+            "drainage",
+            "undrained",
+            "dry or drained: the column starts stress-free, and an undrained "
+            "step would carry its whole weight by excess pore pressure",
+        )
 
 
 def _rel(a: np.ndarray, b: np.ndarray, scale: np.ndarray | None = None) -> float:
@@ -248,5 +307,7 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     scenery=column_scenery,
+    derive=derive,
+    ignored=warn_dry_water,
     time_params=None,  # a run counts its steps
 )

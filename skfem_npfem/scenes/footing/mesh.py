@@ -20,6 +20,7 @@ from ...mesh.smoothing import nodal_integration
 from ...particles import Particles
 from ..limits import check_size
 from .penetration_common import grow_axis, grown_count
+from .strip_water import initial_state
 
 #: Default element size under the footing and block size / b (incremental).
 DEFAULT_SPACING, DEFAULT_DOMAIN = 0.125, 5.0
@@ -96,7 +97,8 @@ def soil_particles(
     particles = Particles.create(
         x, np.maximum(rho, 1e-12) * ni.volumes, stress=stress, fixed=fixed
     )
-    return particles.replace(v_prescribed=vp), foot
+    particles = initial_state(values, particles.replace(v_prescribed=vp), L, K0)
+    return particles, foot
 
 
 def unit_weight(values: Mapping[str, Any]) -> float:

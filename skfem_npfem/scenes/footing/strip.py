@@ -57,6 +57,8 @@ from ..limit_mode import (
 from ..limits import SPACING as SPACING_RANGE
 from ..methods import METHOD_METRICS_NO_SPFEM, method_params, with_method
 from ..params import ANGLE, POSITIVE, Param, Values
+from ..water import derive_drainage, scene_water
+from ..wet_soil import recorded_parameters
 from .mesh import (
     DEFAULT_DOMAIN,
     DEFAULT_SPACING,
@@ -69,6 +71,14 @@ from .mesh import (
 )
 from .plateau import PlateauRule
 from .scenery import footing_scenery
+from .strip_water import (
+    FOOTING_WATER_PARAMS,
+    footing_gamma,
+    limit_soil,
+    soil_gravity,
+    undrained_strength,
+    water_dead_load,
+)
 from .usage import ignored
 
 MATERIALS = ("tresca", "mohr-coulomb", "drucker-prager")
@@ -220,6 +230,7 @@ PARAMS = [
         "small-strain limit analysis",
         bool,
     ),
+    *FOOTING_WATER_PARAMS,
     analysis_param("settlement steps to the load plateau"),
     *method_params(
         ("npfem", "fem-remap"),
@@ -233,8 +244,10 @@ PARAMS = [
 METRICS = {
     "q_ult": "footing pressure at the last step (= collapse load on the plateau), Pa",
     "bearing_factor": "q_ult / c (c > 0), else q_ult / (gamma b) = N_gamma (B = 2b, "
-    "gamma = rho g)",
-    "bearing_factor_reference": "Prandtl-Reissner N_c for weightless soil (else null)",
+    "gamma = rho g; (rho - rho_w) g under a water table at or above the ground); "
+    "q_ult / s_u for an undrained weightless soil with psi = 0",
+    "bearing_factor_reference": "Prandtl-Reissner N_c for weightless soil (2 + pi "
+    "undrained, s_u = c cos phi + p0 sin phi; else null)",
     "relative_error": "bearing_factor / reference - 1 (weightless soil)",
     "load_curve": "list of [settlement (m), pressure (Pa)] per step",
     "plateau_reached": "true if the run stopped on a detected plateau, false if a "
@@ -290,6 +303,7 @@ def derive(values: dict[str, Any]) -> None:
     settlement).
     """
     resolve_defaults(values)
+    derive_drainage(values)
     fill_at_rest(values)
     if values["psi"] is None:
         values["psi"] = values["phi"]
@@ -324,15 +338,16 @@ def build(
     mat, phi = soil_material(values)
     rule = plateau_rule(values)
     particles, foot = soil_particles(values, mesh, phi)
-    b, c, gamma = values["width"] / 2, values["c"], unit_weight(values)
+    b, c, gamma = values["width"] / 2, values["c"], footing_gamma(values)
     model = Model(
         dim=2,
         materials=[mat],
-        gravity=values["gravity"] if values["rho"] > 0 else 0.0,
+        gravity=soil_gravity(values),
         mode="static",
         objective_rotation=values["large_deformation"],
         update_geometry=values["large_deformation"],
         solver=solver_from(values),
+        water=scene_water(values),
         **fidelity_from(values, 0.0),
     )
     sim = Simulation(
@@ -342,7 +357,7 @@ def build(
         rule.first_increment,
         writer=make_writer(out, resume),
         progress=progress,
-        meta={"scene": "strip-footing", "parameters": dict(values)},
+        meta={"scene": "strip-footing", "parameters": recorded_parameters(values)},
     )
 
     def record(sim_: Simulation, p: Particles, res) -> bool:
@@ -362,6 +377,8 @@ def build(
         return reason is not None
 
     ref = prandtl_nc(phi) if gamma == 0 and c > 0 else None
+    if (s_u := undrained_strength(values, phi)) is not None:  # Tresca of s_u
+        c, ref = s_u, prandtl_nc(0.0)
     if values["analysis"] == "limit":
         return limit_scene_run(
             sim, lambda: footing_limit(values, mesh, mat, particles, foot, ref)
@@ -427,16 +444,18 @@ def footing_limit(
     distribution.  The soil's weight is the dead load.  The multiplier is then
     the bearing factor ``q / c`` (``q / (gamma b)``).
     """
-    b, c, gamma = values["width"] / 2, values["c"], unit_weight(values)
+    b, gamma, g_ref = values["width"] / 2, unit_weight(values), footing_gamma(values)
+    mat, c = limit_soil(values, mat)
     ni = nodal_integration(mesh, (0, 1, 2, 3) if mat.needs_zz(2) else (0, 1, 3))
     n = particles.n
     fixed = np.asarray(particles.fixed, bool).copy()
     foot = np.flatnonzero(foot)
     fixed[foot, 1] = False  # the footing's vertical dofs: one tied unknown
     load = np.zeros((n, 2))
-    load[foot, 1] = -(c if c > 0 else gamma * b) * b / foot.size
+    load[foot, 1] = -(c if c > 0 else g_ref * b) * b / foot.size
     dead = np.zeros((n, 2))
     dead[:, 1] = -gamma * ni.volumes
+    dead += water_dead_load(values, ni, mesh.p.T)
     res = limit_analysis(
         ni,
         [mat],
@@ -449,7 +468,7 @@ def footing_limit(
     )
     factor = res.multiplier
     return {
-        "q_ult": factor * (c if c > 0 else gamma * b),
+        "q_ult": factor * (c if c > 0 else g_ref * b),
         "bearing_factor": factor,
         "bearing_factor_reference": ref,
         "relative_error": None if ref is None else factor / ref - 1.0,

@@ -2,7 +2,8 @@
 
 A parameter given for a material or analysis that ignores it is refused
 (``phi``, ``psi`` with Tresca) or warned about (the incremental run's
-parameters with ``analysis=limit``; ``K0`` of a weightless soil).
+parameters with ``analysis=limit``; ``K0`` of a weightless soil, ``p0`` of
+a soil with weight; ``rho_w`` of a dry soil).
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from ..common import refuse_frictional, warn_unused
+from ..wet_soil import warn_dry_water
 
 __all__ = ["LIMIT_UNUSED", "ignored"]
 
@@ -35,6 +37,7 @@ LIMIT_UNUSED = (
 def ignored(values: Mapping[str, Any], given: frozenset[str]) -> None:
     """Refuse phi/psi with Tresca; warn about parameters the run does not use."""
     refuse_frictional(values, given)
+    warn_dry_water(values, given)
     if values["analysis"] == "limit":
         warn_unused(
             given,
@@ -46,4 +49,10 @@ def ignored(values: Mapping[str, Any], given: frozenset[str]) -> None:
     elif values["rho"] == 0:
         warn_unused(
             given, ("K0",), "a weightless soil (rho = 0) has no geostatic stress"
+        )
+    else:
+        warn_unused(
+            given,
+            ("p0",),
+            "a soil with weight (rho > 0) starts from its geostatic stress",
         )
