@@ -122,10 +122,22 @@ def strength_reduction(
     (geometrically) down to a relative width ``max(tol, 2e-3)``: 9-12
     programs for a dry sand slope.
 
+    With pore water the cones carry effective stress and ``load`` is the
+    load of gravity on the skeleton: the weight with the saturated density
+    plus the force of the pore pressure,
+    :func:`~skfem_npfem.water.water_force` (:func:`~.loads.gravity_load`
+    builds it).  Both are proportional to ``g`` (the pore pressure of a
+    water table is ``rho_w g`` times a head), so the multiplier scales
+    weight and water force together and ``lambda(F) = 1`` is the real state
+    of the wet soil.  An undrained analysis passes
+    :func:`~.undrained.undrained_materials`: ``c'`` and ``tan(phi')`` are
+    reduced and the undrained strengths follow, ``s'_0`` kept.
+
     Parameters
     ----------
     operator, materials, material, load, fixed, tied, options
-        As :func:`limit_analysis` (``load``: the body's weight).
+        As :func:`limit_analysis` (``load``: the body's weight, with the
+        water's force when there is water).
     tol : float
         Tolerance on ``|log lambda|`` (about the relative error of ``F``).
     max_programs : int
