@@ -261,6 +261,8 @@ class Scene:
             # A parameter the checkpointed version did not have yet, left at
             # its default now, is the behaviour that version had: not a change.
             defaults = to_jsonable({p.name: p.default for p in self.params})
+            # A dry run records no water parameters (its derived drainage "dry").
+            defaults["drainage"] = "dry"
             added = {k for k in set(now) - set(saved) if now[k] == defaults.get(k)}
             changed = sorted(
                 k
