@@ -377,7 +377,8 @@ def build_parser(scene: str | None = None) -> argparse.ArgumentParser:
         default=None,
         help="fields to draw (default: the vertical stress and plastic_strain_eq); "
         "stress_xx, stress_yy, stress_zz, stress_xy, pressure, plastic_strain_eq, "
-        "velocity, displacement",
+        "velocity, displacement; with pore water pore_pressure, "
+        "excess_pore_pressure",
     )
     p_plot.add_argument("--animation", default="gif", choices=("gif", "mp4", "none"))
     add_debug(p_plot)

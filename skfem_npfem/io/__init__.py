@@ -39,7 +39,7 @@ from .files import (
     write_bytes,
     write_json,
 )
-from .results import ResultWriter, read_pvd, read_step, step_time
+from .results import ResultWriter, read_pvd, read_step, step_time, water_point_data
 from .run_folder import RunFolder
 
 __all__ = [
@@ -62,6 +62,7 @@ __all__ = [
     "save_checkpoint",
     "step_time",
     "to_jsonable",
+    "water_point_data",
     "write_bytes",
     "write_checkpoint",
     "write_json",

@@ -34,6 +34,7 @@ __all__ = [
     "read_step",
     "step_number",
     "step_time",
+    "water_point_data",
 ]
 
 _BAD_NAME = re.compile(r"[<>&\"']")
@@ -67,6 +68,67 @@ def clean_time(time: float) -> float:
     (0.3, 0.3, 1.5e-11)
     """
     return float(f"{time:.{TIME_DIGITS}g}")
+
+
+def water_point_data(
+    particles: Any,
+    model: Any,
+    active: np.ndarray | None = None,
+    cells: np.ndarray | None = None,
+) -> dict[str, np.ndarray]:
+    """The point data of a wet result: pore pressures, effective and total stress.
+
+    Parameters
+    ----------
+    particles : Particles
+        Their ``stress`` (full Voigt, normal components ``xx, yy, zz`` first,
+        tension positive, Pa) is the *effective* stress when there is water;
+        ``pore_pressure`` (compression positive) and ``excess_pore_pressure``
+        are None before the first step.
+    model : Model
+        Its ``water`` (None: a dry model) and ``gravity``: the static pore
+        pressure of particles that carry none yet (the initial state).
+    active : numpy.ndarray, optional
+        Particles in the mesh (indices or a boolean mask); the static
+        pressure of the initial state is given to these only (all if None),
+        as a step gives it.
+    cells : numpy.ndarray, optional
+        The mesh, (ne, 3) particle indices: a seepage's static pressure is
+        solved on it.
+
+    Returns
+    -------
+    dict
+        Empty for a dry model whose particles carry no pore pressure; else
+        ``pore_pressure``, ``excess_pore_pressure`` (zero when the particles
+        carry none), ``effective_stress`` (the particles' stress) and
+        ``total_stress`` (the effective stress less the pore pressure on the
+        normal components: Terzaghi's principle, tension positive), Pa.
+    """
+    water, pore = getattr(model, "water", None), particles.pore_pressure
+    if pore is None and water is None:
+        return {}
+    sig = np.asarray(particles.stress, dtype=float)
+    if pore is None:
+        # A seepage is Darcy's problem on the mesh, conductivity by material.
+        t = None if cells is None else np.asarray(cells).T
+        seepage = getattr(water, "seepage", None) is not None
+        mesh = (t, particles.material) if seepage else ()
+        pore = water.static_pressure(particles.x, model.gravity, *mesh)
+        if active is not None:
+            mask = np.zeros(len(pore), dtype=bool)
+            mask[active] = True
+            pore = np.where(mask, pore, 0.0)
+    pore = np.asarray(pore, dtype=float)
+    excess = particles.excess_pore_pressure
+    total = sig.copy()
+    total[:, :3] -= pore[:, None]
+    return {
+        "pore_pressure": pore,
+        "excess_pore_pressure": np.zeros_like(pore) if excess is None else excess,
+        "effective_stress": sig.copy(),
+        "total_stress": total,
+    }
 
 
 def _field_data_xml(field_data: Mapping[str, Any]) -> bytes:

@@ -15,5 +15,8 @@
 * :mod:`.regions` -- cross-sections from polygons: checked regions, their
   thickness, particles filling them and their mesh;
 * :mod:`.section_file` -- the JSON file of a cross-section, read and checked
-  (every error names its key), and its implausible values.
+  (every error names its key), and its implausible values;
+* :mod:`.section_water` -- a section's phreatic line and seepage heads;
+* :mod:`.section_mesh` -- a section drawn as a mesh file (gmsh): its regions'
+  outlines and named lines.
 """

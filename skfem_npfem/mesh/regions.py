@@ -52,13 +52,20 @@ class Region:
 
 @dataclass
 class CrossSection:
-    """A cross-section: regions, materials (name -> properties), supports."""
+    """A cross-section: regions, materials (name -> properties), supports.
+
+    ``water``: the phreatic line (k, 2), None for a dry section; ``heads``:
+    (boundary name, polyline (k, 2), head in m) of each seepage boundary
+    (:mod:`.section_water`).
+    """
 
     regions: list[Region]
     materials: dict[str, dict[str, float]]
     supports: dict[str, str] = field(
         default_factory=lambda: {"base": "fixed", "sides": "rollers"}
     )
+    water: np.ndarray | None = None
+    heads: list[tuple[str, np.ndarray, float]] = field(default_factory=list)
 
 
 def point_in_polygon(points: np.ndarray, poly: np.ndarray) -> np.ndarray:

@@ -23,6 +23,13 @@ base is the lowest ``y`` of the section (``fixed``: both velocities zero;
 ``rollers``: vertical only), the sides its smallest and largest ``x`` (``rollers``:
 horizontal velocity zero; ``free``: no support).
 
+A section may also give its water (``"water"``: the phreatic line;
+``"heads"``: the heads of steady seepage; ``"boundaries"``: named polylines;
+:mod:`.section_water`), and may be drawn as a mesh file instead of polygons
+(``"mesh": FILE``, a gmsh ``.msh`` whose physical surface groups are the
+regions, mapped to materials by ``"regions": [{"group": ..., "material":
+...}]`` or by name; :mod:`.section_mesh`).
+
 Every error names its place in the file (``materials.fill.phi``,
 ``regions[1].polygon``, ``supports.base``); :func:`implausible_values` lists
 the values that are valid but most likely in other units.
@@ -38,6 +45,13 @@ import numpy as np
 
 from ..errors import ParameterError
 from .regions import CrossSection, Region
+from .section_mesh import group_outlines, line_polyline, read_section_mesh
+from .section_water import (
+    read_boundaries,
+    read_heads,
+    read_water,
+    section_boundaries,
+)
 
 __all__ = ["implausible_values", "read_cross_section"]
 
@@ -155,11 +169,13 @@ def implausible_values(
     return out
 
 
-def _region(k: int, r: object, materials: dict[str, dict[str, float]]) -> Region:
-    """Region ``k`` of a cross-section file, checked (the polygon left open)."""
-    if not isinstance(r, dict) or "polygon" not in r or "material" not in r:
+def _region_keys(
+    k: int, r: object, shape: str, materials: dict[str, dict[str, float]]
+) -> tuple[str, float | None]:
+    """Material and own spacing of region ``k``, which gives ``shape`` too."""
+    if not isinstance(r, dict) or shape not in r or "material" not in r:
         raise ParameterError(
-            f"regions[{k}]", r, "an object with 'material' and 'polygon'"
+            f"regions[{k}]", r, f"an object with 'material' and '{shape}'"
         )
     if r["material"] not in materials:
         raise ParameterError(
@@ -167,6 +183,20 @@ def _region(k: int, r: object, materials: dict[str, dict[str, float]]) -> Region
             r["material"],
             "one of the materials of the file: " + ", ".join(materials),
         )
+    hr = r.get("spacing")
+    if hr is not None and not (
+        isinstance(hr, int | float)
+        and not isinstance(hr, bool)
+        and math.isfinite(hr)
+        and hr > 0
+    ):
+        raise ParameterError(f"regions[{k}].spacing", hr, "a length > 0 (m)")
+    return r["material"], hr
+
+
+def _region(k: int, r: object, materials: dict[str, dict[str, float]]) -> Region:
+    """Region ``k`` of a cross-section file, checked (the polygon left open)."""
+    material, hr = _region_keys(k, r, "polygon", materials)
     try:
         poly = np.asarray(r["polygon"], dtype=float)
     except (TypeError, ValueError):
@@ -183,15 +213,54 @@ def _region(k: int, r: object, materials: dict[str, dict[str, float]]) -> Region
             "a closed polygon: at least 3 vertices and the last one repeating "
             "the first (this one is open)",
         )
-    hr = r.get("spacing")
-    if hr is not None and not (
-        isinstance(hr, int | float)
-        and not isinstance(hr, bool)
-        and math.isfinite(hr)
-        and hr > 0
-    ):
-        raise ParameterError(f"regions[{k}].spacing", hr, "a length > 0 (m)")
-    return Region(r["material"], poly[:-1], hr)
+    return Region(material, poly[:-1], hr)
+
+
+def _mesh_regions(
+    folder: Path, data: dict, materials: dict[str, dict[str, float]]
+) -> tuple[list[Region], dict[str, np.ndarray]]:
+    """Regions and named lines of a section given as ``"mesh"`` (module notes)."""
+    name = data["mesh"]
+    if not isinstance(name, str) or not name:
+        raise ParameterError(
+            "mesh", name, "the path of a mesh file (relative to the JSON file)"
+        )
+    mesh = read_section_mesh(folder / name)
+    spec = data.get("regions")
+    if spec is None:
+        for g in mesh.groups:
+            if g not in materials:
+                raise ParameterError(
+                    f"mesh group {g!r}",
+                    f"{len(mesh.groups[g])} triangles",
+                    "a material of the file (without 'regions' a group's name is "
+                    "its material): one of " + ", ".join(materials),
+                )
+        spec = [{"material": g, "group": g} for g in mesh.groups]
+    if not isinstance(spec, list):
+        raise ParameterError("regions", spec, "a list of {'material', 'group'}")
+    regions = []
+    for k, r in enumerate(spec):
+        material, hr = _region_keys(k, r, "group", materials)
+        if r["group"] not in mesh.groups:
+            raise ParameterError(
+                f"regions[{k}].group",
+                r["group"],
+                "a physical surface group of the mesh: " + ", ".join(mesh.groups),
+            )
+        for poly in group_outlines(r["group"], mesh.points, mesh.groups[r["group"]]):
+            regions.append(Region(material, poly, hr))
+    listed = {r["group"] for r in spec}
+    for g in mesh.groups:
+        if g not in listed:
+            raise ParameterError(
+                f"mesh group {g!r}",
+                f"{len(mesh.groups[g])} triangles",
+                "a group that 'regions' gives a material (every triangle needs "
+                "one): listed are " + ", ".join(sorted(listed)),
+            )
+    lines = {n: line_polyline(n, s, mesh.points) for n, s in mesh.lines.items()}
+    return regions, lines
 
 
 def read_cross_section(path: str | Path) -> CrossSection:
@@ -201,8 +270,11 @@ def read_cross_section(path: str | Path) -> CrossSection:
     ------
     ParameterError
         For a file that cannot be read or parsed, a missing or unknown key, an
-        open polygon, a region whose material is not in ``materials``, or a
-        bad support.  Geometry checks that need the spacing are
+        open polygon, a region whose material is not in ``materials``, a
+        bad support; a mesh file that cannot be read or whose groups do not
+        map to materials (:func:`~.section_mesh.read_section_mesh`); a water
+        line that does not span the section, a head on a boundary it lacks
+        (:mod:`.section_water`).  Geometry checks that need the spacing are
         :func:`check_regions`.
     """
     p = Path(path)
@@ -212,16 +284,32 @@ def read_cross_section(path: str | Path) -> CrossSection:
         raise ParameterError(
             "geometry", str(path), f"a readable file ({err.strerror})"
         ) from None
-    except json.JSONDecodeError as err:
+    except (json.JSONDecodeError, UnicodeDecodeError) as err:
+        line = getattr(err, "lineno", None)
+        where = f"line {line}: {err.msg}" if line else "not text"
         raise ParameterError(
-            "geometry", str(path), f"a JSON file (line {err.lineno}: {err.msg})"
+            "geometry",
+            str(path),
+            f"a JSON file ({where}; a mesh file is named in one: "
+            '{"mesh": FILE, "materials": ...})',
         ) from None
-    if not isinstance(data, dict) or "regions" not in data or "materials" not in data:
+    if (
+        not isinstance(data, dict)
+        or "materials" not in data
+        or ("regions" not in data and "mesh" not in data)
+    ):
         raise ParameterError(
-            "geometry", str(path), "a JSON object with 'materials' and 'regions'"
+            "geometry",
+            str(path),
+            "a JSON object with 'materials' and 'regions' (or 'mesh')",
         )
     materials = _materials(data["materials"])
-    regions = [_region(k, r, materials) for k, r in enumerate(data["regions"])]
+    if "mesh" in data:
+        regions, named = _mesh_regions(p.parent, data, materials)
+    else:
+        regions = [_region(k, r, materials) for k, r in enumerate(data["regions"])]
+        named = {}
+    named.update(read_boundaries(data.get("boundaries", {})))
     supports = {"base": "fixed", "sides": "rollers"}
     for key, val in dict(data.get("supports", {})).items():
         allowed = {"base": BASES, "sides": SIDES}.get(key)
@@ -230,4 +318,11 @@ def read_cross_section(path: str | Path) -> CrossSection:
         if val not in allowed:
             raise ParameterError(f"supports.{key}", val, "one of " + ", ".join(allowed))
         supports[key] = val
-    return CrossSection(regions, materials, supports)
+    if not regions:
+        raise ParameterError("regions", [], "at least one region")
+    boundaries = section_boundaries(regions, named)
+    water = data.get("water")
+    if water is not None:
+        water = read_water(water, regions, boundaries)
+    heads = read_heads(data.get("heads", []), boundaries)
+    return CrossSection(regions, materials, supports, water, heads)

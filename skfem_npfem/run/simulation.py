@@ -24,7 +24,7 @@ from skfem import Mesh
 
 from ..boundary import check_clear
 from ..errors import ParameterError, RunInterrupted, SolverError
-from ..io import read_checkpoint, write_checkpoint
+from ..io import read_checkpoint, water_point_data, write_checkpoint
 from ..mesh.sources import MeshSource, as_mesh_source
 from ..particles import Particles
 from ..step.kinematics import energies
@@ -224,7 +224,8 @@ class Simulation:
             self.time,
             self.particles.x,
             cells_global,
-            self.point_data(self.particles, active),
+            self.point_data(self.particles, active)
+            | water_point_data(self.particles, self.model, active, cells_global),
             field_data={"Axisymmetric": 1.0} if axisymmetric else None,
         )
 

@@ -17,6 +17,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from .._version import __version__
 from ..errors import CheckpointError, ParameterError, RunInterrupted
 from ..io import (
@@ -31,10 +33,46 @@ from ..io import (
 from .limits import check_steps
 from .params import Param, Values
 
-__all__ = ["DEFAULT_CHECKPOINT_EVERY", "RESUME_MAY_CHANGE", "Scene", "SceneRun"]
+__all__ = [
+    "DEFAULT_CHECKPOINT_EVERY",
+    "RESUME_MAY_CHANGE",
+    "WATER_METRICS_DOC",
+    "Scene",
+    "SceneRun",
+    "water_metrics",
+]
 
 #: Steps between checkpoints of scenes that do not choose (``checkpoint_every``).
 DEFAULT_CHECKPOINT_EVERY = 20
+
+
+#: The metrics every run with pore water adds to its scene's own (a scene
+#: with a ``drainage`` parameter lists them in its :attr:`Scene.metrics_doc`).
+WATER_METRICS_DOC = {
+    "pore_pressure_max": "largest pore pressure (static plus excess, "
+    "compression positive) of the last step, Pa (runs with water only)",
+    "excess_pore_pressure_max": "largest excess pore pressure (above the "
+    "water table's static field) of the last step, Pa (not drained runs)",
+    "excess_pore_pressure_min": "smallest excess pore pressure of the last "
+    "step, Pa: negative where the soil dilates (not drained runs)",
+}
+
+
+def water_metrics(sim: Any) -> dict[str, float]:
+    """:data:`WATER_METRICS_DOC` of a run's last step; empty for a dry run.
+
+    The last step is the last one written (a run always writes it); the
+    excess pore pressure not of a drained run (which has none).
+    Before the first step the particles carry no pore pressure: no metrics.
+    """
+    p, water = sim.particles, getattr(sim.model, "water", None)
+    if water is None or p.pore_pressure is None:
+        return {}
+    out = {"pore_pressure_max": float(np.max(p.pore_pressure, initial=0.0))}
+    if water.drainage != "drained" and p.excess_pore_pressure is not None and p.n:
+        out["excess_pore_pressure_max"] = float(np.max(p.excess_pore_pressure))
+        out["excess_pore_pressure_min"] = float(np.min(p.excess_pore_pressure))
+    return out
 
 
 @dataclass
@@ -109,6 +147,12 @@ class Scene:
     derive: Callable[[dict[str, Any]], Any] | None = None
     time_params: tuple[str, str] | None = ("dt", "t_end")
     ignored: Callable[[dict[str, Any], frozenset[str]], None] | None = None
+
+    def __post_init__(self) -> None:
+        if any(p.name == "drainage" for p in self.params):
+            self.metrics_doc = self.metrics_doc | {
+                k: v for k, v in WATER_METRICS_DOC.items() if k not in self.metrics_doc
+            }
 
     def resolve(self, overrides: Mapping[str, Any] | None = None) -> Values:
         """The values of a run: defaults, validated overrides, derived defaults.
@@ -228,7 +272,7 @@ class Scene:
         result = {
             "scene": self.name,
             "parameters": _used(values, srun),
-            "metrics": srun.metrics(sim),
+            "metrics": srun.metrics(sim) | water_metrics(sim),
             "solver": sim.summary(),
             "wall_time_total": time.perf_counter() - start,
             "history": [r.as_dict() for r in sim.records],

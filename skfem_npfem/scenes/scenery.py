@@ -78,6 +78,11 @@ class Scenery:
     boundaries : ndarray (n, 2) or None
         Lines between the regions of a cross-section (layer boundaries), a
         polyline whose pieces are separated by rows of NaN.
+    water_level : float or None
+        Elevation of a horizontal water table, m, drawn across the picture.
+    water_line : ndarray (n, 2) or None
+        A section's water table, a polyline ``(x, z)`` (drawn instead of
+        ``water_level``).
     window : (float, float, float, float) or None
         ``(x0, x1, y0, y1)``: the part of the domain the pictures show, m
         (None: every particle; the cone: a few D around the tip's path).
@@ -120,6 +125,8 @@ class Scenery:
     q_reference: float | None = None
     half_width: float | None = None
     boundaries: np.ndarray | None = None
+    water_level: float | None = None
+    water_line: np.ndarray | None = None
     window: tuple[float, float, float, float] | None = None
     window_note: str = ""
     factor_curve: np.ndarray | None = None

@@ -85,4 +85,4 @@ def scene_water(values: Mapping[str, Any]) -> Water | None:
         return None
     level = values.get("water_level")
     table = None if level is None else WaterTable(level=float(level))
-    return Water(values["drainage"], table, float(values["rho_w"]))
+    return Water(values["drainage"], table, rho_w=float(values["rho_w"]))

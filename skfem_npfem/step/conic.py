@@ -290,6 +290,8 @@ def recover(
         pore = np.asarray(data.pore.excess, float).copy()
         if prog.size("pore"):
             pore = pore + x[prog.slice("pore")]
+        if data.pore.drained is not None:
+            pore[np.asarray(data.pore.drained, int)] = 0.0  # exactly, not to tol
     if prog.pres.size:
         gs = op.G[prog.pres] @ sig_sel.reshape(-1)
         if pore is not None and np.any(pore):

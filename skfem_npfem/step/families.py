@@ -11,9 +11,10 @@ Objective terms (docs/theory.md, "The mixed step"; in the stress increments ``ds
   stabilisation of the stresses (when ``stabilisation > 0``);
 * :func:`~skfem_npfem.step.volume.eigenstrain_work` ``sum_p V_p e_p . ds_p``, a
   prescribed eigenstrain (the volume correction, when ``volume_correction > 0``);
-* :func:`pore_projection` ``1/2 dp_w^T (tau/2G) L dp_w``, the pressure-projection
-  stabilisation of the excess pore pressure (undrained water), and its
-  prescribed work ``+dp_w^T Q_P^T ubar``.
+* :func:`pore_projection` ``1/2 dp_w^T (tau/2G L + S + dt H) dp_w + dp_w^T dt H
+  p_w,n``: the pressure-projection stabilisation of the excess pore pressure,
+  the fluid's storage and Darcy's dissipation (undrained and coupled water),
+  and its prescribed work ``+dp_w^T Q_P^T ubar``.
 
 Row families, each a finished :class:`~skfem_npfem.step.program.Block`:
 
@@ -24,7 +25,8 @@ Row families, each a finished :class:`~skfem_npfem.step.program.Block`:
 * :func:`friction` ``|lambda_t| <= mu lambda_bar_n`` (two rows in 2D, an SOC(3)
   in 3D);
 * :func:`cutoff` tension cut-offs ``a_c^T s <= k_c``;
-* :func:`yield_cones` ``k_p - a_p^T s_p >= ||M s_p||`` per plastic stress point.
+* :func:`yield_cones` ``k_p - a_p^T s_p >= ||M s_p||`` per plastic stress point;
+* :func:`drained_pores` ``dp_w = -p_w,n`` at the drained points of a coupled step.
 
 :data:`OBJECTIVE_TERMS` and :data:`ROW_FAMILIES` list them in the order the
 program is stacked; a new ingredient (a stabilisation term, more cones) is one
@@ -49,6 +51,7 @@ __all__ = [
     "contact_gap",
     "contact_slip",
     "cutoff",
+    "drained_pores",
     "elastic_energy",
     "equilibrium",
     "friction",
@@ -98,27 +101,55 @@ def prescribed_work(prog: Program) -> Term:
 
 
 def pore_projection(prog: Program) -> Term:
-    """Undrained water: the pressure projection on ``dp_w`` and its prescribed work.
+    """The excess pore pressure's own terms (undrained and coupled water).
 
-    ``1/2 dp_w^T (tau/2G) L dp_w`` (:func:`~skfem_npfem.water.projection_matrix`)
-    and ``+dp_w^T Q_P^T ubar``: the excess pore pressure's share of the work of
+    ``1/2 dp_w^T (tau/2G L + S + dt H) dp_w + dp_w^T (dt H p_w,n + Q_P^T ubar)``:
+    the pressure projection (:func:`~skfem_npfem.water.projection_matrix`),
+    the fluid's storage, and the Darcy dissipation of a coupled step on the
+    pressure at the end of the step, ``1/2 dt p^T H p`` with ``p = p_w,n +
+    dp_w``; the last term is the excess pore pressure's share of the work of
     prescribed displacements (its columns in equilibrium are ``-Q``).
     """
     n = prog.size("pore")
     if not n:
         return Term()
     off = prog.slice("pore").start
+    pore = prog.data.pore
+    parts = []
+    if pore.projection is not None:
+        parts.append(sp.triu(pore.projection))
+    if pore.darcy is not None:
+        parts.append(sp.triu(pore.darcy))
+    if pore.storage is not None:
+        parts.append(sp.diags(np.asarray(pore.storage, float)))
     P = None
-    proj = prog.data.pore.projection
-    if proj is not None:
-        L = proj.tocoo()
-        n = prog.nx
-        P = sp.coo_matrix((L.data, (L.row + off, L.col + off)), shape=(n, n))
-    q = None
+    if parts:
+        L = sum(parts[1:], parts[0]).tocoo()
+        nx = prog.nx
+        P = sp.coo_matrix((L.data, (L.row + off, L.col + off)), shape=(nx, nx))
+    q = np.zeros(prog.nx)
+    if pore.darcy is not None:
+        q[prog.slice("pore")] += pore.darcy @ np.asarray(pore.excess, float)
     if prog.pres.size:
-        q = np.zeros(prog.nx)
-        q[prog.slice("pore")] = prog.Q[prog.pres].T @ prog.ubar
+        q[prog.slice("pore")] += prog.Q[prog.pres].T @ prog.ubar
     return Term(P=P, q=q)
+
+
+def drained_pores(prog: Program) -> Block:
+    """Rows ``dp_w = -p_w,n`` at drained points: no excess pore pressure there.
+
+    Zero-cone rows of a coupled step (the free surface lets the water out);
+    their multipliers are the water the points expel over the step.
+    """
+    pore = prog.data.pore
+    if pore is None or pore.drained is None or not prog.size("pore"):
+        return _rows(prog, [], [], [], [], [], "stress")
+    j = np.asarray(pore.drained, int)
+    cols = prog.slice("pore").start + j
+    b = -np.asarray(pore.excess, float)[j]
+    rows = np.arange(j.size)
+    cone = [clarabel.ZeroConeT(j.size)] if j.size else []
+    return _rows(prog, [rows], [cols], [np.ones(j.size)], [b], cone, "stress")
 
 
 def contact_gap(prog: Program) -> Term:
@@ -301,4 +332,12 @@ OBJECTIVE_TERMS = (
     pore_projection,
 )
 #: Row families, stacked in this order within each cone kind.
-ROW_FAMILIES = (equilibrium, contact, friction, cutoff, yield_cones, mean_stress_link)
+ROW_FAMILIES = (
+    equilibrium,
+    contact,
+    friction,
+    cutoff,
+    yield_cones,
+    mean_stress_link,
+    drained_pores,
+)

@@ -16,12 +16,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..boundary import Boundary, Contacts
+from ..errors import ParameterError
 from ..mesh.delaunay import p1_mesh
 from ..mesh.operators import strain_operator
 from ..mesh.smoothing import NodalIntegration
 from ..mesh.sources import MeshSource
 from ..particles import Particles
-from ..water.forces import projection_matrix, water_force
+from ..water.forces import darcy_matrix, drained_nodes, projection_matrix, water_force
 from .boundary_jobs import (
     particle_nodes,
     step_contacts,
@@ -116,7 +117,7 @@ def build_operators(
     force = model.external_force(p.x.shape[0], active, mass)
     pore = None
     if model.water is not None:
-        pore, water = pore_input(model, p, active, op)
+        pore, water = pore_input(model, p, active, op, contacts, dt)
         force = force + water
     strains = volume_strains(
         model.volume_correction,
@@ -161,19 +162,33 @@ def build_operators(
 
 
 def pore_input(
-    model: Model, p: Particles, active: np.ndarray, op: NodalIntegration
+    model: Model,
+    p: Particles,
+    active: np.ndarray,
+    op: NodalIntegration,
+    contacts: Contacts | None = None,
+    dt: float = 1.0,
 ) -> tuple[PoreInput, np.ndarray]:
     """The pore water of a step and the force of its static pore pressure.
 
-    The static field (the water table's hydrostatic pressure at the nodes)
+    The static field (the water table's hydrostatic pressure at the nodes,
+    or the pore pressure of a steady seepage solved on the step's mesh)
     loads the skeleton through :func:`~skfem_npfem.water.water_force`; the
     excess pore pressure the particles carry enters the program as
     :class:`~skfem_npfem.step.program.PoreInput`, with its increments as
-    variables in an undrained step.
+    variables in undrained and coupled steps.  A coupled step adds Darcy's
+    term ``dt H`` (:func:`~skfem_npfem.water.darcy_matrix`, ``kappa = k /
+    (rho_w g)``) and drains the free part of the boundary
+    (:func:`~skfem_npfem.water.drained_nodes`: not held by a support along
+    its normal, not touching a wall or a body, i.e. not in ``contacts``).
     """
     water = model.water
+    if water.seepage is not None and model.axisymmetric:
+        raise ParameterError(
+            "seepage", "an axisymmetric model", "a plane-strain section (dim=2)"
+        )
     x = p.x[active]
-    static = water.static_pressure(x, model.gravity)
+    static = water.static_pressure(x, model.gravity, op.t, p.material[active])
     force = water_force(op, x, static)
     excess = np.zeros(active.size)
     if p.excess_pore_pressure is not None:
@@ -184,4 +199,24 @@ def pore_input(
         compliance = 1.0 / (2.0 * shear[p.material[active]])
         projection = projection_matrix(op, compliance, water.projection)
     pore = PoreInput(excess, water.undrained, projection, static)
+    if water.storage > 0:
+        pore.storage = water.storage * op.volumes
+    if water.drainage == "coupled":
+        gamma_w = water.rho_w * model.gravity
+        if not gamma_w > 0:
+            raise ParameterError(
+                "gravity",
+                model.gravity,
+                "> 0 with coupled drainage (Darcy's law uses gamma_w = rho_w g)",
+            )
+        kappa = water.conductivity(p.material[active]) / gamma_w
+        pore.darcy = dt * darcy_matrix(op, kappa)
+        walled = np.zeros(active.size, bool)
+        if contacts is not None and contacts.size:
+            nodes, _, used = contacts.weights()
+            walled[nodes[used]] = True
+        pore.drained = drained_nodes(op, p.fixed[active], walled)
+        pore.excess = np.where(
+            np.isin(np.arange(active.size), pore.drained), 0.0, excess
+        )
     return pore, force

@@ -110,20 +110,32 @@ class PoreInput:
         Excess pore pressure at the start of the step, Pa (compression
         positive); its force ``Q p_ex`` enters equilibrium.
     undrained : bool
-        The excess pore-pressure increments are variables of the step: the
-        multipliers of the cells' volume constraint.
+        The excess pore-pressure increments are variables of the step
+        (undrained and coupled steps): the multipliers of the cells' volume
+        constraint, or the pressures of their mass balance.
     projection : scipy.sparse matrix (n_p, n_p) or None
         Upper triangle of the pressure-projection term ``tau / (2G) L`` on the
-        increments (undrained steps; None: none).
+        increments (None: none).
     static : ndarray (n_p,) or None
         The static pore pressure of the step, Pa (reported, not used by the
         program).
+    darcy : scipy.sparse matrix (n_p, n_p) or None
+        ``dt H``: the step's Darcy term on the excess pore pressure (coupled
+        steps; full symmetric matrix), m^3 / Pa per unit thickness in 2D.
+    storage : ndarray (n_p,) or None
+        ``V_j n / K_w``: the fluid's storage of each cell (None: none).
+    drained : ndarray (n_d,) int or None
+        Points on a drained boundary: their excess pore pressure is zero at
+        the end of the step (coupled steps).
     """
 
     excess: np.ndarray
     undrained: bool = False
     projection: sp.spmatrix | None = None
     static: np.ndarray | None = None
+    darcy: sp.spmatrix | None = None
+    storage: np.ndarray | None = None
+    drained: np.ndarray | None = None
 
 
 @dataclass

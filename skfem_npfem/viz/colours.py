@@ -22,6 +22,8 @@ _STRESS_INDEX = {
     "stress_yz": 4,
     "stress_zx": 5,
 }
+#: Fields in Pa besides the stress components (scaled like them).
+_PRESSURES = ("pressure", "pore_pressure", "excess_pore_pressure")
 _UNITS = {"plastic_strain_eq": "-", "velocity": "m/s", "displacement": "m"}
 #: Values per step pooled for the colour range, and the share cut at each end.
 _SAMPLE, _TAIL = 4000, 0.01
@@ -70,7 +72,7 @@ def _style(name: str, lo: float, hi: float, fixed: bool = False) -> Style:
 
     With ``fixed`` the range ``lo..hi`` (SI units) is used as given.
     """
-    if name in _STRESS_INDEX or name == "pressure":
+    if name in _STRESS_INDEX or name in _PRESSURES:
         big = max(abs(lo), abs(hi))
         scale, unit = next(
             ((s, u) for s, u in ((1e6, "MPa"), (1e3, "kPa")) if big >= s),

@@ -38,6 +38,7 @@ _REF = "#1f77b4"
 #: The hatched patches of a fixed base and of walls.
 _SUPPORT = {"facecolor": "#d9d9d9", "edgecolor": "#404040", "lw": 0.8, "zorder": 1}
 _FRONT = "#d62728"
+_WATER = "#0072b2"
 
 
 @dataclass
@@ -81,6 +82,8 @@ def crop(steps: list[Step], sc: Scenery, window: tuple[int, int] | None) -> View
         x0, x1, y0, y1 = sc.window
     if sc.runout_reference is not None:
         x1 = max(x1, sc.runout_reference)
+    if sc.water_level is not None:  # free water above the body is shown
+        y0, y1 = min(y0, sc.water_level), max(y1, sc.water_level)
     span = max(x1 - x0, y1 - y0, 1e-12)
     pad = 0.05 * span
     xlim = (x0 - pad, x1 + pad)
@@ -152,6 +155,7 @@ def _scenery(ax, sc: Scenery, view: View) -> None:
     for xy, colour, ls, text in lines:
         if xy is not None and len(xy):
             ax.plot(*xy.T, color=colour, lw=1.2, ls=ls, zorder=6, label=text)
+    _water(ax, sc)
     if sc.runout_reference is not None:
         ax.axvline(
             sc.runout_reference,
@@ -161,6 +165,16 @@ def _scenery(ax, sc: Scenery, view: View) -> None:
             zorder=6,
             label=f"{sc.runout_label} = {sc.runout_reference:.3g} m",
         )
+
+
+def _water(ax, sc: Scenery) -> None:
+    """The water table: a section's line, or a level across the picture."""
+    style = {"color": _WATER, "lw": 1.6, "zorder": 6}
+    if sc.water_line is not None and len(sc.water_line):
+        ax.plot(*np.asarray(sc.water_line, float).T, **style, label="water table")
+    elif sc.water_level is not None:
+        level = sc.water_level
+        ax.axhline(level, **style, label=f"water table ({level:.3g} m)")
 
 
 def _colorbar(fig, ax, style: Style, label: str, extend: str) -> None:

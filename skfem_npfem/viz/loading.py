@@ -33,8 +33,12 @@ _DEFAULT_FIELD = "stress_yy"
 
 __all__ = [
     "FIELDS",
+    "PORE_FIELDS",
 ]
 
+
+#: The fields of a result with pore water (its VTU point data of these names).
+PORE_FIELDS = ("pore_pressure", "excess_pore_pressure")
 
 #: Fields :func:`plot_results` can draw, with a short description.
 FIELDS: dict[str, str] = {
@@ -45,6 +49,8 @@ FIELDS: dict[str, str] = {
     "stress_yz": "shear stress yz (3D only)",
     "stress_zx": "shear stress zx (3D only)",
     "pressure": "pressure, -mean normal stress (compression +)",
+    "pore_pressure": "pore pressure (compression +)",
+    "excess_pore_pressure": "excess pore pressure (compression +)",
     "plastic_strain_eq": "equivalent plastic strain",
     "velocity": "velocity magnitude",
     "displacement": "displacement magnitude",
@@ -55,10 +61,12 @@ def _field_values(name: str, pdata: Mapping[str, np.ndarray]) -> np.ndarray:
     """Return the (N,) values of field ``name`` from VTU point data."""
     if name in _STRESS_INDEX or name == "pressure":
         key = "stress"
-    elif name in ("velocity", "displacement", "plastic_strain_eq"):
+    elif name in ("velocity", "displacement", "plastic_strain_eq", *PORE_FIELDS):
         key = name
     else:  # pragma: no cover - names are checked before
         raise ParameterError("field", name, "one of " + ", ".join(FIELDS))
+    if key not in pdata and name in PORE_FIELDS:
+        raise ParameterError("field", name, "a field of a result with pore water")
     if key not in pdata:
         raise CheckpointError(
             f"result has no point data {key!r} (has: {', '.join(pdata)})"

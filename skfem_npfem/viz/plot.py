@@ -159,8 +159,11 @@ def plot_results(
     field : str or sequence of str, default "stress_yy"
         Field(s) to draw, see :data:`FIELDS`: ``stress_xx``, ``stress_yy``,
         ``stress_zz``, ``stress_xy`` (``stress_yz``, ``stress_zx`` in 3D), in Pa
-        with tension positive; ``pressure`` (minus the mean normal stress);
-        ``plastic_strain_eq``; ``velocity`` and ``displacement`` (magnitudes).
+        with tension positive (with pore water: the effective stress);
+        ``pressure`` (minus the mean normal stress); ``pore_pressure`` and
+        ``excess_pore_pressure`` (Pa, compression positive; results with pore
+        water only); ``plastic_strain_eq``; ``velocity`` and ``displacement``
+        (magnitudes).
         The default string ``"stress_yy"`` draws the vertical stress
         (``stress_yy`` in 2D, ``stress_zz`` in 3D) *and* ``plastic_strain_eq``;
         pass a list (``["stress_yy"]``) or a comma-separated string
@@ -217,7 +220,10 @@ def plot_results(
     the step marked (and ``load_settlement.png`` on its own), and the settlement
     instead of the pseudo-time in titles; for the cone a window a few D around
     the tip's path (said in the title) and its N_c-w/D curve beside the field;
-    for the slope the section's supports and the boundaries between its layers.
+    for the slope the section's supports and the boundaries between its layers;
+    for a run with pore water its water table (the ``water_level`` of
+    ``scene.json`` across the picture, or a section's water line; in 3D a
+    translucent blue plane at the level).
     The frame holds every particle of the drawn steps (detached grains
     included) and everything the legend names (the cone: its window). 3D
     results are shown in an isometric view (pyvista, surface of the tetrahedra). The
@@ -287,6 +293,7 @@ def plot_results(
                 fast=fast,
                 view=sc.view,
                 floor=sc.floor,
+                water=sc.water_level,
             )
 
         stem = f"{name}_{unit.prefix}"

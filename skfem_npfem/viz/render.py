@@ -237,6 +237,7 @@ class Renderer:
         fast: bool = False,
         view: tuple[float, float, float] | None = None,
         floor: float | None = None,
+        water: float | None = None,
     ) -> None:
         self.pv, self.steps, self.dim, self.name = pv, steps, dim, name
         self.style, self.title, self.tau = style, title, tau
@@ -263,6 +264,7 @@ class Renderer:
         n_cells = max(len(s.cells) for s in steps.values())
         self._add_field(bool(n_cells <= 20000 and spacing * scale >= 14))
         self._add_texts()
+        self.water_actor = None if water is None else self._water(lo, hi, water)
         self.free_actors: list[Any] = []
         # 2D: sphere impostors shift depth by their radius, so the coloured
         # free particles are lifted well above their dark rims
@@ -320,6 +322,19 @@ class Renderer:
             n_zlabels=3,
             fmt="%.2f",
             render=False,
+        )
+
+    def _water(self, lo: np.ndarray, hi: np.ndarray, level: float) -> Any:
+        """A 3D result's water table: a translucent blue plane at its level."""
+        mid = (lo + hi) / 2
+        plane = self.pv.Plane(
+            center=(mid[0], mid[1], level),
+            direction=(0.0, 0.0, 1.0),
+            i_size=hi[0] - lo[0],
+            j_size=hi[1] - lo[1],
+        )
+        return self.pl.add_mesh(
+            plane, color="#0072b2", opacity=0.3, lighting=False, render=False
         )
 
     def _font_size(self) -> int:

@@ -20,7 +20,14 @@ import math
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["coupling_matrix", "projection_matrix", "surface_force", "water_force"]
+__all__ = [
+    "coupling_matrix",
+    "darcy_matrix",
+    "drained_nodes",
+    "projection_matrix",
+    "surface_force",
+    "water_force",
+]
 
 
 def _identity(components: tuple[int, ...]) -> np.ndarray:
@@ -140,3 +147,45 @@ def projection_matrix(op, compliance: np.ndarray, tau: float) -> sp.csc_matrix:
     n = op.n_points
     L = sp.coo_matrix((vals.ravel(), (rows.ravel(), cols.ravel())), shape=(n, n))
     return sp.triu(L.tocsc(), format="csc")
+
+
+def darcy_matrix(op, kappa: np.ndarray) -> sp.csr_matrix:
+    """``H = integral kappa grad phi_i . grad phi_j`` (N x N, symmetric).
+
+    ``kappa = k / gamma_w`` per node (m^2 / (Pa s)); an element takes the mean
+    of its vertices'.  The P1 gradients are constant in an element, so the
+    element's volume (its ``2 pi r`` ring in axisymmetry, exact for the
+    linear weight ``r``) integrates the product exactly.
+    """
+    t = np.asarray(op.t)
+    nv, ne = t.shape
+    grads = np.asarray(op.grads)  # (ne, nv, d)
+    k_e = np.asarray(kappa, float)[t].mean(axis=0)
+    w = k_e * np.asarray(op.element_volumes, float)
+    local = np.einsum("ead,ebd->eab", grads, grads) * w[:, None, None]
+    rows = np.broadcast_to(t.T[:, :, None], (ne, nv, nv))
+    cols = np.broadcast_to(t.T[:, None, :], (ne, nv, nv))
+    n = op.n_points
+    return sp.coo_matrix(
+        (local.ravel(), (rows.ravel(), cols.ravel())), shape=(n, n)
+    ).tocsr()
+
+
+def drained_nodes(op, fixed: np.ndarray, walled: np.ndarray) -> np.ndarray:
+    """Nodes on the free (drained) part of a step's boundary.
+
+    A boundary facet is impermeable when all its nodes are held along the
+    axis closest to its normal (a support or a symmetry plane: ``fixed``,
+    (N, d) bool) or all touch a wall or a body (``walled``, (N,) bool);
+    every other boundary facet is drained, and its nodes are returned
+    (sorted, unique).
+    """
+    t = np.asarray(op.t)
+    nodes, elem, opp = _boundary_facets(t)
+    if not nodes.size:
+        return np.zeros(0, int)
+    normal = np.asarray(op.grads)[elem, opp, :]
+    axis = np.argmax(np.abs(normal), axis=1)
+    held = np.asarray(fixed, bool)[nodes, axis[:, None]].all(axis=1)
+    touching = np.asarray(walled, bool)[nodes].all(axis=1)
+    return np.unique(nodes[~(held | touching)])

@@ -14,7 +14,22 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from skfem import MeshTet, MeshTri
+import scipy.sparse as sp
+from skfem import (
+    Basis,
+    BilinearForm,
+    ElementTriP1,
+    ElementTriP2,
+    ElementVector,
+    FacetBasis,
+    LinearForm,
+    MeshTet,
+    MeshTri,
+    asm,
+    condense,
+    solve,
+)
+from skfem.helpers import ddot, div, sym_grad
 
 import skfem_npfem as npfem
 
@@ -100,43 +115,101 @@ def test_undrained_column_keeps_its_volume_and_the_water_carries_the_load():
     )
 
 
-def test_undrained_step_does_not_lock_and_its_pressure_has_no_checkerboard():
-    # A strip load on a block: an undrained (k = 0) poro-elastic step equals
-    # the nodal-integration elastic step of the undrained Poisson ratio
-    # nu_u -> 1/2 (the mixture keeps its volume), and nodal integration does
-    # not lock there: the settlement stays within 10 % of the drained one
-    # times the classical ratio (1 - nu_u^2)/(1 - nu^2) ... of the same mesh
-    # with nu_u = 0.4999 (the incompressible limit of the same operator).
-    mesh = MeshTri.init_tensor(np.linspace(0, 2, 17), np.linspace(0, 1, 9))
+def _strip_block(nx: int, ny: int):
+    """A 2 x 1 half block, smooth sides, fixed base, q0 = 10 kPa on 0 <= x <= 0.25."""
+    mesh = MeshTri.init_tensor(np.linspace(0, 2, nx + 1), np.linspace(0, 1, ny + 1))
     x = mesh.p.T
     fixed = np.zeros_like(x, bool)
     fixed[:, 1] = x[:, 1] == 0.0
     fixed[:, 0] = (x[:, 0] == 0.0) | (x[:, 0] == 2.0) | (x[:, 1] == 0.0)
     top = x[:, 1] == 1.0
     loads = npfem.surface_load(x, top & (x[:, 0] <= 0.25 + 1e-12), 1e4)
+    return mesh, fixed, loads
 
-    def settle(nu, water):
-        soil = npfem.LinearElastic(E=1e7 * (1 + nu) / 1.3, nu=nu, rho=1.0)
-        p = npfem.Particles.from_mesh(mesh, soil, fixed=fixed)
-        model = npfem.Model(
-            dim=2,
-            materials=[soil],
-            mode="static",
-            gravity=0.0,
-            loads=loads,
-            water=water,
-        )
-        p, _ = npfem.advance(p, model, 1.0, mesh)
-        return -float(np.sum(loads[:, 1] * p.u[:, 1]) / np.sum(loads[:, 1])), p
 
-    s_u, p_u = settle(0.3, npfem.Water("undrained", None, projection=0.0))
-    s_ref, _ = settle(0.4999999, None)
-    assert s_u == pytest.approx(s_ref, rel=1e-4)
-    s_d, _ = settle(0.3, None)
-    assert 0.4 < s_u / s_d < 0.6  # Taylor-Hood reference ratio 0.511
-    # Pressure smoothness: neighbouring particles differ by a fraction of
-    # the range (a checkerboard alternates by about the range itself).
-    t = mesh.t
-    pp = p_u.excess_pore_pressure
-    jumps = np.abs(pp[t] - np.roll(pp[t], 1, axis=0)).max()
-    assert jumps < 0.6 * (pp.max() - pp.min())
+SHEAR = 1e7 / 2.6  # G of E = 10 MPa, nu = 0.3
+
+
+def _settle(mesh, fixed, loads, nu, water):
+    """Work-conjugate settlement f . u / (q0 b) of one static step, m."""
+    soil = npfem.LinearElastic(E=2 * SHEAR * (1 + nu), nu=nu, rho=1.0)
+    p = npfem.Particles.from_mesh(mesh, soil, fixed=fixed)
+    model = npfem.Model(
+        dim=2, materials=[soil], mode="static", gravity=0.0, loads=loads, water=water
+    )
+    p, _ = npfem.advance(p, model, 1.0, mesh)
+    return float(np.sum(loads * p.u) / np.sum(loads[:, 1])), p
+
+
+def _taylor_hood_settlement(nx: int, ny: int) -> float:
+    """The incompressible strip-load settlement with Taylor-Hood P2/P1 (scikit-fem).
+
+    An independent discretisation of the same problem (displacement P2,
+    pressure P1, exactly incompressible): the reference the undrained step
+    converges to.
+    """
+    m = MeshTri.init_tensor(np.linspace(0, 2, nx + 1), np.linspace(0, 1, ny + 1))
+    ub = Basis(m, ElementVector(ElementTriP2()), intorder=4)
+    pb = Basis(m, ElementTriP1(), intorder=4)
+
+    @BilinearForm
+    def a(u, v, w):
+        return 2 * SHEAR * ddot(sym_grad(u), sym_grad(v))
+
+    @BilinearForm
+    def b(u, q, w):
+        return -q * div(u)
+
+    @LinearForm
+    def load(v, w):
+        return -1e4 * v[1]
+
+    B = asm(b, ub, pb)
+    K = sp.bmat([[asm(a, ub), B.T], [B, None]], "csr")
+    strip = m.facets_satisfying(lambda x: (x[1] > 1 - 1e-9) & (x[0] < 0.25 + 1e-9))
+    f_u = asm(load, FacetBasis(m, ub.elem, facets=strip))
+    f = np.concatenate([f_u, np.zeros(pb.N)])
+    sides = ub.get_dofs(lambda x: (x[0] < 1e-9) | (x[0] > 2 - 1e-9)).all("u^1")
+    base = ub.get_dofs(lambda x: x[1] < 1e-9).all()
+    D = np.unique(np.concatenate([sides, base]))
+    x = solve(*condense(K, f, D=D))
+    return float(f_u @ x[: ub.N] / (-1e4 * 0.25))
+
+
+def test_undrained_step_does_not_lock_and_converges_to_taylor_hood():
+    # An undrained (k = 0) poro-elastic step of a strip load: the mixture
+    # keeps its volume, so it equals the nodal elastic step of nu -> 1/2
+    # (nodal integration does not lock there), and it converges from above
+    # to the exactly incompressible Taylor-Hood solution of the same problem.
+    reference = _taylor_hood_settlement(64, 32)
+    errors = []
+    for nx, ny in ((16, 8), (32, 16)):
+        mesh, fixed, loads = _strip_block(nx, ny)
+        no_projection = npfem.Water("undrained", None, projection=0.0)
+        s_u, _ = _settle(mesh, fixed, loads, 0.3, no_projection)
+        s_nu, _ = _settle(mesh, fixed, loads, 0.4999999, None)
+        assert s_u == pytest.approx(s_nu, rel=1e-5)
+        errors.append(s_u / reference - 1)
+    assert 0 < errors[1] < 0.03
+    assert errors[1] < 0.5 * errors[0]
+    # ... and about half the drained settlement (undrained / drained 0.511
+    # for this block by Taylor-Hood at nu = 0.3).
+    s_d, _ = _settle(mesh, fixed, loads, 0.3, None)
+    assert s_u / s_d == pytest.approx(0.511, abs=0.01)
+
+
+def test_pressure_projection_keeps_the_undrained_pressure_in_its_range():
+    # Under a strip load the exact excess pore pressure lies between 0 and
+    # the load q0 (it is minus the change of the total mean stress of an
+    # incompressible elastic half-plane under a strip, which lies in
+    # [-q0, 0]).  The raw nodal pressure overshoots both bounds on a lattice
+    # of parallel diagonals (its checkerboard); the projection pulls it in.
+    mesh, fixed, loads = _strip_block(16, 8)
+    _, raw = _settle(
+        mesh, fixed, loads, 0.3, npfem.Water("undrained", None, projection=0.0)
+    )
+    _, proj = _settle(mesh, fixed, loads, 0.3, npfem.Water("undrained", None))
+    for p, low, high in ((raw, -0.2, 1.05), (proj, -0.07, 0.95)):
+        q = p.excess_pore_pressure / 1e4
+        assert low < q.min() and q.max() < high
+    assert proj.excess_pore_pressure.min() > raw.excess_pore_pressure.min()
