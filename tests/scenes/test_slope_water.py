@@ -12,6 +12,7 @@ known in closed form.
 
 from __future__ import annotations
 
+import json
 import math
 
 import pytest
@@ -74,3 +75,25 @@ def test_submerged_griffiths_lane_slope_converges():
     wet = {**GRIFFITHS_LANE, "c": c, "water_level": 12.0, "rho_w": RHO_W}
     m = npfem.run_scene("slope", {**wet, "spacing": 0.5})["metrics"]
     assert abs(m["factor_of_safety"] / BISHOP_MORGENSTERN_FOS - 1) < 0.01
+
+
+def test_a_section_files_water_line_makes_the_slope_wet(tmp_path):
+    """A phreatic line over the crest in the file: tan(phi')/tan(beta) within 5 %."""
+    x_toe = 6.0 + 4.0 / math.tan(math.radians(30.0))
+    W = x_toe + 10.0
+    polygon = [[0, 0], [W, 0], [W, 1], [x_toe, 1], [6, 5], [0, 5], [0, 0]]
+    section = {
+        "materials": {"sand": {"c": 0.0, "phi": 35.0, "rho": 2000.0}},
+        "regions": [{"material": "sand", "polygon": polygon}],
+        "supports": {"base": "fixed", "sides": "rollers"},
+        "water": [[0, 6], [W, 6]],
+    }
+    path = tmp_path / "submerged.json"
+    path.write_text(json.dumps(section))
+    s = npfem.run_scene(
+        "slope", {"geometry": str(path), "analysis": "limit", "spacing": 0.4}
+    )
+    assert s["parameters"]["drainage"] == "drained"
+    assert s["metrics"]["pore_pressure_max"] == pytest.approx(1000.0 * 9.81 * 6.0)
+    ref = math.tan(math.radians(35.0)) / math.tan(math.radians(30.0))
+    assert abs(s["metrics"]["factor_of_safety"] / ref - 1) < 0.05

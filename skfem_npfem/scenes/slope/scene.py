@@ -27,10 +27,9 @@ Stages, in one run:
    PFEM loop run until the slide is at rest (kinetic energy below
    ``rest_fraction`` of its peak) or ``t_end``.
 
-With ``water_level`` the soil is wet (``rho`` saturated, ``c``, ``phi``
-effective; initial stresses effective, pore pressure hydrostatic); the factor
-of safety adds the pore pressure's force (``drained``) or uses the undrained
-strengths of the initial effective stresses (``undrained``; :mod:`.water`).
+With water (``rho`` saturated, ``c``, ``phi`` effective) the factor of safety
+adds the pore pressure's force (``drained``) or uses the undrained strengths
+of the initial effective stresses (``undrained``; :mod:`.water`).
 """
 
 from __future__ import annotations
@@ -62,7 +61,7 @@ from ..common import (
 from ..limit_mode import LIMIT_METRICS, analysis_param
 from ..params import ANGLE, POSITIVE, Param, Values
 from ..scenery import Scenery, number, section_lines
-from ..water import WATER_PARAMS, derive_drainage
+from ..water import WATER_PARAMS
 from .runout import (
     runout_metrics,
 )
@@ -73,7 +72,12 @@ from .stages import (
     initial_stress,
     slope_body,
 )
-from .water import recorded_parameters, slope_water, static_pressure
+from .water import (
+    derive_slope_drainage,
+    recorded_parameters,
+    slope_water,
+    wet_particles,
+)
 
 MATERIALS = ("mohr-coulomb", "tresca")
 
@@ -214,9 +218,8 @@ METRICS = {
     "collapse_multiplier": "gravity multiplier of the unreduced strengths (the "
     "first program; capped at 1e3: a cohesionless slope that stands carries "
     "any multiple of its weight)",
-    "undrained_strength_min": "drainage=undrained only: the smallest undrained "
-    "strength s_u = c' cos phi' + s'_0 sin phi' of the initial effective "
-    "stresses the factor of safety used, Pa",
+    "undrained_strength_min": "drainage=undrained: the smallest strength s_u = "
+    "c' cos phi' + s'_0 sin phi' (initial effective stress) used for F, Pa",
     "undrained_strength_max": "drainage=undrained only: the largest one, Pa",
 }
 
@@ -341,7 +344,7 @@ def resolve_values(values: dict[str, Any]) -> None:
 
     The parametric slope's ``crest_length`` (1.5 H) and ``toe_length`` (2.5 H)
     are filled first.
-    ``drainage`` follows ``water_level``.
+    ``drainage`` follows ``water_level`` (or a section file's water line).
     The spacing defaults to H/10 (a section file: its tallest region / 20);
     ``dt`` to ``0.02 sqrt(H/g)`` and ``t_end`` to ``15 sqrt(H/g)`` with the
     height H of the section filled at that spacing.  A section too large for
@@ -352,7 +355,7 @@ def resolve_values(values: dict[str, Any]) -> None:
     values : dict
         The checked parameter values (defaults and overrides).
     """
-    derive_drainage(values)
+    derive_slope_drainage(values)
     if not values["geometry"]:
         H = values["height"]
         if values["crest_length"] is None:
@@ -414,9 +417,7 @@ def build(
     particles = Particles.create(
         pts, masses, stress=sigma, fixed=fixed, material=material
     )
-    if water is not None:  # the table's hydrostatic pore pressure, no excess
-        p0 = static_pressure(water, pts)
-        particles = particles.replace(pore_pressure=p0, excess_pore_pressure=0 * p0)
+    particles = wet_particles(particles, water)
     model = flow_model(values, body, state, run_out)
     source = (
         AlphaShapeMesher(body.h, values["alpha"]) if run_out else FixedMesh(body.mesh.t)

@@ -12,7 +12,6 @@ the skeleton with the saturated weight and the pore pressure's force
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -21,45 +20,78 @@ from ...constants import GRAVITY
 from ...limit.undrained import UndrainedStrength
 from ...materials import Material
 from ...mesh.regions import CrossSection
+from ...mesh.section_water import section_water
+from ...particles import Particles
 from ...water import Water, WaterTable
-from ..water import scene_water
+from ..water import derive_drainage, is_wet, scene_water
+from .section import section_of
 
 __all__ = [
+    "derive_slope_drainage",
     "recorded_parameters",
+    "section_has_water",
     "section_table",
     "slope_water",
     "static_pressure",
     "undrained_metrics",
+    "wet_particles",
 ]
 
 
-def section_table(sec: CrossSection) -> WaterTable | None:
-    """The water line of a cross-section file, if it has one.
+def section_table(sec: CrossSection, rho_w: float = 1000.0) -> WaterTable | None:
+    """The water table of a cross-section file's phreatic line (None: none)."""
+    return section_water(sec, rho_w)
 
-    HOOK (to be wired when cross-section files carry a water line): return
-    ``skfem_npfem.mesh.section_file.section_water(sec, rho_w)`` for a
-    section with ``sec.water``.  Until then a section has no water line of
-    its own, and the scene's ``water_level`` is the only table.
+
+def section_has_water(values: Mapping[str, Any]) -> bool:
+    """The run's cross-section file gives a phreatic line (``"water"``)."""
+    return bool(values.get("geometry")) and section_of(values)[0].water is not None
+
+
+def derive_slope_drainage(values: dict[str, Any]) -> None:
+    """Fill ``drainage``: a section file's water line counts as a water level.
+
+    Without ``water_level``, a cross-section file with a phreatic line makes
+    the soil ``drained`` by default (``drainage=dry`` ignores the line);
+    otherwise :func:`~skfem_npfem.scenes.water.derive_drainage`.
     """
-    return None
+    if values.get("water_level") is None and section_has_water(values):
+        if values.get("drainage") is None:
+            values["drainage"] = "drained"
+        return
+    derive_drainage(values)
 
 
 def slope_water(values: Mapping[str, Any], sec: CrossSection) -> Water | None:
     """The slope's :class:`~skfem_npfem.Water` (None: dry).
 
     The scene's ``water_level`` sets the table; without one, the section
-    file's water line (:func:`section_table`) does, when it has one.
+    file's phreatic line (:func:`section_table`) does.
     """
-    water = scene_water(values)
-    table = section_table(sec)
-    if water is None or table is None or values.get("water_level") is not None:
-        return water
-    return replace(water, table=table)
+    if not is_wet(values):
+        return None
+    table = None
+    if values.get("water_level") is None:
+        table = section_table(sec, float(values["rho_w"]))
+    if table is None:
+        return scene_water(values)
+    return Water(values["drainage"], table, float(values["rho_w"]))
 
 
 def static_pressure(water: Water | None, x: np.ndarray) -> np.ndarray | None:
     """The static pore pressure at ``x`` under gravity (None when dry), Pa."""
     return None if water is None else water.static_pressure(x, GRAVITY)
+
+
+def wet_particles(particles: Particles, water: Water | None) -> Particles:
+    """The initial particles with the table's hydrostatic pore pressure, no excess.
+
+    Dry (``water`` None): the particles as they are.
+    """
+    if water is None:
+        return particles
+    p0 = water.static_pressure(particles.x, GRAVITY)
+    return particles.replace(pore_pressure=p0, excess_pore_pressure=0 * p0)
 
 
 def undrained_metrics(mats: list[Material]) -> dict[str, float]:
