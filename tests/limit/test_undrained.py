@@ -87,3 +87,23 @@ def test_bad_input():
         undrained_strength(npfem.VonMises(1e7, 0.3, sigma_y=1e3), np.zeros((1, 4)))
     with pytest.raises(ParameterError, match="stress"):
         undrained_materials([mc], np.zeros(3, int), np.zeros((2, 4)))
+
+
+def test_undrained_drucker_prager_footing_is_von_mises_at_p0():
+    """Drucker-Prager cut at p'_0: von Mises sqrt(J2) <= k + 3 alpha p'_0, and a
+    plane-strain von Mises footing carries (2 + pi) times that (Prandtl)."""
+    mesh, fixed, foot, load = footing_problem()
+    n = mesh.p.shape[1]
+    c, p0, phi = 1.0e4, 5.0e4, 30.0
+    stress = np.zeros((n, 4))
+    stress[:, :3] = -p0
+    dp = npfem.DruckerPrager(1e8, 0.3, c=c, phi=phi)
+    t = math.tan(math.radians(phi))
+    root = math.sqrt(9 + 12 * t**2)  # the plane-strain match
+    s_u = 3 * c / root + 3 * (t / root) * p0
+    assert undrained_strength(dp, stress[:1])[0] == pytest.approx(s_u, rel=1e-12)
+    mats = undrained_materials([dp], np.zeros(n, int), stress)
+    res = npfem.limit_analysis(
+        mesh, mats, np.zeros(n, int), s_u * load, fixed=fixed, tied=[2 * foot + 1]
+    )
+    assert abs(res.multiplier / (2 + math.pi) - 1) < UNDRAINED_TOL
