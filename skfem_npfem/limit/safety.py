@@ -22,6 +22,7 @@ __all__ = [
     "BISECTION_TOL",
     "CAP",
     "FLOOR",
+    "MIN_FACTOR",
     "SafetyResult",
     "reduced_strength",
     "strength_reduction",
@@ -122,10 +123,22 @@ def strength_reduction(
     (geometrically) down to a relative width ``max(tol, 2e-3)``: 9-12
     programs for a dry sand slope.
 
+    With pore water the cones carry effective stress and ``load`` is the
+    load of gravity on the skeleton: the weight with the saturated density
+    plus the force of the pore pressure,
+    :func:`~skfem_npfem.water.water_force` (:func:`~.loads.gravity_load`
+    builds it).  Both are proportional to ``g`` (the pore pressure of a
+    water table is ``rho_w g`` times a head), so the multiplier scales
+    weight and water force together and ``lambda(F) = 1`` is the real state
+    of the wet soil.  An undrained analysis passes
+    :func:`~.undrained.undrained_materials`: ``c'`` and ``tan(phi')`` are
+    reduced and the undrained strengths follow, ``s'_0`` kept.
+
     Parameters
     ----------
     operator, materials, material, load, fixed, tied, options
-        As :func:`limit_analysis` (``load``: the body's weight).
+        As :func:`limit_analysis` (``load``: the body's weight, with the
+        water's force when there is water).
     tol : float
         Tolerance on ``|log lambda|`` (about the relative error of ``F``).
     max_programs : int
@@ -169,8 +182,10 @@ def strength_reduction(
     x = 0.0
     width = math.log1p(max(tol, BISECTION_TOL))
     while True:
-        if len(iterates) >= max_programs:
-            raise _no_factor(max_programs, *iterates[-1])
+        if len(iterates) >= max_programs or x < math.log(MIN_FACTOR):
+            # (Below MIN_FACTOR: a part with no strength at all, e.g. undrained
+            # points at zero effective stress, carries nothing at any F.)
+            raise _no_factor(len(iterates), *iterates[-1])
         res = solve(math.exp(x))
         lam = res.multiplier
         iterates.append((math.exp(x), lam))
@@ -220,7 +235,8 @@ def _no_factor(programs: int, F: float, lam: float) -> NpfemError:
         f"programs (last F = {F:.6g}, multiplier {lam:.6g}): no reduction F "
         "brings the gravity multiplier to 1, as for a body that its supports do "
         "not carry (a region resting on nothing) or one whose multiplier jumps "
-        "between 0 and the cap; check the supports and regions"
+        "between 0 and the cap; check the supports and regions (undrained: "
+        "points at zero effective stress have no strength unless c' > 0)"
     )
 
 
@@ -235,3 +251,7 @@ FLOOR = 1.0e-3
 
 #: Relative width at which a bisection of :func:`strength_reduction` stops.
 BISECTION_TOL = 2e-3
+
+
+#: Smallest factor of safety :func:`strength_reduction` tries.
+MIN_FACTOR = 1.0e-6

@@ -41,6 +41,17 @@ GRIFFITHS_LANE = {
     "spacing": 1.0,
 }
 
+#: A cohesionless slope (beta = 30 deg, phi = 35 deg) at spacing H/10.
+SAND = {
+    "analysis": "limit",
+    "c": 0.0,
+    "phi": 35.0,
+    "angle": 30.0,
+    "height": 4.0,
+    "foundation_depth": 1.0,
+    "spacing": 0.4,
+}
+
 
 def test_fill_regions_area_and_materials():
     """Two regions sharing an edge: mesh area exact, nodes by region."""
@@ -149,18 +160,7 @@ def test_vertical_cut_stability_number():
 
 def test_cohesionless_slope_infinite_slope_value():
     """Dry sand: tan(phi)/tan(beta) within 5 % at H/10 (+3.9 %; +1.5 % at H/20)."""
-    m = npfem.run_scene(
-        "slope",
-        {
-            "analysis": "limit",
-            "c": 0.0,
-            "phi": 35.0,
-            "angle": 30.0,
-            "height": 4.0,
-            "foundation_depth": 1.0,
-            "spacing": 0.4,
-        },
-    )["metrics"]
+    m = npfem.run_scene("slope", SAND)["metrics"]
     ref = math.tan(math.radians(35.0)) / math.tan(math.radians(30.0))
     assert abs(m["factor_of_safety"] / ref - 1) < 0.05
 

@@ -15,7 +15,9 @@ import numpy as np
 from skfem import MeshTri
 
 from ...constants import GRAVITY
+from ...limit.loads import gravity_load
 from ...limit.safety import strength_reduction
+from ...limit.undrained import undrained_materials
 from ...mesh.smoothing import nodal_integration
 from ...run.simulation import Simulation
 from ..common import (
@@ -120,7 +122,9 @@ def deposit_factor_of_safety(sim: Simulation, values: Mapping[str, Any]) -> floa
 
     A second limit analysis, on the alpha-shape mesh of the particles at the
     end of the run (supports as at the start); at least 1 when the deposit is
-    statically admissible.
+    statically admissible.  With water, as the slope's: the static pore
+    pressure's force (drained) or the undrained strengths of the particles'
+    effective stresses at the end (undrained).
     """
     p = sim.particles
     active, t = sim.mesh_source(p.x)
@@ -128,12 +132,16 @@ def deposit_factor_of_safety(sim: Simulation, values: Mapping[str, Any]) -> floa
     ni = nodal_integration(mesh, (0, 1, 3))
     material = np.asarray(p.material)[active]
     rho = np.array([m.rho for m in sim.model.materials])[material]
-    load = np.zeros((active.size, 2))
-    load[:, 1] = -rho * GRAVITY * ni.volumes
+    water, x = sim.model.water, p.x[active]
+    pore = None if water is None else water.static_pressure(x, GRAVITY)
+    load = gravity_load(ni, rho, GRAVITY, x=x, pore_pressure=pore)
     fixed = np.asarray(p.fixed, bool)[active]
+    mats = sim.model.materials
+    if water is not None and water.undrained:
+        mats = undrained_materials(mats, material, np.asarray(p.stress)[active])
     res = strength_reduction(
         ni,
-        sim.model.materials,
+        mats,
         material,
         load,
         fixed=fixed,

@@ -26,13 +26,16 @@ Stages, in one run:
    the factor of safety is below 1: such a slope fails as it is) and the
    PFEM loop run until the slide is at rest (kinetic energy below
    ``rest_fraction`` of its peak) or ``t_end``.
+
+With water (``rho`` saturated, ``c``, ``phi`` effective) the factor of safety
+adds the pore pressure's force (``drained``) or uses the undrained strengths
+of the initial effective stresses (``undrained``; :mod:`.water`).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -40,7 +43,7 @@ import numpy as np
 
 from ...constants import GRAVITY
 from ...errors import NpfemError, ParameterError
-from ...mesh.regions import CrossSection, fill_regions
+from ...mesh.regions import fill_regions
 from ...mesh.smoothing import nodal_integration
 from ...mesh.sources import AlphaShapeMesher, FixedMesh
 from ...particles import Particles
@@ -58,15 +61,22 @@ from ..common import (
 from ..limit_mode import LIMIT_METRICS, analysis_param
 from ..params import ANGLE, POSITIVE, Param, Values
 from ..scenery import Scenery, number, section_lines
+from ..water import WATER_PARAMS
+from ..wet_soil import recorded_parameters
 from .runout import (
     runout_metrics,
 )
-from .section import check_section, section_of
+from .section import check_section, section_of, toe_and_crest
 from .stages import (
     flow_model,
     fos_metrics,
     initial_stress,
     slope_body,
+)
+from .water import (
+    derive_slope_drainage,
+    slope_water,
+    wet_particles,
 )
 
 MATERIALS = ("mohr-coulomb", "tresca")
@@ -115,7 +125,8 @@ PARAMS = [
         float,
         **ANGLE,
     ),
-    Param("rho", 2000.0, "kg/m^3", "density", float, **POSITIVE),
+    Param("rho", 2000.0, "kg/m^3", "density (saturated with water)", float, **POSITIVE),
+    *WATER_PARAMS,
     Param(
         "initial_stress",
         "gravity",
@@ -207,6 +218,9 @@ METRICS = {
     "collapse_multiplier": "gravity multiplier of the unreduced strengths (the "
     "first program; capped at 1e3: a cohesionless slope that stands carries "
     "any multiple of its weight)",
+    "undrained_strength_min": "drainage=undrained: the smallest strength s_u = "
+    "c' cos phi' + s'_0 sin phi' (initial effective stress) used for F, Pa",
+    "undrained_strength_max": "drainage=undrained only: the largest one, Pa",
 }
 
 
@@ -286,6 +300,8 @@ def ignored(values: dict[str, Any], given: frozenset[str]) -> None:
     """
     refuse_frictional(values, given)
     limit = values["analysis"] == "limit"
+    # Undrained, the factor of safety needs the initial effective stresses.
+    stresses = not limit or values.get("drainage") == "undrained"
     if values["geometry"]:
         if values["material"] == "tresca":
             raise ParameterError(
@@ -303,7 +319,7 @@ def ignored(values: dict[str, Any], given: frozenset[str]) -> None:
             "false with analysis=limit (one cone program: no failure and "
             "run-out stage); choose analysis=incremental for the run-out",
         )
-    if limit:
+    if not stresses:
         warn_unused(
             given,
             ("E", "nu", "initial_stress", "K0"),
@@ -328,6 +344,7 @@ def resolve_values(values: dict[str, Any]) -> None:
 
     The parametric slope's ``crest_length`` (1.5 H) and ``toe_length`` (2.5 H)
     are filled first.
+    ``drainage`` follows ``water_level`` (or a section file's water line).
     The spacing defaults to H/10 (a section file: its tallest region / 20);
     ``dt`` to ``0.02 sqrt(H/g)`` and ``t_end`` to ``15 sqrt(H/g)`` with the
     height H of the section filled at that spacing.  A section too large for
@@ -338,6 +355,7 @@ def resolve_values(values: dict[str, Any]) -> None:
     values : dict
         The checked parameter values (defaults and overrides).
     """
+    derive_slope_drainage(values)
     if not values["geometry"]:
         H = values["height"]
         if values["crest_length"] is None:
@@ -382,19 +400,24 @@ def build(
     pts, material, fixed = body.pts, body.material, body.fixed
     H = float(np.ptp(pts[:, 1]))
     limit_only = values["analysis"] == "limit"
+    water = slope_water(values, body.sec)
     state: dict[str, Any] = {}
     if limit_only:
         sigma, resid = np.zeros((len(pts), 4)), None
     else:
         t0 = time.perf_counter()
-        sigma, resid = initial_stress(values, body.mesh, body.mats, material, fixed)
+        sigma, resid = initial_stress(
+            values, body.mesh, body.mats, material, fixed, water
+        )
         state["t_initial"] = time.perf_counter() - t0
+        state["initial_stress"] = sigma
     ni = nodal_integration(body.mesh, (0, 1, 3))
     masses = np.array([m.rho for m in body.mats])[material] * ni.volumes
     run_out = values["runout"] and not limit_only
     particles = Particles.create(
         pts, masses, stress=sigma, fixed=fixed, material=material
     )
+    particles = wet_particles(particles, water)
     model = flow_model(values, body, state, run_out)
     source = (
         AlphaShapeMesher(body.h, values["alpha"]) if run_out else FixedMesh(body.mesh.t)
@@ -408,9 +431,9 @@ def build(
         max_displacement=values["max_displacement"],
         writer=make_writer(out, resume),
         progress=progress,
-        meta={"scene": "slope", "parameters": dict(values)},
+        meta={"scene": "slope", "parameters": recorded_parameters(values)},
     )
-    toe_crest = _toe_and_crest(body.sec, values)
+    toe_crest = toe_and_crest(body.sec, values)
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
         fos = fos_metrics(values, body, state, out)
@@ -433,29 +456,6 @@ def build(
         metrics,
         derived=derived | {"reduction": state["reduction"]},
     )
-
-
-def _toe_and_crest(sec: CrossSection, values: Mapping[str, Any]):
-    """Toe and crest points of the section (parametric: exact; file: estimated)."""
-    if not values["geometry"]:
-        H, D = values["height"], values["foundation_depth"]
-        crest = 1.5 * H if values["crest_length"] is None else values["crest_length"]
-        run = (
-            0.0
-            if values["angle"] >= 90
-            else H / math.tan(math.radians(values["angle"]))
-        )
-        return crest + run, D, crest, D + H
-    allp = np.concatenate([r.polygon for r in sec.regions])
-    top = allp[:, 1].max()
-    crest_pts = allp[np.isclose(allp[:, 1], top)]
-    x_crest = float(crest_pts[:, 0].max())
-    right = allp[allp[:, 0] > x_crest + 1e-9]
-    if right.size == 0:
-        return x_crest, top, x_crest, top
-    y_toe = float(right[:, 1].max()) if right.size else top
-    low = right[np.isclose(right[:, 1], right[:, 1].max())]
-    return float(low[:, 0].min()), y_toe, x_crest, float(top)
 
 
 def slope_scenery(p: dict, folder: Path | None = None) -> Scenery:

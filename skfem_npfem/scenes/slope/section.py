@@ -24,6 +24,7 @@ __all__ = [
     "section_of",
     "section_warnings",
     "supports",
+    "toe_and_crest",
 ]
 
 
@@ -199,3 +200,26 @@ def _surface_height(x: np.ndarray, at: np.ndarray, width: float = 0.0) -> np.nda
     np.maximum.at(top, b, x[:, 1])
     out = np.maximum(np.maximum(top[qb - 1], top[qb]), top[qb + 1])
     return np.where(np.isfinite(out), out, np.nan)
+
+
+def toe_and_crest(sec: CrossSection, values: Mapping[str, Any]):
+    """Toe and crest points of the section (parametric: exact; file: estimated)."""
+    if not values["geometry"]:
+        H, D = values["height"], values["foundation_depth"]
+        crest = 1.5 * H if values["crest_length"] is None else values["crest_length"]
+        run = (
+            0.0
+            if values["angle"] >= 90
+            else H / math.tan(math.radians(values["angle"]))
+        )
+        return crest + run, D, crest, D + H
+    allp = np.concatenate([r.polygon for r in sec.regions])
+    top = allp[:, 1].max()
+    crest_pts = allp[np.isclose(allp[:, 1], top)]
+    x_crest = float(crest_pts[:, 0].max())
+    right = allp[allp[:, 0] > x_crest + 1e-9]
+    if right.size == 0:
+        return x_crest, top, x_crest, top
+    y_toe = float(right[:, 1].max()) if right.size else top
+    low = right[np.isclose(right[:, 1], right[:, 1].max())]
+    return float(low[:, 0].min()), y_toe, x_crest, float(top)

@@ -24,13 +24,16 @@ from skfem import MeshTri
 from ...boundary import Contacts
 from ...constants import GRAVITY
 from ...errors import NpfemError
+from ...limit.loads import gravity_load
 from ...limit.safety import SafetyResult, reduced_strength, strength_reduction
+from ...limit.undrained import undrained_materials
 from ...materials import LinearElastic, Material
 from ...mesh.regions import CrossSection, check_regions, fill_regions
 from ...mesh.smoothing import nodal_integration
 from ...step.conic import solve_step
 from ...step.model import Model
 from ...step.program import ConeInput
+from ...water import Water, water_force
 from ..common import fidelity_from, solver_from
 from ..limit_mode import limit_metrics
 from .runout import save_mechanism
@@ -41,6 +44,7 @@ from .section import (
     section_warnings,
     supports,
 )
+from .water import slope_water, static_pressure, undrained_metrics
 
 __all__ = [
     "SlopeBody",
@@ -64,8 +68,16 @@ def initial_stress(
     mats: list[Material],
     material: np.ndarray,
     fixed: np.ndarray,
+    water: Water | None = None,
 ) -> tuple[np.ndarray, float]:
-    """Stage 1: the initial stresses (full Voigt) and their equilibrium residual.
+    """Stage 1: the initial (effective) stresses and their equilibrium residual.
+
+    With water the stresses are effective ones: the gravity step is loaded
+    with the saturated weight and the static pore pressure's force
+    (buoyancy, and the free water's pressure on a submerged surface), and
+    ``k0`` takes ``s'_v = -(rho g (z_s - z) + p_s - p)`` with ``p`` the static
+    pore pressure and ``p_s`` its value at the surface above (free water),
+    ``s'_h = K0 s'_v``.
 
     Parameters
     ----------
@@ -79,11 +91,13 @@ def initial_stress(
         Material index per particle.
     fixed : ndarray (n, 2) bool
         Supports.
+    water : Water, optional
+        The pore water (None: dry).
 
     Returns
     -------
     sigma : ndarray (n, 4)
-        Initial stresses, Pa.
+        Initial (effective) stresses, Pa.
     residual : float
         ``|G s - f| / |f|`` on the free dofs.
     """
@@ -92,6 +106,9 @@ def initial_stress(
     rho = np.array([m.rho for m in mats])[material]
     force = np.zeros_like(x)
     force[:, 1] = -rho * GRAVITY * ni.volumes
+    p = static_pressure(water, x)
+    if p is not None:
+        force = force + water_force(ni, x, p)
     if values["initial_stress"] == "gravity":
         elastic = [LinearElastic(m.E, m.nu, m.rho) for m in mats]
         data = ConeInput(
@@ -112,6 +129,9 @@ def initial_stress(
         k0 = 1 - np.sin(np.radians(phi)) if K0 is None else np.full(len(x), K0)
         sigma = np.zeros((x.shape[0], 4))
         sigma[:, 1] = -rho * GRAVITY * (surface - x[:, 1])
+        if p is not None:
+            top = np.column_stack([x[:, 0], surface])
+            sigma[:, 1] += p - static_pressure(water, top)
         sigma[:, 0] = sigma[:, 2] = k0 * sigma[:, 1]
     free = ~fixed.reshape(-1)
     resid = ni.G @ sigma[:, [0, 1, 3]].reshape(-1) - force.reshape(-1)
@@ -125,13 +145,23 @@ def factor_of_safety(
     mats: list[Material],
     material: np.ndarray,
     fixed: np.ndarray,
-) -> tuple[SafetyResult, Any]:
+    water: Water | None = None,
+    stress: np.ndarray | None = None,
+) -> tuple[SafetyResult, Any, list[Material]]:
     """Stage 2: strength reduction on the initial mesh (its limit analysis).
+
+    With water the load is the saturated weight plus the static pore
+    pressure's force (:func:`~skfem_npfem.limit.loads.gravity_load`);
+    undrained, the materials are the undrained strengths of the initial
+    effective stresses (:func:`~skfem_npfem.limit.undrained_materials`).
 
     Parameters
     ----------
-    values, mesh, mats, material, fixed
+    values, mesh, mats, material, fixed, water
         As in :func:`initial_stress`.
+    stress : ndarray (n, 4), optional
+        Initial effective stresses of an undrained analysis (default: those
+        of :func:`initial_stress`).
 
     Returns
     -------
@@ -139,14 +169,24 @@ def factor_of_safety(
         Factor of safety, iterates and the last limit analysis.
     ni : NodalIntegration
         The mesh's strain operator (its cell volumes).
+    mats : list of Material
+        The (unreduced) materials of the analysis.
     """
     ni = nodal_integration(mesh, (0, 1, 3))
     rho = np.array([m.rho for m in mats])[material]
-    load = np.zeros((mesh.p.shape[1], 2))
-    load[:, 1] = -rho * GRAVITY * ni.volumes
-    return strength_reduction(
-        ni, mats, material, load, fixed=fixed, options=solver_from(values)
-    ), ni
+    x = mesh.p.T
+    load = gravity_load(ni, rho, GRAVITY, x=x, pore_pressure=static_pressure(water, x))
+    if water is not None and water.undrained:
+        if stress is None:
+            stress = initial_stress(values, mesh, mats, material, fixed, water)[0]
+        mats = undrained_materials(mats, material, stress)
+    return (
+        strength_reduction(
+            ni, mats, material, load, fixed=fixed, options=solver_from(values)
+        ),
+        ni,
+        mats,
+    )
 
 
 @dataclass
@@ -234,8 +274,14 @@ def fos_metrics(
     """
     if "fos" not in state:
         t0 = time.perf_counter()
-        res, ni_ = factor_of_safety(
-            values, body.mesh, body.mats, body.material, body.fixed
+        res, ni_, mats = factor_of_safety(
+            values,
+            body.mesh,
+            body.mats,
+            body.material,
+            body.fixed,
+            slope_water(values, body.sec),
+            state.get("initial_stress"),
         )
         state["t_fos"] = time.perf_counter() - t0
         state["fos"] = res
@@ -254,6 +300,7 @@ def fos_metrics(
             # The gravity multiplier of the slope as it is (F = 1).
             "collapse_multiplier": res.multiplier_unreduced,
             **spacing_check(values, res.factor_of_safety, state),
+            **undrained_metrics(mats),
         }
         state["fos_volumes"] = ni_.volumes
     if out is not None and not state.get("mechanism_saved"):
@@ -298,8 +345,13 @@ def spacing_check(
     try:
         check_regions(section_of(coarse)[0].regions, coarse["spacing"])
         body = slope_body(coarse)
-        res, _ = factor_of_safety(
-            coarse, body.mesh, body.mats, body.material, body.fixed
+        res, _, _ = factor_of_safety(
+            coarse,
+            body.mesh,
+            body.mats,
+            body.material,
+            body.fixed,
+            slope_water(coarse, body.sec),
         )
         F2: float | None = float(res.factor_of_safety)
     except (NpfemError, ValueError):
@@ -366,6 +418,7 @@ def flow_model(
     return Model(
         dim=2,
         materials=flow_mats,
+        water=slope_water(values, body.sec),
         gravity=GRAVITY,
         mode="dynamic",
         solver=solver_from(values),
