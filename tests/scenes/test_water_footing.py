@@ -135,8 +135,18 @@ def test_limit_analysis_with_water():
     wet = run_scene("strip-footing", o | {"rho": 2000.0, "water_level": 5.0})
     dry = run_scene("strip-footing", o | {"rho": 1000.0})
     assert wet["metrics"]["q_ult"] == pytest.approx(dry["metrics"]["q_ult"], rel=1e-6)
-    with pytest.raises(ParameterError, match="drainage"):
-        run_scene("strip-footing", o | {"drainage": "undrained", "rho": 2000.0})
+    # With weight the undrained strength grows with depth (each particle's
+    # from its effective stress, K0 = 1 - sin phi'): a Tresca soil whose
+    # strength grows with depth carries (2 + pi) times a strength between
+    # the surface's and that at about the footing's half-width b = 1 m
+    # (Davis & Booker 1973: the mechanism shrinks towards the surface).
+    heavy = run_scene("strip-footing", o | {"drainage": "undrained", "rho": 2000.0})
+    q = heavy["metrics"]["q_ult"]
+    phi = math.radians(30.0)
+    k0 = 1 - math.sin(phi)
+    s_surface = C * math.cos(phi)
+    s_deep = s_surface + (1 + k0) / 2 * 2000.0 * 9.81 * 1.0 * math.sin(phi)
+    assert PRANDTL * s_surface < q < PRANDTL * s_deep
     # Cohesionless: N_gamma = q / (gamma' b) with the buoyant unit weight.
     sand = o | {"c": 0.0}
     wet = run_scene("strip-footing", sand | {"rho": 2000.0, "water_level": 5.0})

@@ -445,7 +445,7 @@ def footing_limit(
     the bearing factor ``q / c`` (``q / (gamma b)``).
     """
     b, gamma, g_ref = values["width"] / 2, unit_weight(values), footing_gamma(values)
-    mat, c = limit_soil(values, mat)
+    mat, c = limit_soil(values, mat, particles.stress)
     ni = nodal_integration(mesh, (0, 1, 2, 3) if mat.needs_zz(2) else (0, 1, 3))
     n = particles.n
     fixed = np.asarray(particles.fixed, bool).copy()

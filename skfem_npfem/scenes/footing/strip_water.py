@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import ParameterError
+from ...limit.undrained import undrained_materials
 from ...materials import Material, Tresca
 from ...particles import Particles
 from ...water import water_force
@@ -127,30 +127,24 @@ def water_dead_load(values: Mapping[str, Any], ni, x: np.ndarray) -> np.ndarray:
     return water_force(ni, x, water.static_pressure(x, soil_gravity(values)))
 
 
-def limit_soil(values: Mapping[str, Any], mat: Material) -> tuple[Material, float]:
-    """The limit analysis's soil and cohesion: ``mat`` and ``c``, or Tresca(s_u).
+def limit_soil(
+    values: Mapping[str, Any], mat: Material, stress: np.ndarray
+) -> tuple[Material, float]:
+    """The limit analysis's soil and cohesion: ``mat`` and ``c``, or undrained.
 
     An undrained soil collapses at constant volume with the undrained strength
     of its initial effective stress.  A weightless soil with ``psi = 0`` has a
     uniform one, ``c cos(phi) + p0 sin(phi)`` (the limit analysis flows at
-    constant volume whatever ``psi``); a soil with weight needs a strength per
-    particle from its initial effective stress, which this limit analysis does
-    not compute yet: the hook for it is here.
-
-    Raises
-    ------
-    ParameterError
-        ``drainage=undrained`` with ``rho > 0``.
+    constant volume whatever ``psi``); a soil with weight has one per particle,
+    from its initial effective stress ``stress``
+    (:func:`~skfem_npfem.limit.undrained.undrained_materials`), and its
+    reference strength is the surface's, ``c cos(phi)``.
     """
     if values["drainage"] != "undrained":
         return mat, values["c"]
-    if values["rho"] > 0:
-        raise ParameterError(
-            "drainage",
-            "undrained",
-            "with analysis=limit: a weightless soil (rho = 0, uniform s_u); "
-            "or analysis=incremental",
-        )
     phi = 0.0 if values["material"] == "tresca" else math.radians(values["phi"])
+    if values["rho"] > 0:
+        soil = undrained_materials([mat], np.zeros(len(stress), int), stress)[0]
+        return soil, values["c"] * math.cos(phi)
     s_u = values["c"] * math.cos(phi) + values["p0"] * math.sin(phi)
     return Tresca(mat.E, mat.nu, mat.rho, c=s_u), s_u
