@@ -225,6 +225,10 @@ class Model:
 
     def _check_tied(self) -> None:
         """Tied groups: (particle indices, axis) pairs, at least two particles each."""
+        if self.mode != "static":
+            raise ParameterError(
+                "tied", "tied dofs", "None in a dynamic model (static steps only)"
+            )
         groups = []
         for entry in self.tied:
             try:
@@ -270,6 +274,10 @@ class Model:
                 "water",
                 f"{self.water.drainage} water",
                 f"None with {method} (pore water is modelled by N-PFEM only)",
+            )
+        if self.tied:
+            raise ParameterError(
+                "tied", "tied dofs", f"None with {method} (N-PFEM only)"
             )
         if self.loads is not None:
             raise ParameterError(

@@ -115,3 +115,19 @@ def test_bad_input_is_refused(overrides, name):
     with pytest.raises(ParameterError) as err:
         npfem.run_scene("consolidation", overrides)
     assert err.value.name == name
+
+
+@pytest.mark.parametrize(
+    "tied", [[([3], 1)], [([1, 2], 2)], [([1, -2], 0)], [("top", 1)]]
+)
+def test_a_bad_tied_group_is_refused(tied):
+    soil = npfem.LinearElastic(E=1e7, nu=0.3, rho=1.0)
+    with pytest.raises(ParameterError) as err:
+        npfem.Model(dim=2, materials=[soil], mode="static", tied=tied)
+    assert err.value.name == "tied"
+
+
+def test_tied_dofs_are_static_only():
+    soil = npfem.LinearElastic(E=1e7, nu=0.3, rho=1.0)
+    with pytest.raises(ParameterError, match="static steps only"):
+        npfem.Model(dim=2, materials=[soil], mode="dynamic", tied=[([0, 1], 1)])
