@@ -2,7 +2,8 @@
 
 One folder per scene family: ``elastic/`` (``elastic-column``), ``footing/``
 (``strip-footing``, ``footing-penetration``, ``cone-penetration``),
-``collapse/`` (``column-collapse``) and ``slope/`` (``slope``).  What every
+``collapse/`` (``column-collapse``), ``slope/`` (``slope``) and
+``consolidation/`` (``consolidation``).  What every
 family uses stays here, at the top: the scene framework (``base``), declared
 and read-only parameters (``params``), the size, memory and step-count checks
 (``limits``), the parameters and helpers the scenes share (``common``), the
@@ -18,6 +19,7 @@ from typing import Any
 from ..errors import ParameterError
 from .base import Scene
 from .collapse import COLUMN_COLLAPSE
+from .consolidation import CONSOLIDATION
 from .elastic import ELASTIC_COLUMN
 from .footing import CONE_PENETRATION, FOOTING_PENETRATION, STRIP_FOOTING
 from .params import Param
@@ -34,6 +36,7 @@ SCENES: dict[str, Scene] = {
         SLOPE,
         FOOTING_PENETRATION,
         CONE_PENETRATION,
+        CONSOLIDATION,
     )
 }
 

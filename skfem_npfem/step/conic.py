@@ -265,7 +265,10 @@ def recover(
     data, op, d = prog.data, prog.data.operator, prog.dim
     N, comp = prog.n_nodes, list(prog.comp)
     du = np.zeros(d * N)
-    du[prog.free] = -z[: prog.free.size]
+    if prog.tie is None:
+        du[prog.free] = -z[: prog.free.size]
+    else:  # a tied group's one row moves all its dofs
+        du[prog.free] = -(prog.tie.T @ z[: prog.tie.shape[0]])
     du[prog.pres] = prog.ubar
     du = du.reshape(N, d)
     dsig = x[prog.slice("sigma")].reshape(prog.n_points, prog.ns)

@@ -219,6 +219,8 @@ def equilibrium(prog: Program) -> Block:
     if prog.Q is not None and np.any(prog.data.pore.excess):
         rhs = rhs + prog.Q[free] @ np.asarray(prog.data.pore.excess, float)
     A = sp.hstack(blocks, format="csc")
+    if prog.tie is not None:  # a tied group balances its resultant only
+        A, rhs = (prog.tie @ A).tocsc(), prog.tie @ rhs
     return Block(A, rhs, [clarabel.ZeroConeT(rhs.size)], "force")
 
 

@@ -118,6 +118,15 @@ class Model:
         stresses, the cones act on them and equilibrium is written in the
         total stress; the materials' ``rho`` is the saturated density.  None
         (default): a dry soil.  N-PFEM only.
+    tied : list of (indices, axis) or None
+        Tied degrees of freedom: each entry is a group of particles (indices
+        into the particles) whose displacement along ``axis`` is one
+        unknown, as under a rigid smooth plate that carries the group's
+        loads (Mandel's plate).  The group's equilibrium rows are summed
+        into one zero-cone row, so only its resultant is in balance, and a
+        coupled step's facets whose nodes are all tied along their normal
+        are impermeable, as the plate is.  Static N-PFEM steps; None
+        (default): none.
     """
 
     dim: int
@@ -139,6 +148,7 @@ class Model:
     stabilisation_mode: str = "full"
     loads: np.ndarray | None = None
     water: Water | None = None
+    tied: list | None = None
 
     def __post_init__(self) -> None:
         if self.dim not in (2, 3):
@@ -210,6 +220,31 @@ class Model:
                 self.water,
                 "a Water(drainage, table) or None (a dry soil)",
             )
+        if self.tied is not None:
+            self._check_tied()
+
+    def _check_tied(self) -> None:
+        """Tied groups: (particle indices, axis) pairs, at least two particles each."""
+        if self.mode != "static":
+            raise ParameterError(
+                "tied", "tied dofs", "None in a dynamic model (static steps only)"
+            )
+        groups = []
+        for entry in self.tied:
+            try:
+                idx, axis = entry
+                idx = np.asarray(idx).astype(int, casting="safe").reshape(-1)
+            except (TypeError, ValueError):
+                idx, axis = np.zeros(0, int), -1
+            if idx.size < 2 or axis not in range(self.dim) or np.any(idx < 0):
+                raise ParameterError(
+                    "tied",
+                    entry,
+                    "(particle indices, axis): at least 2 indices >= 0, "
+                    f"axis in 0..{self.dim - 1}",
+                )
+            groups.append((np.unique(idx), int(axis)))
+        self.tied = groups
 
     def _check_loads(self) -> None:
         """Dead loads: a finite array with one column per dimension."""
@@ -239,6 +274,10 @@ class Model:
                 "water",
                 f"{self.water.drainage} water",
                 f"None with {method} (pore water is modelled by N-PFEM only)",
+            )
+        if self.tied:
+            raise ParameterError(
+                "tied", "tied dofs", f"None with {method} (N-PFEM only)"
             )
         if self.loads is not None:
             raise ParameterError(

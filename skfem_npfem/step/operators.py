@@ -154,6 +154,7 @@ def build_operators(
         a_n=p.a[active],
         eigenstrain=eigenstrain,
         pore=pore,
+        tied=tied_dofs(model, active),
     )
     columns = nodes.lagged.shape[1]
     return StepOperators(
@@ -215,8 +216,33 @@ def pore_input(
         if contacts is not None and contacts.size:
             nodes, _, used = contacts.weights()
             walled[nodes[used]] = True
-        pore.drained = drained_nodes(op, p.fixed[active], walled)
+        held = p.fixed[active] | tied_mask(model, active)  # a plate is impermeable
+        pore.drained = drained_nodes(op, held, walled)
+        modulus = np.array(
+            [m.E * (1 - m.nu) / ((1 + m.nu) * (1 - 2 * m.nu)) for m in model.materials]
+        )
+        c_v = kappa * modulus[p.material[active]]
+        h = float(np.sum(op.volumes) / max(active.size, 1)) ** (1.0 / model.dim)
+        pore.diffusion_number = float(dt * c_v.min() / h**2)
         pore.excess = np.where(
             np.isin(np.arange(active.size), pore.drained), 0.0, excess
         )
     return pore, force
+
+
+def tied_mask(model: Model, active: np.ndarray) -> np.ndarray:
+    """(n_active, d) bool: the step's dofs in a tied group (:attr:`Model.tied`)."""
+    mask = np.zeros((active.size, model.dim), bool)
+    for idx, axis in model.tied or []:
+        mask[np.isin(active, idx), axis] = True
+    return mask
+
+
+def tied_dofs(model: Model, active: np.ndarray) -> list[np.ndarray] | None:
+    """The tied groups as the step's node-major dofs (None: no group)."""
+    if not model.tied:
+        return None
+    local = [np.flatnonzero(np.isin(active, idx)) for idx, _ in model.tied]
+    return [
+        model.dim * n + axis for n, (_, axis) in zip(local, model.tied, strict=True)
+    ]

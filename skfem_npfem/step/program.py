@@ -127,6 +127,9 @@ class PoreInput:
     drained : ndarray (n_d,) int or None
         Points on a drained boundary: their excess pore pressure is zero at
         the end of the step (coupled steps).
+    diffusion_number : float or None
+        ``c_v dt / h^2`` of a coupled step (smallest over its nodes, ``h``
+        the mean node spacing): reported in the step record's ``extra``.
     """
 
     excess: np.ndarray
@@ -136,6 +139,7 @@ class PoreInput:
     darcy: sp.spmatrix | None = None
     storage: np.ndarray | None = None
     drained: np.ndarray | None = None
+    diffusion_number: float | None = None
 
 
 @dataclass
@@ -193,6 +197,10 @@ class ConeInput:
     pore : PoreInput or None
         The pore water (None: a dry step).  With it, ``sigma_n`` and the
         stress variables are effective stresses.
+    tied : list of ndarray or None
+        Groups of tied free dofs (node-major indices ``d * node + axis``):
+        each group's equilibrium rows are summed into one row, so its dofs
+        share one displacement (:attr:`~skfem_npfem.Model.tied`).  None: none.
     """
 
     operator: StrainOperator
@@ -215,6 +223,7 @@ class ConeInput:
     eigenstrain: np.ndarray | None = None
     stabilisation_mode: str = "full"
     pore: PoreInput | None = None
+    tied: list[np.ndarray] | None = None
 
 
 @dataclass
@@ -315,6 +324,7 @@ class Program:
         self.free = np.flatnonzero(~dofs_fixed)
         self.pres = np.flatnonzero(dofs_fixed)
         self.ubar = np.asarray(data.du_prescribed, float).reshape(-1)[self.pres]
+        self.tie = tie_matrix(self.free, data.tied)
         self.sig_n = np.asarray(data.sigma_n, float)[:, list(self.comp)]
         self.mt = np.zeros(0)
         if data.dynamic:
@@ -379,6 +389,32 @@ class Program:
         """Number of variables in a block."""
         sl = self.layout.slices[name]
         return sl.stop - sl.start
+
+
+def tie_matrix(free: np.ndarray, tied: list[np.ndarray] | None) -> sp.csr_matrix | None:
+    """Rows summing the equilibrium rows of each tied group (None: no group).
+
+    ``T`` (n_eq, n_free) maps the free dofs' rows to the program's: one row
+    per untied free dof and one per group; a dof's displacement is then
+    ``-(T^T z)`` of the rows' multipliers ``z``.  Tied dofs that are
+    prescribed are left to their prescription.
+    """
+    if not tied:
+        return None
+    row = np.arange(free.size)
+    position = np.full(int(free.max(initial=-1)) + 1, -1)
+    position[free] = row
+    for group in tied:
+        group = np.asarray(group, int)
+        at = position[group[group < position.size]]
+        at = at[at >= 0]
+        if at.size > 1:
+            row[at] = row[at].min()
+    _, row = np.unique(row, return_inverse=True)
+    ones = np.ones(free.size)
+    return sp.csr_matrix(
+        (ones, (row, np.arange(free.size))), (row.max() + 1, free.size)
+    )
 
 
 @dataclass

@@ -152,6 +152,9 @@ def advance(
     extra = {}
     if ops.volume_strains is not None:
         extra["volume_correction_strain"] = [float(x) for x in ops.volume_strains]
+    pore = ops.data.pore
+    if pore is not None and pore.diffusion_number is not None:
+        extra["diffusion_number"] = pore.diffusion_number
     record(
         boundaries,
         extra,
