@@ -71,9 +71,20 @@ def test_submerged_elastic_column_stays_at_rest():
     assert np.all(p.excess_pore_pressure == 0.0)
 
 
-def test_elastic_column_refuses_undrained_and_warns_about_unused_rho_w():
-    with pytest.raises(ParameterError, match="drainage"):
-        get_scene("elastic-column").resolve({"drainage": "undrained"})
+def test_undrained_elastic_column_carries_its_weight_by_excess_pore_pressure():
+    # Between smooth walls on a fixed base, a mixture that keeps its volume
+    # cannot move: loaded by its weight from a stress-free skeleton, the
+    # excess pore pressure takes all of the buoyant weight (rho - rho_w) g
+    # times the depth, the skeleton nothing, and the top does not settle.
+    # The pressure projection lets cells next to the boundary change their
+    # volume a little (it acts on the pressure's gradient there).
+    m = column(drainage="undrained", water_level=H, spacing=0.25, steps=3)
+    assert m["excess_pore_pressure_rel_l2"] < 0.02
+    assert m["sigma_v_rel_l2"] < 0.02
+    assert abs(m["settlement"]) < 0.01 * (RHO - RHO_W) * G * H**2 / (2 * 1e7)
+
+
+def test_elastic_column_warns_about_unused_rho_w():
     with pytest.warns(UserWarning, match="rho_w not used"):
         get_scene("elastic-column").resolve({"rho_w": 1025.0})
 
