@@ -1,0 +1,123 @@
+"""The ``slope`` scene with the heads of a cross-section file (steady seepage).
+
+References: equal heads ``H`` on every water boundary make the head ``H``
+everywhere (a constant solves Darcy's problem), so the pore pressure is the
+hydrostatic one of a horizontal table at ``H``: the factor of safety, the
+pore pressure and the undrained strengths equal those of ``water_level = H``
+(exactly, up to the round-off of the heads and the cone programs: 1e-9
+relative at the interior-point tolerance ``tol = 1e-10``; measured 3e-11,
+and 4e-8 at the default 1e-8).  The sand has a
+small cohesion ``c'`` so that its factor of safety depends on the water (a
+cohesionless submerged slope has the dry slope's F).
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+import skfem_npfem as npfem
+from skfem_npfem.errors import ParameterError
+from skfem_npfem.mesh.section_file import read_cross_section
+from skfem_npfem.scenes.slope.water import section_seepage
+
+pytestmark = [
+    pytest.mark.filterwarnings("ignore:slope. the factor of safety"),
+    pytest.mark.filterwarnings("ignore:.*AlmostSolved"),
+]
+
+PHI, LEVEL = 35.0, 6.0
+X_TOE = 6.0 + 4.0 * 3**0.5  # a 30 degree slope 4 m high
+W = X_TOE + 10.0
+SECTION = {
+    "materials": {"sand": {"c": 2.0e3, "phi": PHI, "rho": 2000.0}},
+    "regions": [
+        {
+            "material": "sand",
+            "polygon": [[0, 0], [W, 0], [W, 1], [X_TOE, 1], [6, 5], [0, 5], [0, 0]],
+        }
+    ],
+    "supports": {"base": "fixed", "sides": "rollers"},
+}
+#: The free water at LEVEL seen by both sides: the same head everywhere.
+HEADS = [{"boundary": "left", "head": LEVEL}, {"boundary": "right", "head": LEVEL}]
+LIMIT = {"analysis": "limit", "spacing": 0.4, "tol": 1e-10}
+
+
+def write(tmp_path, name="section.json", **extra) -> str:
+    path = tmp_path / name
+    path.write_text(json.dumps({**SECTION, **extra}))
+    return str(path)
+
+
+def run(path: str, **values) -> dict:
+    return npfem.run_scene("slope", {"geometry": path, **LIMIT, **values})
+
+
+def test_equal_heads_are_a_horizontal_table(tmp_path):
+    """F and p_max of equal heads H are those of water_level = H to 1e-9."""
+    heads = run(write(tmp_path, heads=HEADS))
+    table = run(write(tmp_path, "dry.json"), water_level=LEVEL)
+    assert heads["parameters"]["drainage"] == "drained"
+    m, ref = heads["metrics"], table["metrics"]
+    assert m["pore_pressure_max"] == pytest.approx(1000.0 * 9.81 * LEVEL, rel=1e-9)
+    assert m["factor_of_safety"] == pytest.approx(ref["factor_of_safety"], rel=1e-9)
+    dry = run(write(tmp_path, "dry.json"))["metrics"]["factor_of_safety"]
+    assert abs(m["factor_of_safety"] / dry - 1) > 0.05  # the water matters
+
+
+def test_heads_win_over_the_phreatic_line(tmp_path):
+    """A line at z = 2 with heads 6: the heads' pore pressure, rho_w g 6."""
+    path = write(tmp_path, heads=HEADS, water=[[0, 2], [W, 2]])
+    m = run(path)["metrics"]
+    assert m["pore_pressure_max"] == pytest.approx(1000.0 * 9.81 * LEVEL, rel=1e-9)
+
+
+def test_undrained_k0_strengths_of_equal_heads(tmp_path):
+    """s_u of K0 stresses under equal heads H: those of water_level = H to 1e-9."""
+    o = {"drainage": "undrained", "initial_stress": "k0", "K0": 0.5}
+    m = run(write(tmp_path, heads=HEADS), **o)["metrics"]
+    ref = run(write(tmp_path, "dry.json"), water_level=LEVEL, **o)["metrics"]
+    for key in ("undrained_strength_min", "undrained_strength_max"):
+        assert m[key] == pytest.approx(ref[key], rel=1e-9)
+
+
+def test_dry_drainage_ignores_the_heads(tmp_path):
+    m = run(write(tmp_path, heads=HEADS), drainage="dry")["metrics"]
+    assert "pore_pressure_max" not in m
+
+
+def test_conductivity_per_material_in_material_order(tmp_path):
+    two = {
+        "materials": {
+            "clay": {"c": 2e4, "phi": 0.0, "rho": 1900.0, "k": 1e-9},
+            "sand": {"c": 0.0, "phi": PHI, "rho": 2000.0, "k": 1e-5},
+        },
+        "regions": [
+            {"material": "clay", "polygon": [[0, 0], [W, 0], [W, 1], [0, 1], [0, 0]]},
+            {
+                "material": "sand",
+                "polygon": [[0, 1], [X_TOE, 1], [6, 5], [0, 5], [0, 1]],
+            },
+        ],
+    }
+    path = tmp_path / "two.json"
+    path.write_text(json.dumps({**two, "heads": HEADS}))
+    assert section_seepage(read_cross_section(path)).k == (1e-9, 1e-5)
+    dry = read_cross_section(write(tmp_path, "dry.json"))
+    assert section_seepage(dry) is None
+
+
+def test_head_on_a_missing_boundary_is_refused(tmp_path):
+    path = write(tmp_path, heads=[{"boundary": "upstream", "head": 6.0}])
+    with pytest.raises(ParameterError, match="upstream"):
+        run(path)
+
+
+@pytest.mark.parametrize("k", [0.0, -1e-5])
+def test_conductivity_must_be_positive(tmp_path, k):
+    mats = {"sand": {**SECTION["materials"]["sand"], "k": k}}
+    path = write(tmp_path, materials=mats, heads=HEADS)
+    with pytest.raises(ParameterError, match=r"materials\.sand\.k"):
+        run(path)
