@@ -160,3 +160,15 @@ def test_layers_in_series_take_the_materials_conductivities(tmp_path, k_clay, k_
     interface = 10.0 - 4.0 * r_clay / (r_clay + r_sand)
     at = np.isclose(z, 2.0)
     assert np.abs(head[at] - interface).max() < 0.02 * 4.0
+
+
+def test_runout_under_unequal_heads(tmp_path):
+    """Heads 5.5 (left) and 1 (right) through a short run-out: the largest pore
+    pressure is rho_w g 5.5 (maximum principle: h <= 5.5 everywhere, z >= 0,
+    and the fixed corner (0, 0) of the left boundary keeps h = 5.5)."""
+    heads = [{"boundary": "left", "head": 5.5}, {"boundary": "right", "head": 1.0}]
+    path = write(tmp_path, heads=heads)
+    o = {"spacing": 0.5, "runout": True, "t_end": 0.3, "reduction": 1.5}
+    m = npfem.run_scene("slope", {"geometry": path, **o})["metrics"]
+    assert m["pore_pressure_max"] == pytest.approx(1000.0 * 9.81 * 5.5, rel=1e-9)
+    assert m["deposit_factor_of_safety"] > 0
