@@ -18,10 +18,13 @@ Lengths in m, stresses in Pa, angles in degrees, densities ``rho`` in kg/m^3 (th
 unit weight is ``rho g``). A region may give its own ``"spacing"`` (finer where
 asked: a thin layer, the zone where a slip is expected); edges it shares with
 coarser regions take its points. A material may also give ``E``, ``nu`` and ``psi``
-(defaults: the scene's). Polygons are closed: the last vertex repeats the first. The
-base is the lowest ``y`` of the section (``fixed``: both velocities zero;
-``rollers``: vertical only), the sides its smallest and largest ``x`` (``rollers``:
-horizontal velocity zero; ``free``: no support).
+(defaults: the scene's), and ``k``, its hydraulic conductivity (m/s) for the
+steady seepage of ``"heads"``: every material or none (none: one uniform ``k``;
+the heads of a soil of one conductivity do not depend on its value). Polygons
+are closed: the last vertex repeats the first. The base is the lowest ``y`` of
+the section (``fixed``: both velocities zero; ``rollers``: vertical only), the
+sides its smallest and largest ``x`` (``rollers``: horizontal velocity zero;
+``free``: no support).
 
 A section may also give its water (``"water"``: the phreatic line;
 ``"heads"``: the heads of steady seepage; ``"boundaries"``: named polylines;
@@ -56,7 +59,7 @@ from .section_water import (
 __all__ = ["implausible_values", "read_cross_section"]
 
 #: Keys a material of a geometry file may have.
-MATERIAL_KEYS = ("c", "phi", "psi", "rho", "E", "nu")
+MATERIAL_KEYS = ("c", "phi", "psi", "rho", "E", "nu", "k")
 #: Physical ranges of a material's properties: (low, high, low open, high open, what).
 MATERIAL_RANGES = {
     "c": (0.0, math.inf, False, True, "a cohesion >= 0 (Pa)"),
@@ -65,6 +68,7 @@ MATERIAL_RANGES = {
     "rho": (0.0, math.inf, True, True, "a density > 0 (kg/m^3)"),
     "E": (0.0, math.inf, True, True, "a Young's modulus > 0 (Pa)"),
     "nu": (-1.0, 0.5, True, True, "a Poisson's ratio in (-1, 0.5)"),
+    "k": (0.0, math.inf, True, True, "a hydraulic conductivity > 0 (m/s)"),
 }
 #: Allowed supports.
 BASES, SIDES = ("fixed", "rollers"), ("rollers", "free")
@@ -99,6 +103,16 @@ def _materials(mats: object) -> dict[str, dict[str, float]]:
             ):
                 raise ParameterError(where, val, what)
         materials[name] = {k: float(v) for k, v in props.items()}
+    given = [name for name, props in materials.items() if "k" in props]
+    if given:
+        for name, props in materials.items():
+            if "k" not in props:
+                raise ParameterError(
+                    f"materials.{name}.k",
+                    None,
+                    "a hydraulic conductivity > 0 (m/s): every material gives "
+                    f"one when any does ({', '.join(given)} do)",
+                )
     return materials
 
 

@@ -135,3 +135,22 @@ def test_bad_rho_w(tmp_path):
     with pytest.raises(ParameterError) as err:
         section_water(sec, rho_w=-1.0)
     assert err.value.name == "rho_w"
+
+
+def test_conductivity_of_every_material(tmp_path):
+    clay, sand = SECTION["materials"]["clay"], SECTION["materials"]["sand"]
+    mats = {"clay": {**clay, "k": 1e-9}, "sand": {**sand, "k": 1e-5}}
+    sec = read(tmp_path, materials=mats)
+    assert [p["k"] for p in sec.materials.values()] == [1e-9, 1e-5]
+
+
+def test_conductivity_of_some_materials_only_is_refused(tmp_path):
+    mats = {**SECTION["materials"], "sand": {**SECTION["materials"]["sand"], "k": 1e-5}}
+    err = error(tmp_path, materials=mats)
+    assert err.name == "materials.clay.k" and "every material" in str(err)
+
+
+@pytest.mark.parametrize("k", [0, -1e-5, "fast"])
+def test_bad_conductivity(tmp_path, k):
+    mats = {**SECTION["materials"], "sand": {**SECTION["materials"]["sand"], "k": k}}
+    assert error(tmp_path, materials=mats).name == "materials.sand.k"

@@ -26,6 +26,7 @@ from ..common import (
 from .section import (
     _surface_height,
 )
+from .water import static_pressure
 
 __all__ = [
     "deposit_factor_of_safety",
@@ -133,7 +134,7 @@ def deposit_factor_of_safety(sim: Simulation, values: Mapping[str, Any]) -> floa
     material = np.asarray(p.material)[active]
     rho = np.array([m.rho for m in sim.model.materials])[material]
     water, x = sim.model.water, p.x[active]
-    pore = None if water is None else water.static_pressure(x, GRAVITY)
+    pore = static_pressure(water, x, t, material)
     load = gravity_load(ni, rho, GRAVITY, x=x, pore_pressure=pore)
     fixed = np.asarray(p.fixed, bool)[active]
     mats = sim.model.materials

@@ -417,7 +417,7 @@ def build(
     particles = Particles.create(
         pts, masses, stress=sigma, fixed=fixed, material=material
     )
-    particles = wet_particles(particles, water)
+    particles = wet_particles(particles, water, body.mesh.t)
     model = flow_model(values, body, state, run_out)
     source = (
         AlphaShapeMesher(body.h, values["alpha"]) if run_out else FixedMesh(body.mesh.t)

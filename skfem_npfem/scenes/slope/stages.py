@@ -44,7 +44,12 @@ from .section import (
     section_warnings,
     supports,
 )
-from .water import slope_water, static_pressure, undrained_metrics
+from .water import (
+    slope_water,
+    static_pressure,
+    surface_pressure,
+    undrained_metrics,
+)
 
 __all__ = [
     "SlopeBody",
@@ -106,7 +111,7 @@ def initial_stress(
     rho = np.array([m.rho for m in mats])[material]
     force = np.zeros_like(x)
     force[:, 1] = -rho * GRAVITY * ni.volumes
-    p = static_pressure(water, x)
+    p = static_pressure(water, x, mesh.t, material)
     if p is not None:
         force = force + water_force(ni, x, p)
     if values["initial_stress"] == "gravity":
@@ -131,7 +136,7 @@ def initial_stress(
         sigma[:, 1] = -rho * GRAVITY * (surface - x[:, 1])
         if p is not None:
             top = np.column_stack([x[:, 0], surface])
-            sigma[:, 1] += p - static_pressure(water, top)
+            sigma[:, 1] += p - surface_pressure(water, x, mesh.t, material, top)
         sigma[:, 0] = sigma[:, 2] = k0 * sigma[:, 1]
     free = ~fixed.reshape(-1)
     resid = ni.G @ sigma[:, [0, 1, 3]].reshape(-1) - force.reshape(-1)
@@ -175,7 +180,8 @@ def factor_of_safety(
     ni = nodal_integration(mesh, (0, 1, 3))
     rho = np.array([m.rho for m in mats])[material]
     x = mesh.p.T
-    load = gravity_load(ni, rho, GRAVITY, x=x, pore_pressure=static_pressure(water, x))
+    p = static_pressure(water, x, mesh.t, material)
+    load = gravity_load(ni, rho, GRAVITY, x=x, pore_pressure=p)
     if water is not None and water.undrained:
         if stress is None:
             stress = initial_stress(values, mesh, mats, material, fixed, water)[0]
