@@ -21,6 +21,16 @@ interface (smooth, or Tresca adhesion ``alpha s_u``) acts on the cone's face
 and the shaft is smooth, so the body's vertical force over ``pi D^2/4`` is the
 tip resistance ``q_c`` (the sleeve friction of a real cone is not modelled).
 
+With ``material=mohr-coulomb`` the soil is an effective-stress clay
+(``c``, ``phi``, ``psi``; ``sigma0`` its initial effective stress: a
+weightless soil's static pore pressure is nil) and ``drainage`` adds the
+pore water: undrained, each cell keeps its volume and the excess pore
+pressure is reported (at the shoulder, where a piezocone reads u2); ``su``
+is then the clay's undrained strength at the constant mean effective stress
+``sigma0`` with the vertical stress intermediate (the plane-strain
+``c cos phi + sigma0 sin phi``), against which the cone's resistance matches
+a Tresca soil's (docs/validation/cone_penetration.md).
+
 Reference: Teh & Houlsby's (1991) cone factor of a smooth cone in steady
 penetration, ``N_c = (q_c - sigma_0)/s_u = 1.25 + 1.84 ln I_r``.
 """
@@ -81,7 +91,12 @@ SURFACES = ("surcharge", "rollers")
 
 PARAMS = [
     Param("diameter", 0.0357, "m", "cone diameter D (10 cm^2 cone)", float, **POSITIVE),
-    *soil_params(1.0e4),
+    *soil_params(
+        1.0e4,
+        "c cos phi + sigma0 sin phi (undrained at a constant mean effective "
+        "stress sigma0, the vertical stress between the radial and the hoop "
+        "ones, as round an expanding cylindrical cavity)",
+    ),
     Param(
         "rigidity_index",
         100.0,
@@ -209,8 +224,8 @@ PARAMS = [
 ]
 
 METRICS = {
-    "cone_factor": "steady N_c = (q_c - sigma_0)/s_u: the median of the steps' "
-    "N_c over the last steady_window x D of the push",
+    "cone_factor": "steady N_c = (q_c - sigma_0)/s_u (s_u: su): the median of "
+    "the steps' N_c over the last steady_window x D of the push",
     "cone_factor_range": "[min, max] of N_c over that window",
     "cone_factor_mean": "mean of N_c over that window (trapezoidal)",
     "cone_factor_drops": "steps of that window whose N_c is under 0.8 x "

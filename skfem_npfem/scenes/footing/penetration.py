@@ -16,6 +16,12 @@ yields under a surface footing (smooth or rough: the same in weightless
 Tresca soil); past it the pressure rises as the footing is embedded and the
 soil heaves beside it.
 
+``material=mohr-coulomb`` makes the soil an effective-stress clay (``c``,
+``phi``, ``psi``) and ``drainage`` adds pore water; undrained, its ``su`` is
+the plane-strain ``c cos phi`` of the stress-free soil (a uniform initial
+stress would need a surcharge beside the footing, which this scene does
+not carry).
+
 ``method`` runs the same scene with N-PFEM (default) or FEM-remap (P1 or P2
 elements, Gauss-point state remapped after each remesh; the footing enters
 its steps through the same stage functions); docs/validation/penetration_methods.md
@@ -118,7 +124,9 @@ PARAMS = [
         hi=0.5,
         hi_open=True,
     ),
-    *soil_params(1.0e3),
+    *soil_params(
+        1.0e3, "c cos phi (plane strain; the weightless soil starts stress-free)"
+    ),
     Param("interface", "smooth", "-", "footing-soil interface", str, INTERFACES),
     ADHESION,
     Param(

@@ -179,8 +179,9 @@ def derive_cone(values: dict[str, Any]) -> None:
 
     ``spacing`` D/12, ``penetration`` 6 D, ``depth`` 10 D, and ``dt``: the
     cone moves half a spacing per step; ``drainage`` from ``water_level``;
-    ``su`` of a Mohr-Coulomb clay: its undrained strength in triaxial
-    compression at the mean effective stress ``sigma0``.
+    ``su`` of a Mohr-Coulomb clay: its plane-strain undrained strength at
+    the mean effective stress ``sigma0`` (the soil round the cone shears as
+    round an expanding cylindrical cavity, the vertical stress intermediate).
     """
     derive_drainage(values)
     derive_soil(values, 1.0e4, values["sigma0"], "plane-strain")

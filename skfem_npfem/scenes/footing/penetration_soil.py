@@ -39,8 +39,11 @@ SOIL_MATERIALS = ("tresca", "mohr-coulomb")
 SHEARING = ("plane-strain", "triaxial-compression", "triaxial-extension")
 
 
-def soil_params(su: float) -> list[Param]:
-    """``material``, ``su`` (Tresca's, default ``su``), ``c``, ``phi``, ``psi``."""
+def soil_params(su: float, derived: str) -> list[Param]:
+    """``material``, ``su`` (Tresca's, default ``su``), ``c``, ``phi``, ``psi``.
+
+    ``derived`` says how the scene derives a Mohr-Coulomb clay's ``su``.
+    """
     return [
         Param(
             "material",
@@ -57,8 +60,8 @@ def soil_params(su: float) -> list[Param]:
             None,
             "Pa",
             f"undrained shear strength s_u (default {su:g} with material=tresca; "
-            "with mohr-coulomb the undrained strength derived from c, phi and the "
-            "initial effective stress, which is its only accepted value)",
+            f"with mohr-coulomb its undrained strength {derived}, the only value "
+            "accepted)",
             float,
             lo=0,
             lo_open=True,
