@@ -171,3 +171,13 @@ def test_footing_undrained_effective_stress_clay_matches_tresca():
     assert mc["bearing_factor"] == pytest.approx(tresca["bearing_factor"], rel=0.10)
     assert mc["bearing_factor"] == pytest.approx(2 + math.pi, rel=0.10)
     assert mc["max_excess_pore_pressure"] > 0.0
+
+
+def test_footing_refuses_fem_remap_with_pore_water():
+    # FEM-remap carries no pore pressure: refused before anything runs.
+    with pytest.raises(ParameterError) as err:
+        run_scene(
+            "footing-penetration",
+            {"spacing": 0.25, "method": "fem-remap", "drainage": "undrained"},
+        )
+    assert err.value.name == "method"
