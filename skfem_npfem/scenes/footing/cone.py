@@ -21,6 +21,16 @@ interface (smooth, or Tresca adhesion ``alpha s_u``) acts on the cone's face
 and the shaft is smooth, so the body's vertical force over ``pi D^2/4`` is the
 tip resistance ``q_c`` (the sleeve friction of a real cone is not modelled).
 
+With ``material=mohr-coulomb`` the soil is an effective-stress clay
+(``c``, ``phi``, ``psi``; ``sigma0`` its initial effective stress: a
+weightless soil's static pore pressure is nil) and ``drainage`` adds the
+pore water: undrained, each cell keeps its volume and the excess pore
+pressure is reported (at the shoulder, where a piezocone reads u2); ``su``
+is then the clay's undrained strength at the constant mean effective stress
+``sigma0`` with the vertical stress intermediate (the plane-strain
+``c cos phi + sigma0 sin phi``), against which the cone's resistance matches
+a Tresca soil's (docs/validation/cone_penetration.md).
+
 Reference: Teh & Houlsby's (1991) cone factor of a smooth cone in steady
 penetration, ``N_c = (q_c - sigma_0)/s_u = 1.25 + 1.84 ln I_r``.
 """
@@ -34,8 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from ...boundary import RigidBody, wall_x
-from ...errors import ParameterError
+from ...boundary import wall_x
 from ...laws import teh_houlsby_nc
 from ...loads import surface_load
 from ...mesh.axisymmetric import AxisymmetricMohrCoulomb
@@ -51,22 +60,24 @@ from ..common import (
     solver_from,
     solver_params,
 )
-from ..limits import check_size
 from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
+from ..water import WATER_PARAMS, scene_water
+from .cone_geometry import APEX, check, cone_body, sizes, soil_points
 from .penetration_common import (
     ADHESION,
-    axis_count,
     derive_cone,
-    graded_axis,
-    interface_adhesion,
-    lattice_gap,
     lattice_params,
     penetration_warnings,
-    refuse_adhesion,
+    refuse_penetration,
     running_drops,
     steady_factor,
-    step_dt,
+)
+from .penetration_soil import (
+    WATER_METRICS,
+    pore_metrics,
+    soil_params,
+    with_pore_pressure,
 )
 from .scenery import saved_factor_curve
 
@@ -78,12 +89,14 @@ INTERFACES = ("smooth", "rough", "adhesion")
 #: The soil's top surface.
 SURFACES = ("surcharge", "rollers")
 
-#: Apex angle of the standard cone, degrees.
-APEX = 60.0
-
 PARAMS = [
     Param("diameter", 0.0357, "m", "cone diameter D (10 cm^2 cone)", float, **POSITIVE),
-    Param("su", 1.0e4, "Pa", "undrained shear strength s_u", float, **POSITIVE),
+    *soil_params(
+        1.0e4,
+        "c cos phi + sigma0 sin phi (undrained at a constant mean effective "
+        "stress sigma0, the vertical stress between the radial and the hoop "
+        "ones, as round an expanding cylindrical cavity)",
+    ),
     Param(
         "rigidity_index",
         100.0,
@@ -97,7 +110,7 @@ PARAMS = [
         "nu",
         0.49,
         "-",
-        "undrained Poisson's ratio",
+        "Poisson's ratio (tresca: undrained; mohr-coulomb: the skeleton's drained nu')",
         float,
         lo=0.0,
         hi=0.5,
@@ -107,7 +120,8 @@ PARAMS = [
         "sigma0",
         5.0e4,
         "Pa",
-        "isotropic initial (total) stress, compression positive",
+        "isotropic initial stress, compression positive (total and, the "
+        "scene being weightless, effective: the static pore pressure is nil)",
         float,
         lo=0.0,
     ),
@@ -204,13 +218,14 @@ PARAMS = [
         lo=0.05,
         hi=100.0,
     ),
+    *WATER_PARAMS,
     *fidelity_params(0.0),
     *solver_params(),
 ]
 
 METRICS = {
-    "cone_factor": "steady N_c = (q_c - sigma_0)/s_u: the median of the steps' "
-    "N_c over the last steady_window x D of the push",
+    "cone_factor": "steady N_c = (q_c - sigma_0)/s_u (s_u: su): the median of "
+    "the steps' N_c over the last steady_window x D of the push",
     "cone_factor_range": "[min, max] of N_c over that window",
     "cone_factor_mean": "mean of N_c over that window (trapezoidal)",
     "cone_factor_drops": "steps of that window whose N_c is under 0.8 x "
@@ -226,109 +241,11 @@ METRICS = {
     "n_particles": "number of particles",
     "warnings": "what to look at (a particle deeper than half a spacing inside "
     "the cone)",
+    **WATER_METRICS,
+    "shoulder_excess_pore_pressure": "with water only: the mean excess pore "
+    "pressure at the end of the particles within one spacing of the cone's "
+    "shoulder (the u2 filter of a piezocone) / s_u",
 }
-
-
-def _sizes(values: Mapping[str, Any]) -> dict[str, float]:
-    """Lengths of the set-up, m: D, spacing, push, tip depth, soil, radius."""
-    D = values["diameter"]
-    h = values["spacing"] if values["spacing"] is not None else D / 12
-    w = values["penetration"] if values["penetration"] is not None else 6 * D
-    depth = values["depth"] if values["depth"] is not None else 10 * D
-    z_tip = values["domain_below"] * D + w  # the tip's height at time 0
-    return {
-        "D": D,
-        "h": h,
-        "w": w,
-        "depth": depth,
-        "z_tip": z_tip,
-        "top": z_tip + depth,
-        "radius": values["domain_radius"] * D,
-    }
-
-
-def _fine_window(g: dict[str, float]) -> tuple[float, float]:
-    """Heights between which the lattice has the fine spacing."""
-    return max(g["z_tip"] - g["w"] - 2 * g["D"], 0.0), min(
-        g["z_tip"] + 2 * g["D"], g["top"]
-    )
-
-
-def _heights(g: dict[str, float], ratio: float) -> np.ndarray:
-    """Lattice heights: fine around the tip's path, growing below and above."""
-    lo, hi = _fine_window(g)
-    h = g["h"]
-    fine = np.linspace(lo, hi, max(1, math.ceil((hi - lo) / h - 1e-9)) + 1)
-    below = lo - graded_axis(h, h, lo, ratio)[::-1] if lo > 0 else np.zeros(0)
-    above = hi + graded_axis(h, h, g["top"] - hi, ratio) if g["top"] > hi else fine
-    return np.unique(np.concatenate([below, fine, above]).round(12))
-
-
-def check(values: Mapping[str, Any]) -> float:
-    """Refuse bad combinations before anything is built; return ``dt``."""
-    g = _sizes(values)
-    D, h = g["D"], g["h"]
-    if h > D / 4:
-        raise ParameterError("spacing", h, f"at most D/4 = {D / 4:g} m")
-    if g["depth"] < 2 * D:
-        raise ParameterError(
-            "depth",
-            g["depth"],
-            f"at least 2 D = {2 * D:g} m: the cone starts embedded, its tip "
-            "this deep below the surface",
-        )
-    dt = step_dt(values, h, 0.5, "cone")
-    lo, hi = _fine_window(g)
-    nr = axis_count(1.5 * D, h, g["radius"], values["grading"])
-    nz = (hi - lo) / h + axis_count(h, h, lo, values["grading"])
-    nz += axis_count(h, h, g["top"] - hi, values["grading"])
-    check_size(nr * nz, 2, values, advice="use a larger spacing or grading")
-    return dt
-
-
-def cone_body(values: Mapping[str, Any]) -> RigidBody:
-    """The cone with its shaft at time 0, wished in place, moving down."""
-    g = _sizes(values)
-    R = g["D"] / 2
-    tall = R / math.tan(math.radians(APEX / 2))
-    adhesion = interface_adhesion(values)
-    if adhesion > 0:  # on the face only (edge 0); the shaft is smooth
-        adhesion = [adhesion, 0.0, 0.0, 0.0]
-    top = g["top"] + g["w"] + g["D"]
-    return RigidBody(
-        [[0.0, g["z_tip"]], [R, g["z_tip"] + tall], [R, top], [0.0, top]],
-        velocity=[0.0, -values["speed"]],
-        adhesion=adhesion,
-        name="cone",
-        reference=[0.0, g["z_tip"]],
-    )
-
-
-def soil_points(values: Mapping[str, Any], body: RigidBody) -> tuple[np.ndarray, ...]:
-    """Particle positions round the cone and each one's lattice spacing.
-
-    A graded lattice without the points inside the cone or closer to it
-    than half their spacing, plus points on the cone's face and shaft (the
-    soil starts in contact with the cone: an unsupported cavity would close
-    plastically under sigma_0).
-    """
-    g = _sizes(values)
-    rs = graded_axis(1.5 * g["D"], g["h"], g["radius"], values["grading"])
-    zs = _heights(g, values["grading"])
-    R, z_tip, h = g["D"] / 2, g["z_tip"], g["h"]
-    shoulder = z_tip + R / math.tan(math.radians(APEX / 2))
-    n_face = max(2, math.ceil(math.hypot(R, shoulder - z_tip) / h - 1e-9))
-    s = np.linspace(0.0, 1.0, n_face + 1)
-    face = np.stack([s * R, z_tip + s * (shoulder - z_tip)], axis=1)
-    shaft_z = zs[zs > shoulder + 0.5 * h]
-    shaft = np.stack([np.full(shaft_z.size, R), shaft_z], axis=1)
-    rr, zz = np.meshgrid(rs, zs, indexing="ij")
-    lattice = np.stack([rr.ravel(), zz.ravel()], axis=1)
-    gap = lattice_gap(lattice, rs, zs)
-    dist, _, _ = body.signed_distance(lattice, 0.0)
-    keep = dist > 0.5 * gap
-    x = np.concatenate([face, shaft, lattice[keep]])
-    return x, lattice_gap(x, rs, zs)
 
 
 def build(
@@ -336,29 +253,15 @@ def build(
 ) -> SceneRun:
     """Build the cone-penetration simulation."""
     dt = check(values)
-    g = _sizes(values)
+    g = sizes(values)
     D, su, s0 = g["D"], values["su"], values["sigma0"]
     G = values["rigidity_index"] * su
     E = 2 * G * (1 + values["nu"])
-    soil = AxisymmetricMohrCoulomb(E, values["nu"], 1.0, c=su, phi=0.0)
+    soil = cone_soil(values, E)
     cone = cone_body(values)
     x, spacing = soil_points(values, cone)
-    fixed = np.zeros_like(x, dtype=bool)
-    fixed[np.isclose(x[:, 1], 0.0)] = True
-    fixed[np.isclose(x[:, 0], g["radius"]), 0] = True
-    top = np.isclose(x[:, 1], g["top"])
-    if values["surface"] == "rollers":
-        fixed[top, 1] = True  # rollers hold sigma_0 on top
-        loads = None
-    else:  # sigma_0 on the top as a dead load: the soil is free to heave
-        loads = surface_load(x, top, s0, axisymmetric=True)
-    stress = np.zeros((x.shape[0], 4))
-    stress[:, :3] = -s0
+    particles, loads = start_state(values, x)
     axis = wall_x(2, 0.0, facing=1)
-    # Weightless soil: tiny masses (static steps do not use them).
-    particles = Particles.create(
-        x, np.full(x.shape[0], 1e-12), fixed=fixed, stress=stress, n_walls=2
-    )
     model = Model(
         dim=2,
         axisymmetric=True,
@@ -368,6 +271,7 @@ def build(
         walls=[axis],
         bodies=[cone],
         loads=loads,
+        water=scene_water(values),
         solver=solver_from(values),
         **fidelity_from(values, 0.0),
     )
@@ -409,9 +313,62 @@ def build(
             "curve": curve,
             "n_particles": int(particles.n),
             "warnings": notes,
+            **pore_metrics(
+                sim_.particles,
+                values,
+                shoulder_filter(sim_.particles.x, g, curve[-1][0] if curve else 0.0),
+                "shoulder_excess_pore_pressure",
+            ),
         }
 
     return SceneRun(sim, {"t_end": g["w"] / values["speed"]}, metrics)
+
+
+def start_state(
+    values: Mapping[str, Any], x: np.ndarray
+) -> tuple[Particles, np.ndarray | None]:
+    """The particles under ``sigma0`` at ``x`` and the surcharge holding it.
+
+    The base is fixed, the far side on rollers; the top carries ``sigma0``
+    as a dead load or (``surface=rollers``) is held vertically.
+    """
+    g = sizes(values)
+    s0 = values["sigma0"]
+    fixed = np.zeros_like(x, dtype=bool)
+    fixed[np.isclose(x[:, 1], 0.0)] = True
+    fixed[np.isclose(x[:, 0], g["radius"]), 0] = True
+    top = np.isclose(x[:, 1], g["top"])
+    if values["surface"] == "rollers":
+        fixed[top, 1] = True  # rollers hold sigma_0 on top
+        loads = None
+    else:  # sigma_0 on the top as a dead load: the soil is free to heave
+        loads = surface_load(x, top, s0, axisymmetric=True)
+    stress = np.zeros((x.shape[0], 4))
+    stress[:, :3] = -s0
+    # Weightless soil: tiny masses (static steps do not use them).
+    particles = Particles.create(
+        x, np.full(x.shape[0], 1e-12), fixed=fixed, stress=stress, n_walls=2
+    )
+    return with_pore_pressure(particles, values), loads
+
+
+def shoulder_filter(x: np.ndarray, g: dict[str, float], push: float) -> np.ndarray:
+    """The particles within one spacing of the shoulder after ``push`` x D.
+
+    Where a piezocone's u2 filter sits, just behind the cone.
+    """
+    R = g["D"] / 2
+    shoulder = g["z_tip"] - push * g["D"] + R / math.tan(math.radians(APEX / 2))
+    return np.hypot(x[:, 0] - R, x[:, 1] - shoulder) <= g["h"]
+
+
+def cone_soil(values: Mapping[str, Any], E: float) -> AxisymmetricMohrCoulomb:
+    """The soil: Tresca of strength ``su``, or the effective-stress clay."""
+    if values["material"] == "tresca":
+        return AxisymmetricMohrCoulomb(E, values["nu"], 1.0, c=values["su"], phi=0.0)
+    return AxisymmetricMohrCoulomb(
+        E, values["nu"], 1.0, c=values["c"], phi=values["phi"], psi=values["psi"]
+    )
 
 
 #: The cone's pictures show r <= WINDOW_R D, from WINDOW_Z D below the end of the
@@ -447,7 +404,7 @@ def cone_scenery(p: dict, folder: Path | None = None) -> Scenery:
         speed,
     ):
         return s
-    g = _sizes(values)
+    g = sizes(values)
     s.floor, s.floor_label = 0.0, "fixed base"
     s.walls.append((g["radius"], -1, "rollers"))
     s.symmetry = 0.0
@@ -472,7 +429,7 @@ def cone_scenery(p: dict, folder: Path | None = None) -> Scenery:
         f"window: r \u2264 {WINDOW_R:g} D, {WINDOW_Z:g} D around the tip's path"
     )
     s.diameter = D
-    su = number(p, "su", default["su"])
+    su = number(p, "su", 1.0e4)
     s0 = number(p, "sigma0", default["sigma0"])
     ir = number(p, "rigidity_index", default["rigidity_index"])
     if ir is not None:
@@ -488,7 +445,7 @@ SCENE = Scene(
     params=PARAMS,
     build=build,
     metrics_doc=METRICS,
-    ignored=refuse_adhesion,
+    ignored=refuse_penetration,
     derive=derive_cone,
     scenery=cone_scenery,
     time_params=("dt", "penetration"),

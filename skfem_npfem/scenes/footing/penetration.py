@@ -16,6 +16,12 @@ yields under a surface footing (smooth or rough: the same in weightless
 Tresca soil); past it the pressure rises as the footing is embedded and the
 soil heaves beside it.
 
+``material=mohr-coulomb`` makes the soil an effective-stress clay (``c``,
+``phi``, ``psi``) and ``drainage`` adds pore water; undrained, its ``su`` is
+the plane-strain ``c cos phi`` of the stress-free soil (a uniform initial
+stress would need a surcharge beside the footing, which this scene does
+not carry).
+
 ``method`` runs the same scene with N-PFEM (default) or FEM-remap (P1 or P2
 elements, Gauss-point state remapped after each remesh; the footing enters
 its steps through the same stage functions); docs/validation/penetration_methods.md
@@ -35,7 +41,7 @@ from skfem import MeshTri
 from ...boundary import RigidBody
 from ...errors import ParameterError
 from ...laws import prandtl_nc
-from ...materials import Tresca
+from ...materials import Material, MohrCoulomb, Tresca
 from ...mesh.smoothing import nodal_integration
 from ...mesh.sources import AlphaShapeMesher
 from ...particles import Particles
@@ -53,6 +59,7 @@ from ..limits import check_size
 from ..methods import METHOD_METRICS_NO_SPFEM, method_params, with_method
 from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
+from ..water import WATER_PARAMS, is_wet, scene_water
 from .penetration_common import (
     ADHESION,
     axis_count,
@@ -63,9 +70,15 @@ from .penetration_common import (
     lattice_params,
     locking_warnings,
     penetration_warnings,
-    refuse_adhesion,
+    refuse_penetration,
     running_drops,
     step_dt,
+)
+from .penetration_soil import (
+    WATER_METRICS,
+    pore_metrics,
+    soil_params,
+    with_pore_pressure,
 )
 
 __all__ = ["INTERFACES", "RIGID_ENOUGH", "SCENE"]
@@ -93,18 +106,27 @@ PARAMS = [
         hi=50.0,
     ),
     Param("domain_depth", 5.0, "-", "soil depth / B", float, lo=1.5, hi=50.0),
-    Param("E", 1.0e5, "Pa", "undrained Young's modulus E_u", float, **POSITIVE),
+    Param(
+        "E",
+        1.0e5,
+        "Pa",
+        "Young's modulus (tresca: undrained E_u; mohr-coulomb: the skeleton's E')",
+        float,
+        **POSITIVE,
+    ),
     Param(
         "nu",
         0.495,
         "-",
-        "undrained Poisson's ratio",
+        "Poisson's ratio (tresca: undrained; mohr-coulomb: the skeleton's drained nu')",
         float,
         lo=0.0,
         hi=0.5,
         hi_open=True,
     ),
-    Param("su", 1.0e3, "Pa", "undrained shear strength s_u", float, **POSITIVE),
+    *soil_params(
+        1.0e3, "c cos phi (plane strain; the weightless soil starts stress-free)"
+    ),
     Param("interface", "smooth", "-", "footing-soil interface", str, INTERFACES),
     ADHESION,
     Param(
@@ -141,12 +163,15 @@ PARAMS = [
         "has no rigid-body contact); docs/validation/penetration_methods.md "
         "compares npfem and fem-remap here",
     ),
+    *WATER_PARAMS,
     *fidelity_params(0.0),
     *solver_params(),
 ]
 
 METRICS = {
-    "bearing_factor": "q/s_u at w/B = 0.1: the curve's mean over one spacing of "
+    "bearing_factor": "q/s_u at w/B = 0.1 (s_u: material=mohr-coulomb's "
+    "plane-strain undrained strength c cos phi of the stress-free soil): the "
+    "curve's mean over one spacing of "
     "penetration centred there (w/B = 0.1 +- spacing/(2B); it averages the "
     "saw-tooth of soil nodes passing the footing's edge); null if not reached",
     "bearing_factor_range": "[min, max] of q/s_u over that window",
@@ -164,6 +189,7 @@ METRICS = {
     "warnings": "what to look at: a particle deeper than half a spacing inside "
     "the footing; method=fem-remap with P1 elements (they lock)",
     "curve": "list of [w/B, q/s_u] per step",
+    **WATER_METRICS,
     "n_particles": "number of particles",
     **METHOD_METRICS_NO_SPFEM,
 }
@@ -192,6 +218,12 @@ def check(values: Mapping[str, Any]) -> float:
             w,
             f"less than the soil depth minus two spacings ({depth - 2 * h:g} m): "
             "the footing would hit the fixed base",
+        )
+    if is_wet(values) and values["method"] != "npfem":
+        raise ParameterError(
+            "method",
+            values["method"],
+            "npfem with pore water (drainage other than dry)",
         )
     dt = step_dt(values, h, 0.25, "footing")
     nx = axis_count(B / 2 + B, h, half, values["grading"])
@@ -244,13 +276,15 @@ def build(
     B, _, _, w = _geometry(values)
     su = values["su"]
     particles, spacing, _ = soil(values)
+    particles = with_pore_pressure(particles, values)
     body = footing_body(values)
     model = Model(
         dim=2,
-        materials=[Tresca(values["E"], values["nu"], 0.0, c=su)],
+        materials=[footing_soil(values)],
         gravity=0.0,
         mode="static",
         bodies=[body],
+        water=scene_water(values),
         solver=solver_from(values),
         **fidelity_from(values, 0.0),
     )
@@ -281,7 +315,7 @@ def build(
             )
             + locking
         )
-        return {
+        out = {
             "bearing_factor": factor,
             "bearing_factor_range": spread,
             "bearing_factor_reference": ref,
@@ -294,8 +328,17 @@ def build(
             "curve": curve,
             "n_particles": int(particles.n),
         }
+        return {**out, **pore_metrics(sim_.particles, values)}
 
     return with_method(values, SceneRun(sim, {"t_end": t_end}, metrics))
+
+
+def footing_soil(values: Mapping[str, Any]) -> Material:
+    """Tresca of strength ``su``, or the effective-stress Mohr-Coulomb clay."""
+    E, nu = values["E"], values["nu"]
+    if values["material"] == "tresca":
+        return Tresca(E, nu, 0.0, c=values["su"])
+    return MohrCoulomb(E, nu, 0.0, c=values["c"], phi=values["phi"], psi=values["psi"])
 
 
 def penetration_curve(records, B: float, su: float) -> list[list[float]]:
@@ -392,7 +435,7 @@ SCENE = Scene(
     params=PARAMS,
     build=build,
     metrics_doc=METRICS,
-    ignored=refuse_adhesion,
+    ignored=refuse_penetration,
     derive=derive_footing,
     scenery=penetration_scenery,
     time_params=("dt", "penetration"),

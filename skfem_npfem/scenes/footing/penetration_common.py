@@ -17,6 +17,8 @@ import numpy as np
 
 from ...errors import ParameterError, warn_user
 from ..params import Param
+from ..water import derive_drainage
+from .penetration_soil import derive_soil, refuse_soil
 
 __all__ = [
     "ADHESION",
@@ -36,6 +38,7 @@ __all__ = [
     "locking_warnings",
     "penetration_warnings",
     "refuse_adhesion",
+    "refuse_penetration",
     "running_drops",
     "steady_factor",
 ]
@@ -175,8 +178,13 @@ def derive_cone(values: dict[str, Any]) -> None:
     """cone-penetration's derived defaults, in place.
 
     ``spacing`` D/12, ``penetration`` 6 D, ``depth`` 10 D, and ``dt``: the
-    cone moves half a spacing per step.
+    cone moves half a spacing per step; ``drainage`` from ``water_level``;
+    ``su`` of a Mohr-Coulomb clay: its plane-strain undrained strength at
+    the mean effective stress ``sigma0`` (the soil round the cone shears as
+    round an expanding cylindrical cavity, the vertical stress intermediate).
     """
+    derive_drainage(values)
+    derive_soil(values, 1.0e4, values["sigma0"], "plane-strain")
     D = values["diameter"]
     if values["spacing"] is None:
         values["spacing"] = D / 12
@@ -189,11 +197,30 @@ def derive_cone(values: dict[str, Any]) -> None:
 
 
 def derive_footing(values: dict[str, Any]) -> None:
-    """footing-penetration's ``penetration`` (B) and ``dt`` (spacing/4 a step)."""
+    """footing-penetration's ``penetration`` (B) and ``dt`` (spacing/4 a step).
+
+    Also ``drainage`` from ``water_level`` and ``su`` of a Mohr-Coulomb clay:
+    its plane-strain undrained strength ``c cos(phi)`` (the weightless soil
+    starts stress-free: ``p'_0 = 0``).
+    """
+    derive_drainage(values)
+    derive_soil(values, 1.0e3, 0.0, "plane-strain")
     if values["penetration"] is None:
         values["penetration"] = values["width"]
     if values["dt"] is None:
         values["dt"] = 0.25 * values["spacing"] / values["speed"]
+
+
+def refuse_penetration(values: Mapping[str, Any], given: frozenset[str]) -> None:
+    """Refuse ``adhesion`` (:func:`refuse_adhesion`) and the soil's unused parameters.
+
+    Raises
+    ------
+    ParameterError
+        Naming the parameter left out (:func:`refuse_soil`).
+    """
+    refuse_adhesion(values, given)
+    refuse_soil(values, given)
 
 
 def refuse_adhesion(values: Mapping[str, Any], given: frozenset[str]) -> None:
