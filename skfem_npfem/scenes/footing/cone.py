@@ -75,6 +75,7 @@ from .penetration_common import (
 )
 from .penetration_soil import (
     WATER_METRICS,
+    penetration_parameters,
     pore_metrics,
     soil_params,
     with_pore_pressure,
@@ -283,7 +284,10 @@ def build(
         dt,
         writer=make_writer(out, resume),
         progress=progress,
-        meta={"scene": "cone-penetration", "parameters": dict(values)},
+        meta={
+            "scene": "cone-penetration",
+            "parameters": penetration_parameters(values),
+        },
     )
     area = math.pi * D**2 / 4
     sim.penetration_check.enabled = False  # penetration_warnings says it

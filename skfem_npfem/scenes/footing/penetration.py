@@ -76,6 +76,7 @@ from .penetration_common import (
 )
 from .penetration_soil import (
     WATER_METRICS,
+    penetration_parameters,
     pore_metrics,
     soil_params,
     with_pore_pressure,
@@ -296,7 +297,10 @@ def build(
         dt,
         writer=make_writer(out, resume),
         progress=progress,
-        meta={"scene": "footing-penetration", "parameters": dict(values)},
+        meta={
+            "scene": "footing-penetration",
+            "parameters": penetration_parameters(values),
+        },
     )
     t_end = w / values["speed"]
     sim.penetration_check.enabled = False  # penetration_warnings says it

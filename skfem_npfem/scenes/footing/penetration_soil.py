@@ -18,12 +18,15 @@ from ...errors import ParameterError
 from ...particles import Particles
 from ..params import ANGLE, Param
 from ..water import is_wet, scene_water
+from ..wet_soil import recorded_parameters
 
 __all__ = [
     "SHEARING",
     "SOIL_MATERIALS",
+    "TRESCA_VALUES",
     "WATER_METRICS",
     "derive_soil",
+    "penetration_parameters",
     "pore_metrics",
     "refuse_soil",
     "soil_params",
@@ -232,4 +235,25 @@ def pore_metrics(
     out["max_excess_pore_pressure"] = float(u.max()) / su
     if near is not None:
         out[name] = float(u[near].mean()) / su if near.any() else None
+    return out
+
+
+#: The soil parameters of a Tresca clay as the scenes had them before
+#: effective-stress clays: a run with these records none of them.
+TRESCA_VALUES = {"material": "tresca", "c": 0.0, "phi": 25.0, "psi": 0.0}
+
+
+def penetration_parameters(values: Mapping[str, Any]) -> dict[str, Any]:
+    """The parameters a penetration run records.
+
+    A dry Tresca run records what it recorded before the scenes had pore
+    water and effective-stress clays (its checkpoints, bit for bit): the
+    water parameters at their dry values
+    (:func:`~skfem_npfem.scenes.wet_soil.recorded_parameters`) and, with
+    ``material=tresca``, the Mohr-Coulomb parameters at their defaults are
+    left out.
+    """
+    out = recorded_parameters(values)
+    if values.get("material") == "tresca":
+        out = {k: v for k, v in out.items() if TRESCA_VALUES.get(k, k) != v}
     return out
