@@ -17,24 +17,59 @@ from ..errors import ParameterError
 from ..water import Water, WaterTable
 from .params import POSITIVE, Param
 
-__all__ = ["DRAINAGE", "WATER_PARAMS", "derive_drainage", "is_wet", "scene_water"]
+__all__ = [
+    "DRAINAGE",
+    "WATER_PARAMS",
+    "derive_drainage",
+    "is_wet",
+    "scene_water",
+    "water_params",
+]
 
-#: Values of the ``drainage`` parameter.
-DRAINAGE = ("dry", "drained", "undrained")
+#: Values of the ``drainage`` parameter (``coupled`` where a scene offers it).
+DRAINAGE = ("dry", "drained", "undrained", "coupled")
 
-#: The water parameters of a scene with soil.
-WATER_PARAMS = [
-    Param(
+
+def water_params(coupled: bool = False) -> list[Param]:
+    """The water parameters of a scene with soil.
+
+    ``coupled=True`` offers ``drainage=coupled`` (consolidation: the water
+    flows by Darcy's law while the soil deforms) and its hydraulic
+    conductivity ``k``.
+    """
+    choices = DRAINAGE if coupled else DRAINAGE[:3]
+    help_ = (
+        "pore water: dry (no water), drained (pore pressure from the water "
+        "table, effective stress in the cones) or undrained (no drainage within "
+        "a step: the mixture keeps its volume; excess pore pressure)"
+    )
+    if coupled:
+        help_ += " or coupled (consolidation: Darcy flow within each step, k)"
+    drainage = Param(
         "drainage",
         None,
         "-",
-        "pore water: dry (no water), drained (pore pressure from the water "
-        "table, effective stress in the cones) or undrained (no drainage within "
-        "a step: the mixture keeps its volume; excess pore pressure) "
-        "(default: dry without water_level, drained with it)",
+        help_ + " (default: dry without water_level, drained with it)",
         str,
-        DRAINAGE,
-    ),
+        choices,
+    )
+    out = [drainage, *_LEVEL_AND_DENSITY]
+    if coupled:
+        out.append(
+            Param(
+                "k",
+                None,
+                "m/s",
+                "hydraulic conductivity of the soil (drainage=coupled)",
+                float,
+                lo=0,
+                lo_open=True,
+            )
+        )
+    return out
+
+
+_LEVEL_AND_DENSITY = [
     Param(
         "water_level",
         None,
@@ -46,6 +81,9 @@ WATER_PARAMS = [
     ),
     Param("rho_w", 1000.0, "kg/m^3", "density of the pore water", float, **POSITIVE),
 ]
+
+#: The water parameters of a scene with soil (no ``coupled`` drainage).
+WATER_PARAMS = water_params()
 
 
 def derive_drainage(values: dict[str, Any]) -> None:
@@ -66,6 +104,12 @@ def derive_drainage(values: dict[str, Any]) -> None:
             "drained",
             "drained with a water_level (m) that sets the pore pressure, or dry",
         )
+    if values["drainage"] == "coupled" and values.get("k") is None:
+        raise ParameterError(
+            "k",
+            None,
+            "a hydraulic conductivity k > 0 (m/s) with drainage=coupled",
+        )
     if values["drainage"] == "dry" and level is not None:
         raise ParameterError(
             "water_level",
@@ -85,4 +129,11 @@ def scene_water(values: Mapping[str, Any]) -> Water | None:
         return None
     level = values.get("water_level")
     table = None if level is None else WaterTable(level=float(level))
+    if values["drainage"] == "coupled":
+        return Water(
+            "coupled",
+            table,
+            rho_w=float(values["rho_w"]),
+            permeability=float(values["k"]),
+        )
     return Water(values["drainage"], table, rho_w=float(values["rho_w"]))
