@@ -33,6 +33,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _reporting import save_png
 
 from skfem_npfem.scenes import get_scene, run_scene
 from skfem_npfem.scenes.consolidation.exact import mandel_pressure, terzaghi_degree
@@ -246,8 +247,7 @@ def figure(data: dict, path: Path) -> None:
     ax2.set_title("Mandel (centre)")
     ax2.legend(fontsize=8)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    save_png(fig, path, dpi=110)
 
 
 def main() -> None:
