@@ -16,7 +16,9 @@ another drainage the run is the one step: ``undrained`` gives the immediate
 settlement, ``dry`` the drained one.
 
 The settlement is that of the footing; the degree of consolidation is
-``U = (s - s_immediate) / (s_final - s_immediate)``.
+``U = (s - s_immediate) / (s_final - s_immediate)``.  Without ``load`` a
+coupled footing takes its settlement steps at 1 m/s: their pseudo-time is
+the time of Darcy's flow, in seconds.
 """
 
 from __future__ import annotations
