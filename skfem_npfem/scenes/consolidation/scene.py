@@ -300,16 +300,31 @@ def _stepping(values: Values, seconds: float, loads, top, centre):
                     float(p.excess_pore_pressure[below].min()),
                     float(p.excess_pore_pressure[below].max()),
                 ]
-        dt = min(step.record.dt * values["dt_growth"], sim.dt_max)
-        ahead = [m - sim.time for m in marks if m - sim.time > 1e-9 * seconds]
-        if ahead and ahead[0] < dt * (1 + 1e-9):
-            dt = ahead[0]
-        elif ahead and ahead[0] < 1.5 * dt:  # no sliver before the mark
-            dt = 0.5 * ahead[0]
-        sim.dt = dt
+        sim.dt = next_time_step(
+            sim, step.record.dt, values["dt_growth"], marks, seconds
+        )
         return False
 
     return callback
+
+
+def next_time_step(
+    sim: Simulation, dt: float, growth: float, marks: list[float], seconds: float
+) -> float:
+    """The step after one of ``dt``: ``growth`` times it, landing on the marks.
+
+    At most ``sim.dt_max``; shortened to land on the next of the times
+    ``marks`` (s) ahead of ``sim.time``, or to half the way there when a
+    full step would leave a sliver before it.  ``seconds`` is the run's time
+    scale (marks closer than ``1e-9 seconds`` are passed).
+    """
+    dt = min(dt * growth, sim.dt_max)
+    ahead = [m - sim.time for m in marks if m - sim.time > 1e-9 * seconds]
+    if ahead and ahead[0] < dt * (1 + 1e-9):
+        dt = ahead[0]
+    elif ahead and ahead[0] < 1.5 * dt:  # no sliver before the mark
+        dt = 0.5 * ahead[0]
+    return dt
 
 
 def scene_metrics(sim: Simulation, values: Values, seconds: float) -> dict[str, Any]:

@@ -36,11 +36,9 @@ from ...mesh.smoothing import nodal_integration
 from ...mesh.sources import FixedMesh
 from ...particles import Particles
 from ...run.simulation import Simulation
-from ...step.model import Model
 from ..base import Scene, SceneRun
 from ..common import (
     elastic_params,
-    fidelity_from,
     fidelity_params,
     fill_at_rest,
     make_writer,
@@ -57,8 +55,7 @@ from ..limit_mode import (
 from ..limits import SPACING as SPACING_RANGE
 from ..methods import METHOD_METRICS_NO_SPFEM, method_params, with_method
 from ..params import ANGLE, POSITIVE, Param, Values
-from ..water import derive_drainage, scene_water
-from ..wet_soil import recorded_parameters
+from ..water import derive_drainage
 from .mesh import (
     DEFAULT_DOMAIN,
     DEFAULT_SPACING,
@@ -71,11 +68,17 @@ from .mesh import (
 )
 from .plateau import PlateauRule
 from .scenery import footing_scenery
+from .strip_coupled import (
+    LOAD_METRICS,
+    LOAD_PARAMS,
+    footing_model,
+    footing_parameters,
+    held_load_run,
+)
 from .strip_water import (
     FOOTING_WATER_PARAMS,
     footing_gamma,
     limit_soil,
-    soil_gravity,
     undrained_strength,
     water_dead_load,
 )
@@ -231,6 +234,7 @@ PARAMS = [
         bool,
     ),
     *FOOTING_WATER_PARAMS,
+    *LOAD_PARAMS,
     analysis_param("settlement steps to the load plateau"),
     *method_params(
         ("npfem", "fem-remap"),
@@ -265,6 +269,7 @@ METRICS = {
     "n_particles": "number of particles",
     **METHOD_METRICS_NO_SPFEM,
     **LIMIT_METRICS,
+    **LOAD_METRICS,
 }
 
 
@@ -338,18 +343,11 @@ def build(
     mat, phi = soil_material(values)
     rule = plateau_rule(values)
     particles, foot = soil_particles(values, mesh, phi)
+    if values["load"] is not None:  # loaded fast, then held
+        writer = make_writer(out, resume)
+        return held_load_run(values, mesh, mat, particles, foot, writer, progress)
     b, c, gamma = values["width"] / 2, values["c"], footing_gamma(values)
-    model = Model(
-        dim=2,
-        materials=[mat],
-        gravity=soil_gravity(values),
-        mode="static",
-        objective_rotation=values["large_deformation"],
-        update_geometry=values["large_deformation"],
-        solver=solver_from(values),
-        water=scene_water(values),
-        **fidelity_from(values, 0.0),
-    )
+    model = footing_model(values, mat)
     sim = Simulation(
         particles,
         model,
@@ -357,7 +355,7 @@ def build(
         rule.first_increment,
         writer=make_writer(out, resume),
         progress=progress,
-        meta={"scene": "strip-footing", "parameters": recorded_parameters(values)},
+        meta={"scene": "strip-footing", "parameters": footing_parameters(values)},
     )
 
     def record(sim_: Simulation, p: Particles, res) -> bool:

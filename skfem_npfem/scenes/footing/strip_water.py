@@ -24,7 +24,7 @@ from ...materials import Material, Tresca
 from ...particles import Particles
 from ...water import water_force
 from ..params import Param
-from ..water import WATER_PARAMS, scene_water
+from ..water import scene_water, water_params
 from ..wet_soil import wet_geostatic
 
 __all__ = [
@@ -38,7 +38,7 @@ __all__ = [
 
 #: The water parameters of the strip footing and the weightless soil's ``p0``.
 FOOTING_WATER_PARAMS = [
-    *WATER_PARAMS,
+    *water_params(coupled=True),
     Param(
         "p0",
         0.0,
