@@ -195,50 +195,60 @@ def build(
     sim.callbacks.append(record_top)
 
     def metrics(sim_: Simulation) -> dict[str, float]:
-        p = sim_.particles
-        z0 = p.x[:, -1] - p.u[:, -1]
-        g = values["gravity"]
-        sv_ex = effective_vertical_stress(z0, H, mat.rho, g, water)
-        undrained = water is not None and water.undrained
-        if undrained:
-            # The mixture keeps its volume and the walls hold it sideways:
-            # nothing moves, and the excess pore pressure carries what the
-            # skeleton would carry drained.
-            drained_sv, sv_ex = sv_ex, np.zeros_like(sv_ex)
-        nu = mat.nu
-        sv = p.stress[:, dim - 1] if dim == 2 else p.stress[:, 2]
-        sh = p.stress[:, 0]
-        M = mat.p_wave_modulus
-        base = np.isclose(z0, 0.0)
-        t_exact = 4 * H / np.sqrt(M / mat.rho)
-        scale = drained_sv if undrained else sv_ex
-        out = {
-            "sigma_v_rel_l2": _rel(sv, sv_ex, scale),
-            # nu = 0: the exact s_h is 0; normalise by |s_v| instead of NaN.
-            "sigma_h_rel_l2": _rel(sh, nu / (1 - nu) * sv_ex, scale),
-            "settlement": float(-p.u[top, -1].mean()),
-            "settlement_exact": 0.0
-            if undrained
-            else exact_settlement(H, mat.rho, g, M, water),
-            "base_sigma_v": float(sv[base].mean()),
-            "period": oscillation_period(
-                [
-                    (r.time, r.extra["settlement_top"])
-                    for r in sim_.records
-                    if "settlement_top" in r.extra
-                ]
-            ),
-            "period_exact": float(t_exact),
-            "n_particles": int(p.n),
-            **pore_metrics(p, water, g),
-        }
-        if undrained:
-            out["excess_pore_pressure_rel_l2"] = _rel(
-                p.excess_pore_pressure, -drained_sv
-            )
-        return out
+        return column_metrics(sim_, values, mat, top, water)
 
     return with_method(values, SceneRun(sim, {"steps": values["steps"]}, metrics))
+
+
+def column_metrics(
+    sim_: Simulation,
+    values: Values,
+    mat: LinearElastic,
+    top: np.ndarray,
+    water: Water | None,
+) -> dict[str, float]:
+    """The column's metrics against the exact oedometric column at rest."""
+    dim, H = values["dim"], values["height"]
+    p = sim_.particles
+    z0 = p.x[:, -1] - p.u[:, -1]
+    g = values["gravity"]
+    sv_ex = effective_vertical_stress(z0, H, mat.rho, g, water)
+    undrained = water is not None and water.undrained
+    if undrained:
+        # The mixture keeps its volume and the walls hold it sideways:
+        # nothing moves, and the excess pore pressure carries what the
+        # skeleton would carry drained.
+        drained_sv, sv_ex = sv_ex, np.zeros_like(sv_ex)
+    nu = mat.nu
+    sv = p.stress[:, dim - 1] if dim == 2 else p.stress[:, 2]
+    sh = p.stress[:, 0]
+    M = mat.p_wave_modulus
+    base = np.isclose(z0, 0.0)
+    t_exact = 4 * H / np.sqrt(M / mat.rho)
+    scale = drained_sv if undrained else sv_ex
+    out = {
+        "sigma_v_rel_l2": _rel(sv, sv_ex, scale),
+        # nu = 0: the exact s_h is 0; normalise by |s_v| instead of NaN.
+        "sigma_h_rel_l2": _rel(sh, nu / (1 - nu) * sv_ex, scale),
+        "settlement": float(-p.u[top, -1].mean()),
+        "settlement_exact": 0.0
+        if undrained
+        else exact_settlement(H, mat.rho, g, M, water),
+        "base_sigma_v": float(sv[base].mean()),
+        "period": oscillation_period(
+            [
+                (r.time, r.extra["settlement_top"])
+                for r in sim_.records
+                if "settlement_top" in r.extra
+            ]
+        ),
+        "period_exact": float(t_exact),
+        "n_particles": int(p.n),
+        **pore_metrics(p, water, g),
+    }
+    if undrained:
+        out["excess_pore_pressure_rel_l2"] = _rel(p.excess_pore_pressure, -drained_sv)
+    return out
 
 
 def pore_metrics(p: Particles, water: Water | None, g: float) -> dict[str, float]:
