@@ -62,9 +62,7 @@ def _boundary_facets(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
         key = key.astype(np.int64) @ (np.int64(n) ** np.arange(nv - 2, -1, -1))
         _, inv, count = np.unique(key, return_inverse=True, return_counts=True)
     else:
-        _, inv, count = np.unique(
-            key, axis=0, return_inverse=True, return_counts=True
-        )
+        _, inv, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
     once = np.flatnonzero(count[inv.reshape(-1)] == 1)
     return faces[once], once // nv, once % nv
 
