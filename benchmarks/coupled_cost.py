@@ -67,7 +67,8 @@ VARIANTS = {
     "coupled tau=1": ("coupled", 1.0),
     "coupled tau=0": ("coupled", 0.0),
 }
-#: Variants stepped with the library's facet finder of before (``--before``).
+#: Variants stepped as the library did before (``--before``): the facet finder
+#: below, and qdldl for pore pressures coupled in P (the automatic backend).
 BEFORE = {"drained (before)": "drained", "coupled tau=1 (before)": "coupled tau=1"}
 PROBLEMS = ("elastic", "plastic")
 GEOMETRIES = ("plane strain", "axisymmetric")
@@ -170,15 +171,17 @@ def run_case(
     names = [*VARIANTS, *(BEFORE if before else ())]
     sims = {v: [*build(problem, geometry, v), None] for v in names}
     rows: dict[str, dict[str, list]] = {v: {} for v in names}
-    now = forces._boundary_facets
+    now = forces._boundary_facets, conic.couples_pore_pressures
     for _ in range(steps):
         for v, sim in sims.items():
             p, model, mesh, state = sim
-            forces._boundary_facets = boundary_facets_before if v in BEFORE else now
+            if v in BEFORE:
+                forces._boundary_facets = boundary_facets_before
+                conic.couples_pore_pressures = lambda data: False
             t0, c0 = time.perf_counter(), time.process_time()
             p, step = npfem.advance(p, model, DT, mesh, start=state)
             wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-            forces._boundary_facets = now
+            forces._boundary_facets, conic.couples_pore_pressures = now
             sim[0], sim[3] = p, step.state
             r = rows[v]
             t = step.solution.timings
@@ -215,8 +218,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--before",
         action="store_true",
-        help="also step the drained and coupled (tau = 1) variants with the "
-        "boundary-facet finder of before, in the same run",
+        help="also step the drained and coupled (tau = 1) variants as before "
+        "(boundary-facet finder, backend choice), in the same run",
     )
     ap.add_argument("--tables", action="store_true", help=docs_tables.HELP)
     args = ap.parse_args(argv)
@@ -233,7 +236,7 @@ def main(argv: list[str] | None = None) -> int:
                     f"(x{r['vs_drained']:.2f}, cpu x{r['cpu_vs_drained']:.2f}) "
                     f"setup {r['setup_s']:.4f} solve "
                     f"{r['solve_s']:.4f} it {r['iterations']:.0f} "
-                    f"n {r['kkt_dim']} LU {r['lu_nnz']}",
+                    f"n {r['kkt_dim']} LU {r['lu_nnz']} {r['linear_solver']}",
                     flush=True,
                 )
     report: dict[str, Any] = {
@@ -260,7 +263,7 @@ def coupled_cost() -> str:
             rows.append(
                 [
                     f"{c['problem']}, {c['geometry']}",
-                    v,
+                    f"{v} ({r['linear_solver']})",
                     docs_tables.sig(r["step_s"]),
                     f"{r['vs_drained']:.2f} / {r['cpu_vs_drained']:.2f}",
                     " / ".join(
@@ -275,7 +278,7 @@ def coupled_cost() -> str:
     return docs_tables.md(
         [
             "problem",
-            "variant",
+            "variant (backend)",
             "step (s)",
             "/ drained (wall / CPU)",
             "assembly / setup / solve (s)",
