@@ -237,10 +237,12 @@ def choose_linear_solver(n_variables: int, dim: int, coupled: bool = False) -> s
     MKL Pardiso when installed and the problem is not tiny; otherwise qdldl for
     small 2D problems and faer for large 2D and all 3D problems (denser factors).
     ``coupled``: the objective couples neighbouring stresses (the stabilisation
-    of :mod:`skfem_npfem.step.stabilisation`); the factors are then denser and faer
-    wins from small sizes on (1 035-particle collapse, beta = 30: qdldl 0.66 s,
-    faer 0.48 s a step; without stabilisation 0.20 s and 0.35 s; shared
-    machine, stepped alternately in one process).
+    of :mod:`skfem_npfem.step.stabilisation`) or excess pore pressures (the
+    pressure projection and Darcy's term of undrained and coupled water,
+    :func:`~skfem_npfem.step.conic.couples_pore_pressures`); the factors are
+    then denser and faer wins from small sizes on (1 035-particle collapse,
+    beta = 30: qdldl 0.66 s, faer 0.48 s a step; without stabilisation 0.20 s
+    and 0.35 s; shared machine, stepped alternately in one process).
 
     Examples
     --------

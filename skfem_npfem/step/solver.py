@@ -142,8 +142,9 @@ class SolverOptions:
     ) -> str:
         """The backend actually used (``auto`` resolved by problem size).
 
-        ``coupled``: the objective couples the stresses of neighbouring
-        particles (the stabilisation), see :func:`choose_linear_solver`.
+        ``coupled``: the objective couples the stresses or the excess pore
+        pressures of neighbouring particles (the stabilisation; the pore
+        pressure's projection and Darcy terms), see :func:`choose_linear_solver`.
 
         Raises
         ------
@@ -233,8 +234,9 @@ def solve_clarabel(
     ``P`` is the upper triangle.  Without iterative refinement the KKT solves
     can be too inaccurate near the optimum (seen in 3D at tol 1e-6): a solve
     ending in ``InsufficientProgress`` or ``NumericalError`` is then repeated
-    once with refinement.  ``coupled`` (stresses coupled in ``P``) steers the
-    automatic backend (:func:`~skfem_npfem.step.backends.choose_linear_solver`).
+    once with refinement.  ``coupled`` (stresses or pore pressures coupled in
+    ``P``) steers the automatic backend
+    (:func:`~skfem_npfem.step.backends.choose_linear_solver`).
     """
     t0 = time.perf_counter()
     backend = options.resolved_linear_solver(A.shape[1], dim, coupled)

@@ -57,7 +57,12 @@ def _boundary_facets(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     local = np.array([[j for j in range(nv) if j != k] for k in range(nv)])
     faces = t[local].transpose(2, 0, 1).reshape(ne * nv, nv - 1)  # (e, k) order
     key = np.sort(faces, axis=1)
-    _, inv, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    n = int(t.max()) + 1 if t.size else 1
+    if float(n) ** (nv - 1) < 2.0**62:  # one int64 per facet: a fast 1D unique
+        key = key.astype(np.int64) @ (np.int64(n) ** np.arange(nv - 2, -1, -1))
+        _, inv, count = np.unique(key, return_inverse=True, return_counts=True)
+    else:
+        _, inv, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
     once = np.flatnonzero(count[inv.reshape(-1)] == 1)
     return faces[once], once // nv, once % nv
 
