@@ -300,16 +300,42 @@ def _stepping(values: Values, seconds: float, loads, top, centre):
                     float(p.excess_pore_pressure[below].min()),
                     float(p.excess_pore_pressure[below].max()),
                 ]
-        dt = min(step.record.dt * values["dt_growth"], sim.dt_max)
-        ahead = [m - sim.time for m in marks if m - sim.time > 1e-9 * seconds]
-        if ahead and ahead[0] < dt * (1 + 1e-9):
-            dt = ahead[0]
-        elif ahead and ahead[0] < 1.5 * dt:  # no sliver before the mark
-            dt = 0.5 * ahead[0]
-        sim.dt = dt
+        sim.dt = growing_step(
+            step.record.dt, values["dt_growth"], sim.dt_max, sim.time, marks, seconds
+        )
         return False
 
     return callback
+
+
+def growing_step(
+    last: float,
+    growth: float,
+    longest: float,
+    now: float,
+    marks: list[float],
+    unit: float,
+) -> float:
+    """The next time step: ``growth`` times the ``last``, at most ``longest``.
+
+    Shortened to land on the next of the ``marks`` (times, s) after ``now``,
+    or to half the way there when a full step would leave a sliver under
+    half a step before it; ``unit`` (s) scales the tolerance.
+
+    Examples
+    --------
+    >>> growing_step(1.0, 2.0, 10.0, 0.0, [5.0], 1.0)
+    2.0
+    >>> growing_step(1.0, 2.0, 10.0, 0.0, [2.5], 1.0)
+    1.25
+    """
+    dt = min(last * growth, longest)
+    ahead = [m - now for m in marks if m - now > 1e-9 * unit]
+    if ahead and ahead[0] < dt * (1 + 1e-9):
+        dt = ahead[0]
+    elif ahead and ahead[0] < 1.5 * dt:  # no sliver before the mark
+        dt = 0.5 * ahead[0]
+    return dt
 
 
 def scene_metrics(sim: Simulation, values: Values, seconds: float) -> dict[str, Any]:
