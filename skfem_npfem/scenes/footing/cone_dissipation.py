@@ -105,6 +105,8 @@ DISSIPATION_PARAMS = [
 DISSIPATION_METRICS = {
     "u2_max": "drainage=undrained or coupled: the largest excess pore pressure "
     "at the shoulder (u2, as shoulder_excess_pore_pressure) over the push, Pa",
+    "u2_end": "drainage=undrained or coupled: u2 at the end of the push, Pa "
+    "(u2(0) of the dissipation test)",
     "consolidation_coefficient": "drainage=coupled: c_h = k M / gamma_w "
     "(M = 2 G (1 - nu)/(1 - 2 nu), the skeleton's constrained modulus), m^2/s",
     "normalised_velocity": "drainage=coupled: V = speed D / c_h (undrained "
@@ -292,7 +294,10 @@ def dissipation_metrics(
     """``u2_max`` and, coupled, c_h, V and the dissipation curve with its T*_50."""
     recs = sim.records
     push = [r.extra["u2"] for r in in_push(sim, t_push) if "u2" in r.extra]
-    out: dict[str, Any] = {"u2_max": max(push) if push else None}
+    out: dict[str, Any] = {
+        "u2_max": max(push) if push else None,
+        "u2_end": push[-1] if push else None,
+    }
     if values["drainage"] != "coupled":
         return out
     ch = consolidation_coefficient(values)
