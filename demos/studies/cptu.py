@@ -6,7 +6,7 @@ docs/validation/cone_penetration.md (c' = 0, phi' = 25 deg, psi = 0,
 p'_0 = sigma0 = 50 kPa, nu' = 0.3, I_r = G/s_u = 100) with coupled drainage
 (k = 1e-8 m/s: c_h = k M / gamma_w = 7.5e-6 m^2/s, V = v D / c_h = 95 at
 2 cm/s), pushed ``push`` x D from 4 D deep in a 10 D radius, then held
-(``dissipation=true``) to T* = 3.  At each spacing D/n and cone step
+(``dissipation=true``) to T* = 2.  At each spacing D/n and cone step
 (spacing / ``per`` a step) it tabulates u2 at the end of the push and its
 largest value, the u2 of the held cone's first step, and the T* at which u2
 fell to half its value at the end of the push, against Teh & Houlsby's (1991)
@@ -14,7 +14,7 @@ T*_50 = 0.245 at u2.
 
 Usage (from the repository root)::
 
-    python demos/studies/cptu.py [--n 6 8] [--push 2 3] [--per 2 2] [--tables]
+    python demos/studies/cptu.py [--n 6 6] [--push 1.5 1.5] [--per 2 8] [--tables]
 
 ``--tables`` writes ``docs/validation/cptu.json``, the table
 ``docs/validation/cptu.inc`` and the figure ``docs/validation/cptu.png``
@@ -44,7 +44,7 @@ STAGE = {
     "dT": 0.002,
     "dt_growth": 1.3,
     "dT_max": 0.1,
-    "T_end": 3.0,
+    "T_end": 2.0,
 }
 SMALL = {"depth": 4 * D, "domain_below": 3.0, "domain_radius": 10.0}
 
@@ -136,9 +136,9 @@ def figure(rows: list[dict], path: Path) -> None:
 def main() -> None:
     """Run the rows; print the table; with ``--tables`` write it and the figure."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--n", type=int, nargs="+", default=[6, 8])
-    parser.add_argument("--push", type=float, nargs="+", default=[2.0, 3.0])
-    parser.add_argument("--per", type=float, nargs="+", default=[2.0, 2.0])
+    parser.add_argument("--n", type=int, nargs="+", default=[6, 6])
+    parser.add_argument("--push", type=float, nargs="+", default=[1.5, 1.5])
+    parser.add_argument("--per", type=float, nargs="+", default=[2.0, 8.0])
     parser.add_argument("--tables", action="store_true", help="write the results")
     args = parser.parse_args()
     rows = [
