@@ -14,7 +14,7 @@ T*_50 = 0.245 at u2.
 
 Usage (from the repository root)::
 
-    python demos/studies/cptu.py [--n 6 6] [--push 1.5 1.5] [--per 2 8] [--tables]
+    python demos/studies/cptu.py [--n 6 8] [--push 4 3] [--per 4 4] [--tables]
 
 ``--tables`` writes ``docs/validation/cptu.json``, the table
 ``docs/validation/cptu.inc`` and the figure ``docs/validation/cptu.png``
@@ -136,9 +136,9 @@ def figure(rows: list[dict], path: Path) -> None:
 def main() -> None:
     """Run the rows; print the table; with ``--tables`` write it and the figure."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--n", type=int, nargs="+", default=[6, 6])
-    parser.add_argument("--push", type=float, nargs="+", default=[1.5, 1.5])
-    parser.add_argument("--per", type=float, nargs="+", default=[2.0, 8.0])
+    parser.add_argument("--n", type=int, nargs="+", default=[6, 8])
+    parser.add_argument("--push", type=float, nargs="+", default=[4.0, 3.0])
+    parser.add_argument("--per", type=float, nargs="+", default=[4.0, 4.0])
     parser.add_argument("--tables", action="store_true", help="write the results")
     args = parser.parse_args()
     rows = [
