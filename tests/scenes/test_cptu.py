@@ -122,3 +122,46 @@ def test_dissipation_stage_drains_u2_faster_with_larger_k():
         slow["normalised_velocity"] / 4, rel=1e-12
     )
     assert fast["dissipation"][-1][1] < slow["dissipation"][-1][1]
+
+
+@pytest.fixture(scope="module")
+def cptu_d6() -> dict:
+    """D/6 pushed 4 D a quarter spacing a step, held to T* = 2 (about 5 minutes)."""
+    h = D / 6
+    over = {
+        **CLAY,
+        "spacing": h,
+        "dt": h / 4 / 0.02,
+        "penetration": 4 * D,
+        "depth": 4 * D,
+        "domain_below": 3.0,
+        "domain_radius": 10.0,
+        "drainage": "coupled",
+        "k": K,
+        "dissipation": True,
+        "dT": 0.002,
+        "dt_growth": 1.3,
+        "dT_max": 0.1,
+        "T_end": 2.0,
+    }
+    return run_scene("cone-penetration", over)["metrics"]
+
+
+@pytest.mark.slow
+def test_t50_star_is_of_teh_houlsby_order(cptu_d6):
+    # Teh & Houlsby (1991), Geotechnique 41(1) 17-34: T*_50 = 0.245 at u2.
+    # Within a factor of two; measured 0.332 (+35 %) here, 0.169 (-31 %) at
+    # D/8 pushed 3 D (docs/validation/cone_penetration.md, "CPTu").
+    t50 = cptu_d6["t50_star"]
+    assert 0.245 / 2 < t50 < 0.245 * 2
+    assert cptu_d6["dissipation"][-1][1] < 0.2  # drained by T* = 2
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    reason="T*_50 = 0.332 at D/6 pushed 4 D, +35 % of Teh & Houlsby's 0.245: "
+    "u2 at the end of a coarse push scatters from step to step",
+    strict=False,
+)
+def test_t50_star_within_25_percent_of_teh_houlsby(cptu_d6):
+    assert cptu_d6["t50_star"] == pytest.approx(0.245, rel=0.25)
