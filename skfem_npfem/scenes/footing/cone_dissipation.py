@@ -199,7 +199,7 @@ def half_time(curve: list[list[float]]) -> float | None:
     Examples
     --------
     >>> round(half_time([[0.0, 1.0], [0.1, 0.8], [1.0, 0.3]]), 4)
-    0.3162
+    0.3981
     """
     c = np.asarray(curve, float)
     below = np.flatnonzero(c[:, 1] <= 0.5)
