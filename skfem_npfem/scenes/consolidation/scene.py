@@ -300,26 +300,37 @@ def _stepping(values: Values, seconds: float, loads, top, centre):
                     float(p.excess_pore_pressure[below].min()),
                     float(p.excess_pore_pressure[below].max()),
                 ]
-        sim.dt = next_time_step(
-            sim, step.record.dt, values["dt_growth"], marks, seconds
+        sim.dt = growing_step(
+            step.record.dt, values["dt_growth"], sim.dt_max, sim.time, marks, seconds
         )
         return False
 
     return callback
 
 
-def next_time_step(
-    sim: Simulation, dt: float, growth: float, marks: list[float], seconds: float
+def growing_step(
+    last: float,
+    growth: float,
+    longest: float,
+    now: float,
+    marks: list[float],
+    unit: float,
 ) -> float:
-    """The step after one of ``dt``: ``growth`` times it, landing on the marks.
+    """The next time step: ``growth`` times the ``last``, at most ``longest``.
 
-    At most ``sim.dt_max``; shortened to land on the next of the times
-    ``marks`` (s) ahead of ``sim.time``, or to half the way there when a
-    full step would leave a sliver before it.  ``seconds`` is the run's time
-    scale (marks closer than ``1e-9 seconds`` are passed).
+    Shortened to land on the next of the ``marks`` (times, s) after ``now``,
+    or to half the way there when a full step would leave a sliver under
+    half a step before it; ``unit`` (s) scales the tolerance.
+
+    Examples
+    --------
+    >>> growing_step(1.0, 2.0, 10.0, 0.0, [5.0], 1.0)
+    2.0
+    >>> growing_step(1.0, 2.0, 10.0, 0.0, [2.5], 1.0)
+    1.25
     """
-    dt = min(dt * growth, sim.dt_max)
-    ahead = [m - sim.time for m in marks if m - sim.time > 1e-9 * seconds]
+    dt = min(last * growth, longest)
+    ahead = [m - now for m in marks if m - now > 1e-9 * unit]
     if ahead and ahead[0] < dt * (1 + 1e-9):
         dt = ahead[0]
     elif ahead and ahead[0] < 1.5 * dt:  # no sliver before the mark

@@ -29,7 +29,12 @@ pressure is reported (at the shoulder, where a piezocone reads u2); ``su``
 is then the clay's undrained strength at the constant mean effective stress
 ``sigma0`` with the vertical stress intermediate (the plane-strain
 ``c cos phi + sigma0 sin phi``), against which the cone's resistance matches
-a Tresca soil's (docs/validation/cone_penetration.md).
+a Tresca soil's (docs/validation/cone_penetration.md).  With
+``drainage=coupled`` (conductivity ``k``) the water flows while the cone
+goes down, and ``dissipation=true`` holds the cone after the push while the
+excess pore pressure at u2 dissipates: a CPTu dissipation test against Teh &
+Houlsby's (1991) ``T*_50 = 0.245``
+(:mod:`~skfem_npfem.scenes.footing.cone_dissipation`).
 
 Reference: Teh & Houlsby's (1991) cone factor of a smooth cone in steady
 penetration, ``N_c = (q_c - sigma_0)/s_u = 1.25 + 1.84 ln I_r``.
@@ -45,6 +50,7 @@ from typing import Any
 import numpy as np
 
 from ...boundary import wall_x
+from ...constants import GRAVITY
 from ...laws import teh_houlsby_nc
 from ...loads import surface_load
 from ...mesh.axisymmetric import AxisymmetricMohrCoulomb
@@ -62,7 +68,15 @@ from ..common import (
 )
 from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
-from ..water import WATER_PARAMS, scene_water
+from ..water import is_wet, scene_water, water_params
+from .cone_dissipation import (
+    DISSIPATION_METRICS,
+    DISSIPATION_PARAMS,
+    attach_piezocone,
+    check_dissipation,
+    dissipation_metrics,
+    in_push,
+)
 from .cone_geometry import APEX, check, cone_body, sizes, soil_points
 from .penetration_common import (
     ADHESION,
@@ -219,7 +233,8 @@ PARAMS = [
         lo=0.05,
         hi=100.0,
     ),
-    *WATER_PARAMS,
+    *water_params(coupled=True),
+    *DISSIPATION_PARAMS,
     *fidelity_params(0.0),
     *solver_params(),
 ]
@@ -246,6 +261,7 @@ METRICS = {
     "shoulder_excess_pore_pressure": "with water only: the mean excess pore "
     "pressure at the end of the particles within one spacing of the cone's "
     "shoulder (the u2 filter of a piezocone) / s_u",
+    **DISSIPATION_METRICS,
 }
 
 
@@ -267,7 +283,8 @@ def build(
         dim=2,
         axisymmetric=True,
         materials=[soil],
-        gravity=0.0,
+        # Darcy's law needs gamma_w = rho_w g; the particles' weight is nil.
+        gravity=GRAVITY if values["drainage"] == "coupled" else 0.0,
         mode="static",
         walls=[axis],
         bodies=[cone],
@@ -291,11 +308,13 @@ def build(
     )
     area = math.pi * D**2 / 4
     sim.penetration_check.enabled = False  # penetration_warnings says it
+    t_push = g["w"] / values["speed"]
+    t_end = attach_piezocone(sim, values, t_push, lambda x, w: shoulder_filter(x, g, w))
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
         curve = [
             [-r.extra["cone_y"] / D, (r.extra["cone_force_y"] / area - s0) / su]
-            for r in sim_.records
+            for r in in_push(sim_, t_push)
             if "cone_force_y" in r.extra
         ]
         steady = steady_factor(curve, values["steady_window"])
@@ -323,9 +342,10 @@ def build(
                 shoulder_filter(sim_.particles.x, g, curve[-1][0] if curve else 0.0),
                 "shoulder_excess_pore_pressure",
             ),
+            **(dissipation_metrics(sim_, values, t_push) if is_wet(values) else {}),
         }
 
-    return SceneRun(sim, {"t_end": g["w"] / values["speed"]}, metrics)
+    return SceneRun(sim, {"t_end": t_end}, metrics)
 
 
 def start_state(
@@ -443,6 +463,12 @@ def cone_scenery(p: dict, folder: Path | None = None) -> Scenery:
     return s
 
 
+def derive(values: dict[str, Any]) -> None:
+    """The cone's derived defaults (:func:`derive_cone`); a checked dissipation."""
+    derive_cone(values)
+    check_dissipation(values)
+
+
 SCENE = Scene(
     name="cone-penetration",
     description=__doc__.strip().splitlines()[0].split(": ", 1)[1],
@@ -450,7 +476,7 @@ SCENE = Scene(
     build=build,
     metrics_doc=METRICS,
     ignored=refuse_penetration,
-    derive=derive_cone,
+    derive=derive,
     scenery=cone_scenery,
     time_params=("dt", "penetration"),
 )

@@ -238,6 +238,9 @@ def pore_metrics(
     return out
 
 
+#: The cone's dissipation-test parameters, recorded only with ``dissipation``.
+DISSIPATION_NAMES = ("dissipation", "dT", "dt_growth", "dT_max", "T_end")
+
 #: The soil parameters of a Tresca clay as the scenes had them before
 #: effective-stress clays: a run with these records none of them.
 TRESCA_VALUES = {"material": "tresca", "c": 0.0, "phi": 25.0, "psi": 0.0}
@@ -251,9 +254,14 @@ def penetration_parameters(values: Mapping[str, Any]) -> dict[str, Any]:
     water parameters at their dry values
     (:func:`~skfem_npfem.scenes.wet_soil.recorded_parameters`) and, with
     ``material=tresca``, the Mohr-Coulomb parameters at their defaults are
-    left out.
+    left out; so are a cone's ``k`` when not coupled and its dissipation
+    stepping without a dissipation test.
     """
     out = recorded_parameters(values)
+    if out.get("k", 0.0) is None:  # not coupled: no conductivity
+        del out["k"]
+    if not out.get("dissipation", True):  # no dissipation test: no stepping
+        out = {k: v for k, v in out.items() if k not in DISSIPATION_NAMES}
     if values.get("material") == "tresca":
         out = {k: v for k, v in out.items() if TRESCA_VALUES.get(k, k) != v}
     return out

@@ -38,7 +38,7 @@ from ...run.simulation import Simulation
 from ...step.model import Model
 from ..base import SceneRun
 from ..common import fidelity_from, solver_from
-from ..consolidation.scene import REPORT_TIMES, next_time_step
+from ..consolidation.scene import REPORT_TIMES, growing_step
 from ..params import POSITIVE, Param
 from ..water import scene_water
 from ..wet_soil import recorded_parameters
@@ -234,7 +234,9 @@ def held_load_run(
 
     def record(sim_: Simulation, p: Particles, step) -> bool:
         step.record.extra["settlement"] = float(-p.u[foot_ids, 1].mean())
-        sim_.dt = next_time_step(sim_, step.record.dt, values["dt_growth"], marks, 1.0)
+        sim_.dt = growing_step(
+            step.record.dt, values["dt_growth"], sim_.dt_max, sim_.time, marks, 1.0
+        )
         return False
 
     sim.callbacks.append(record)

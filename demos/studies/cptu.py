@@ -1,0 +1,156 @@
+#!/usr/bin/env python
+"""CPTu: the coupled cone's u2 and its dissipation against Teh & Houlsby's T*_50.
+
+Runs ``cone-penetration`` with the weightless effective-stress clay of
+docs/validation/cone_penetration.md (c' = 0, phi' = 25 deg, psi = 0,
+p'_0 = sigma0 = 50 kPa, nu' = 0.3, I_r = G/s_u = 100) with coupled drainage
+(k = 1e-8 m/s: c_h = k M / gamma_w = 7.5e-6 m^2/s, V = v D / c_h = 95 at
+2 cm/s), pushed ``push`` x D from 4 D deep in a 10 D radius, then held
+(``dissipation=true``) to T* = 2.  At each spacing D/n and cone step
+(spacing / ``per`` a step) it tabulates u2 at the end of the push and its
+largest value, the u2 of the held cone's first step, and the T* at which u2
+fell to half its value at the end of the push, against Teh & Houlsby's (1991)
+T*_50 = 0.245 at u2.
+
+Usage (from the repository root)::
+
+    python demos/studies/cptu.py [--n 6 8] [--push 4 3] [--per 4 4] [--tables]
+
+``--tables`` writes ``docs/validation/cptu.json``, the table
+``docs/validation/cptu.inc`` and the figure ``docs/validation/cptu.png``
+(included by docs/validation/cone_penetration.md).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+from _common import VALIDATION
+
+import skfem_npfem as npfem
+from skfem_npfem.scenes.footing.cone_dissipation import TEH_HOULSBY_T50_U2
+
+D = 0.0357
+K = 1.0e-8
+CLAY = {"material": "mohr-coulomb", "phi": 25.0, "nu": 0.3}
+STAGE = {
+    "drainage": "coupled",
+    "k": K,
+    "dissipation": True,
+    "dT": 0.002,
+    "dt_growth": 1.3,
+    "dT_max": 0.1,
+    "T_end": 2.0,
+}
+SMALL = {"depth": 4 * D, "domain_below": 3.0, "domain_radius": 10.0}
+
+
+def run_row(n: int, push: float, per: float) -> dict:
+    """The CPTu at D/n pushed ``push`` D, the cone moving spacing/per a step."""
+    h = D / n
+    over = {
+        **CLAY,
+        **SMALL,
+        **STAGE,
+        "spacing": h,
+        "dt": h / per / 0.02,
+        "penetration": push * D,
+    }
+    t0 = time.perf_counter()
+    m = npfem.run_scene("cone-penetration", over)["metrics"]
+    curve = m["dissipation"]
+    return {
+        "n": n,
+        "push": push,
+        "per": per,
+        "su": m["undrained_strength"],
+        "u2_max": m["u2_max"],
+        "u2_end": m["u2_end"],
+        "first_held": curve[1][1] if len(curve) > 1 else None,
+        "t50_star": m["t50_star"],
+        "V": m["normalised_velocity"],
+        "c_h": m["consolidation_coefficient"],
+        "N_c": m["cone_factor"],
+        "curve": curve,
+        "wall_s": time.perf_counter() - t0,
+    }
+
+
+def markdown(rows: list[dict]) -> str:
+    """One line per spacing, push and cone step."""
+    lines = [
+        "| D/n, push, cone step | V | N_c | u2 end of push / s_u | u2_max / s_u "
+        "| first held step: u2/u2(0) | T*_50 | vs 0.245 | wall (s) |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        t50 = r["t50_star"]
+        vs = "n/a" if t50 is None else f"{t50 / TEH_HOULSBY_T50_U2 - 1:+.0%}"
+        lines.append(
+            f"| D/{r['n']}, {r['push']:g} D, h/{r['per']:g} | {r['V']:.0f} | "
+            f"{r['N_c']:.2f} | {r['u2_end'] / r['su']:.2f} | "
+            f"{r['u2_max'] / r['su']:.2f} | {r['first_held']:.2f} | "
+            f"{'n/a' if t50 is None else f'{t50:.3g}'} | {vs} | {r['wall_s']:.0f} |"
+        )
+    return "\n".join(lines).replace("%", " %") + "\n"
+
+
+def figure(rows: list[dict], path: Path) -> None:
+    """u2/u2(0) against T* of each row, and Teh & Houlsby's T*_50 at u2."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 3.8))
+    for r in rows:
+        c = np.asarray(r["curve"][1:])  # T* = 0 has no place on a log axis
+        ax.semilogx(
+            c[:, 0],
+            c[:, 1],
+            ".-",
+            ms=4,
+            label=f"N-PFEM, D/{r['n']}, push {r['push']:g} D, step h/{r['per']:g}",
+        )
+    ax.plot(
+        [TEH_HOULSBY_T50_U2],
+        [0.5],
+        "k*",
+        ms=12,
+        label="Teh & Houlsby (1991): T*_50 = 0.245 at u2",
+    )
+    ax.axhline(0.5, color="0.7", lw=0.8)
+    ax.set_xlabel("T* = c_h t / (R^2 sqrt(I_r))")
+    ax.set_ylabel("u2(t) / u2(end of push)")
+    ax.set_title("CPTu dissipation at the shoulder (u2)")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+
+
+def main() -> None:
+    """Run the rows; print the table; with ``--tables`` write it and the figure."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--n", type=int, nargs="+", default=[6, 8])
+    parser.add_argument("--push", type=float, nargs="+", default=[4.0, 3.0])
+    parser.add_argument("--per", type=float, nargs="+", default=[4.0, 4.0])
+    parser.add_argument("--tables", action="store_true", help="write the results")
+    args = parser.parse_args()
+    rows = [
+        run_row(n, w, p) for n, w, p in zip(args.n, args.push, args.per, strict=True)
+    ]
+    page = markdown(rows)
+    print(page)
+    if args.tables:
+        (VALIDATION / "cptu.json").write_text(json.dumps(rows, indent=1) + "\n")
+        (VALIDATION / "cptu.inc").write_text(page)
+        figure(rows, VALIDATION / "cptu.png")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,167 @@
+"""The piezocone (CPTu): a coupled cone and its dissipation test.
+
+References: the constrained modulus of linear elasticity
+``M = E (1 - nu) / ((1 + nu)(1 - 2 nu))`` with ``E = 2 G (1 + nu)``, hence
+``c_h = k M / gamma_w``; Teh & Houlsby (1991), Geotechnique 41(1) 17-34:
+``T*_50 = 0.245`` at the shoulder (u2) of a 60-degree cone, with
+``T* = c_h t / (R^2 sqrt(I_r))``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from skfem_npfem import ParameterError, run_scene
+from skfem_npfem.constants import GRAVITY
+from skfem_npfem.scenes import get_scene
+from skfem_npfem.scenes.footing.cone_dissipation import (
+    consolidation_coefficient,
+    half_time,
+    time_factor_seconds,
+)
+from skfem_npfem.scenes.footing.penetration_soil import penetration_parameters
+
+D = 0.0357
+#: The effective-stress clay of tests/scenes/test_water_penetration.py.
+CLAY = {"material": "mohr-coulomb", "phi": 25.0, "nu": 0.3}
+#: k = 1e-8 m/s: c_h = 7.5e-6 m^2/s, V = v D / c_h = 95 at 2 cm/s.
+K = 1.0e-8
+
+
+def test_consolidation_coefficient_and_time_factor():
+    values = get_scene("cone-penetration").resolve(
+        {**CLAY, "drainage": "coupled", "k": K}
+    )
+    G = 100.0 * values["su"]  # I_r = 100
+    E, nu = 2 * G * 1.3, 0.3
+    M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
+    ch = K * M / (1000.0 * GRAVITY)
+    assert consolidation_coefficient(values) == pytest.approx(ch, rel=1e-12)
+    R = D / 2
+    assert time_factor_seconds(values) == pytest.approx(
+        R**2 * math.sqrt(100.0) / ch, rel=1e-12
+    )
+    assert 0.02 * D / ch > 30.0  # undrained penetration
+
+
+def test_half_time_of_an_exponential_decay():
+    # u = 2^(-T/0.245) sampled at steps growing by 1.3: log-linear
+    # interpolation between samples within 2 % of the exact half time.
+    T = np.concatenate([[0.0], 1e-3 * 1.3 ** np.arange(30)])
+    curve = np.stack([T, 2.0 ** (-T / 0.245)], axis=1).tolist()
+    assert half_time(curve) == pytest.approx(0.245, rel=0.02)
+    assert half_time([[0.0, 1.0], [1.0, 0.6]]) is None
+
+
+def test_dissipation_refused_without_coupled_drainage():
+    sc = get_scene("cone-penetration")
+    bad = [
+        ({**CLAY, "drainage": "undrained", "dissipation": True}, "dissipation"),
+        ({**CLAY, "drainage": "coupled"}, "k"),
+        (
+            {
+                **CLAY,
+                "drainage": "coupled",
+                "k": K,
+                "dissipation": True,
+                "dT": 0.1,
+                "dT_max": 0.01,
+            },
+            "dT_max",
+        ),
+    ]
+    for over, name in bad:
+        with pytest.raises(ParameterError) as err:
+            sc.resolve(over)
+        assert err.value.name == name, over
+
+
+def test_a_run_without_coupling_records_none_of_its_parameters():
+    sc = get_scene("cone-penetration")
+    names = {"k", "dissipation", "dT", "dt_growth", "dT_max", "T_end"}
+    assert not names & set(penetration_parameters(sc.resolve({})))
+    wet = sc.resolve({**CLAY, "drainage": "coupled", "k": K, "dissipation": True})
+    assert names <= set(penetration_parameters(wet))
+
+
+def smoke(k: float, T_end: float) -> dict:
+    """A coarse CPTu: D/4, pushed D, a small domain, then held."""
+    h = D / 4
+    over = {
+        **CLAY,
+        "spacing": h,
+        "dt": h / 0.02,
+        "penetration": D,
+        "depth": 4 * D,
+        "domain_below": 3.0,
+        "domain_radius": 10.0,
+        "drainage": "coupled",
+        "k": k,
+        "dissipation": True,
+        "dT": 0.01,
+        "dt_growth": 1.6,
+        "T_end": T_end,
+    }
+    return run_scene("cone-penetration", over)["metrics"]
+
+
+def test_dissipation_stage_drains_u2_faster_with_larger_k():
+    # Two runs of about 8 s: the same 120 s of dissipation with k and 4 k
+    # (T_end 0.3 and 1.2 in T*, which scales with k).
+    slow, fast = smoke(K, 0.3), smoke(4 * K, 1.2)
+    for m in (slow, fast):
+        assert m["u2_max"] > 0.0
+        curve = np.asarray(m["dissipation"])
+        assert curve[0].tolist() == [0.0, 1.0]
+        assert np.all(np.diff(curve[:, 0]) > 0)
+        assert curve[-1, 1] < 0.5  # drained below half of u2(0)
+    assert fast["normalised_velocity"] == pytest.approx(
+        slow["normalised_velocity"] / 4, rel=1e-12
+    )
+    assert fast["dissipation"][-1][1] < slow["dissipation"][-1][1]
+
+
+@pytest.fixture(scope="module")
+def cptu_d6() -> dict:
+    """D/6 pushed 4 D a quarter spacing a step, held to T* = 2 (about 5 minutes)."""
+    h = D / 6
+    over = {
+        **CLAY,
+        "spacing": h,
+        "dt": h / 4 / 0.02,
+        "penetration": 4 * D,
+        "depth": 4 * D,
+        "domain_below": 3.0,
+        "domain_radius": 10.0,
+        "drainage": "coupled",
+        "k": K,
+        "dissipation": True,
+        "dT": 0.002,
+        "dt_growth": 1.3,
+        "dT_max": 0.1,
+        "T_end": 2.0,
+    }
+    return run_scene("cone-penetration", over)["metrics"]
+
+
+@pytest.mark.slow
+def test_t50_star_is_of_teh_houlsby_order(cptu_d6):
+    # Teh & Houlsby (1991), Geotechnique 41(1) 17-34: T*_50 = 0.245 at u2.
+    # Within a factor of two; measured 0.332 (+35 %) here, 0.169 (-31 %) at
+    # D/8 pushed 3 D (docs/validation/cone_penetration.md, "CPTu").
+    t50 = cptu_d6["t50_star"]
+    assert 0.245 / 2 < t50 < 0.245 * 2
+    assert cptu_d6["dissipation"][-1][1] < 0.2  # drained by T* = 2
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    reason="T*_50 = 0.332 at D/6 pushed 4 D, +35 % of Teh & Houlsby's 0.245: "
+    "u2 at the end of a coarse push scatters from step to step",
+    strict=False,
+)
+def test_t50_star_within_25_percent_of_teh_houlsby(cptu_d6):
+    assert cptu_d6["t50_star"] == pytest.approx(0.245, rel=0.25)
