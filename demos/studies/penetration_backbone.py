@@ -137,17 +137,21 @@ def figure(res: dict, path: Path) -> None:
 
     V = np.array([r["V"] for r in res["rows"]])
     fig, ax = plt.subplots(figsize=(6, 3.8))
-    for key, w, mark in (("q_01", 0.1, "o-"), ("q_015", 0.15, "s--")):
+    for key, w, mark, colour in (
+        ("q_01", 0.1, "o-", "C0"),
+        ("q_015", 0.15, "s--", "C1"),
+    ):
         ax.semilogx(
             V,
             [r[key + "_ratio"] for r in res["rows"]],
             mark,
+            color=colour,
             ms=4,
             label=f"N-PFEM coupled, w/B = {w:g}",
         )
         ax.axhline(
             res["ends"]["drained"][key + "_ratio"],
-            color="C2" if key == "q_01" else "C3",
+            color=colour,
             lw=0.8,
             ls=":",
             label=f"drained, w/B = {w:g}",
