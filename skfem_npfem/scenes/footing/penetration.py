@@ -20,7 +20,13 @@ soil heaves beside it.
 ``phi``, ``psi``) and ``drainage`` adds pore water; undrained, its ``su`` is
 the plane-strain ``c cos phi`` of the stress-free soil (a uniform initial
 stress would need a surcharge beside the footing, which this scene does
-not carry).
+not carry).  With ``drainage=coupled`` (conductivity ``k``) the water
+flows by Darcy's law while the footing goes down: the footing is
+impermeable (the soil touching it), the soil's free surface beside it
+drained, the base and the rollers impermeable; the normalised velocity
+``V = v B / c_v`` (``c_v = k M / gamma_w``, ``M`` the skeleton's constrained
+modulus) sets how far the response is from drained (small ``V``) to
+undrained (large ``V``): docs/validation/penetration_backbone.md.
 
 ``method`` runs the same scene with N-PFEM (default) or FEM-remap (P1 or P2
 elements, Gauss-point state remapped after each remesh; the footing enters
@@ -39,6 +45,7 @@ import numpy as np
 from skfem import MeshTri
 
 from ...boundary import RigidBody
+from ...constants import GRAVITY
 from ...errors import ParameterError
 from ...laws import prandtl_nc
 from ...materials import Material, MohrCoulomb, Tresca
@@ -59,7 +66,7 @@ from ..limits import check_size
 from ..methods import METHOD_METRICS_NO_SPFEM, method_params, with_method
 from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
-from ..water import WATER_PARAMS, is_wet, scene_water
+from ..water import is_wet, scene_water, water_params
 from .penetration_common import (
     ADHESION,
     axis_count,
@@ -82,7 +89,7 @@ from .penetration_soil import (
     with_pore_pressure,
 )
 
-__all__ = ["INTERFACES", "RIGID_ENOUGH", "SCENE"]
+__all__ = ["INTERFACES", "RIGID_ENOUGH", "SCENE", "consolidation_coefficient"]
 
 #: Footing-soil interfaces.
 INTERFACES = ("smooth", "rough", "adhesion")
@@ -164,7 +171,7 @@ PARAMS = [
         "has no rigid-body contact); docs/validation/penetration_methods.md "
         "compares npfem and fem-remap here",
     ),
-    *WATER_PARAMS,
+    *water_params(coupled=True),
     *fidelity_params(0.0),
     *solver_params(),
 ]
@@ -191,9 +198,28 @@ METRICS = {
     "the footing; method=fem-remap with P1 elements (they lock)",
     "curve": "list of [w/B, q/s_u] per step",
     **WATER_METRICS,
+    "consolidation_coefficient": "drainage=coupled: c_v = k M / gamma_w "
+    "(M = E (1 - nu)/((1 + nu)(1 - 2 nu)), the skeleton's constrained "
+    "modulus), m^2/s",
+    "normalised_velocity": "drainage=coupled: V = speed B / c_v (drained for "
+    "small V, undrained for large V)",
     "n_particles": "number of particles",
     **METHOD_METRICS_NO_SPFEM,
 }
+
+
+def consolidation_coefficient(values: Mapping[str, Any]) -> float:
+    """``c_v = k M / gamma_w`` of the skeleton (``E``, ``nu``), m^2/s.
+
+    Examples
+    --------
+    >>> v = {"E": 1.3e5, "nu": 0.3, "k": 1e-3, "rho_w": 1000.0}
+    >>> round(consolidation_coefficient(v) * 9.81, 9)
+    0.175
+    """
+    E, nu = values["E"], values["nu"]
+    M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
+    return values["k"] * M / (values["rho_w"] * GRAVITY)
 
 
 def _geometry(values: Mapping[str, Any]) -> tuple[float, float, float, float]:
@@ -282,7 +308,8 @@ def build(
     model = Model(
         dim=2,
         materials=[footing_soil(values)],
-        gravity=0.0,
+        # Darcy's law needs gamma_w = rho_w g; the particles' weight is nil.
+        gravity=GRAVITY if values["drainage"] == "coupled" else 0.0,
         mode="static",
         bodies=[body],
         water=scene_water(values),
@@ -332,6 +359,10 @@ def build(
             "curve": curve,
             "n_particles": int(particles.n),
         }
+        if values["drainage"] == "coupled":
+            cv = consolidation_coefficient(values)
+            out["consolidation_coefficient"] = cv
+            out["normalised_velocity"] = values["speed"] * B / cv
         return {**out, **pore_metrics(sim_.particles, values)}
 
     return with_method(values, SceneRun(sim, {"t_end": t_end}, metrics))
