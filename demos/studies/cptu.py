@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 from _common import VALIDATION
+from _reporting import save_png
 
 import skfem_npfem as npfem
 from skfem_npfem.scenes.footing.cone_dissipation import TEH_HOULSBY_T50_U2
@@ -129,8 +130,7 @@ def figure(rows: list[dict], path: Path) -> None:
     ax.set_title("CPTu dissipation at the shoulder (u2)")
     ax.legend(fontsize=7)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    save_png(fig, path, dpi=110)
 
 
 def main() -> None:
