@@ -44,7 +44,7 @@ def water_params(coupled: bool = False) -> list[Param]:
         "a step: the mixture keeps its volume; excess pore pressure)"
     )
     if coupled:
-        help_ += " or coupled (consolidation: Darcy flow within each step, k)"
+        help_ += " or coupled (Darcy flow within each step, k; the soil consolidates)"
     drainage = Param(
         "drainage",
         None,
