@@ -41,7 +41,7 @@ def _column(nx: int, ny: int, delaunay: bool) -> MeshTri:
     return MeshTri(x.T, Delaunay(x).simplices.T)
 
 
-def _consolidate(mesh, dts, projection=1.0, drainage="coupled", k=K):
+def _consolidate(mesh, dts, projection=1.0, drainage="coupled", k=K, storage=0.0):
     x = mesh.p.T
     width = x[:, 0].max()
     fixed = np.zeros_like(x, bool)
@@ -51,7 +51,9 @@ def _consolidate(mesh, dts, projection=1.0, drainage="coupled", k=K):
     loads = npfem.surface_load(x, top, Q0)
     soil = npfem.LinearElastic(E=E, nu=NU, rho=1e-9)  # weightless
     kwargs = {"permeability": k} if drainage == "coupled" else {}
-    water = npfem.Water(drainage, None, rho_w=RHO_W, projection=projection, **kwargs)
+    water = npfem.Water(
+        drainage, None, rho_w=RHO_W, projection=projection, storage=storage, **kwargs
+    )
     model = npfem.Model(
         dim=2,
         materials=[soil],

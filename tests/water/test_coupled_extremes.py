@@ -30,20 +30,27 @@ from functools import cache
 import numpy as np
 import pytest
 from skfem import MeshTri
+from water.test_consolidation import (
+    GRAVITY,
+    NU,
+    Q0,
+    RHO_W,
+    E,
+    M,
+    _column,
+    _consolidate,
+    exact_u,
+)
 
 import skfem_npfem as npfem
 
-E, NU, Q0, GRAVITY, RHO_W = 1e7, 0.3, 1e4, 10.0, 1000.0
-M = E * (1 - NU) / ((1 + NU) * (1 - 2 * NU))
 GAMMA_W = RHO_W * GRAVITY
 ACCEPTED = ("Solved", "AlmostSolved")
 
 
 def series_u(T: float) -> float:
     """Terzaghi's degree of consolidation U(T) (the exact series)."""
-    m = np.arange(200)
-    mm = np.pi * (2 * m + 1) / 2
-    return float(1 - np.sum(2 / mm**2 * np.exp(-(mm**2) * T)))
+    return float(exact_u(np.array([T]))[0])
 
 
 def time_factor(k: float, dt: float, storage: float = 0.0) -> float:
@@ -68,32 +75,14 @@ class Run:
 @cache
 def column(k: float, dt: float, steps: int = 1, storage: float = 0.0) -> Run:
     """Terzaghi's column on a 2 x 10 lattice, coupled, ``steps`` steps of ``dt``."""
-    mesh = MeshTri.init_tensor(np.linspace(0, 0.2, 3), np.linspace(0, 1, 11))
-    x = mesh.p.T
-    fixed = np.zeros_like(x, bool)
-    fixed[:, 1] = x[:, 1] < 1e-12
-    fixed[:, 0] = (x[:, 0] < 1e-12) | (x[:, 0] > 0.2 - 1e-12) | fixed[:, 1]
-    top = x[:, 1] > 1 - 1e-12
-    loads = npfem.surface_load(x, top, Q0)
-    soil = npfem.LinearElastic(E=E, nu=NU, rho=1e-9)  # weightless
-    water = npfem.Water("coupled", None, rho_w=RHO_W, permeability=k, storage=storage)
-    model = npfem.Model(
-        dim=2,
-        materials=[soil],
-        mode="static",
-        gravity=GRAVITY,
-        loads=loads,
-        water=water,
-        update_geometry=False,
+    top, history = _consolidate(
+        _column(2, 10, False), [dt] * steps, k=k, storage=storage
     )
-    p = npfem.Particles.from_mesh(mesh, soil, fixed=fixed)
-    state, run = None, Run()
-    for _ in range(steps):
-        p, step = npfem.advance(p, model, dt, mesh, start=state)
-        state = step.state
+    run = Run()
+    for _, _, _, step in history:
         run.statuses.append(step.record.status)
         run.iterations.append(step.record.iterations)
-    run.u = -np.sum(loads[:, 1] * p.u[:, 1]) / np.sum(loads[:, 1]) / (Q0 / M)
+    _, run.u, p, step = history[-1]
     vol = step.operator.volumes[~top]
     run.mean_p = np.sum(p.excess_pore_pressure[~top] * vol) / np.sum(vol) / Q0
     return run
