@@ -219,6 +219,11 @@ class ClarabelResult:
     solve: float
 
 
+#: Statuses of a solve that stalled on the KKT solves' accuracy (not on the
+#: program): :func:`solve_clarabel` repeats it with refinement, then qdldl.
+STALLED = ("InsufficientProgress", "NumericalError")
+
+
 def solve_clarabel(
     P: sp.csc_matrix,
     q: np.ndarray,
@@ -236,7 +241,12 @@ def solve_clarabel(
     ending in ``InsufficientProgress`` or ``NumericalError`` is then repeated
     once with refinement.  ``coupled`` (stresses or pore pressures coupled in
     ``P``) steers the automatic backend
-    (:func:`~skfem_npfem.step.backends.choose_linear_solver`).
+    (:func:`~skfem_npfem.step.backends.choose_linear_solver`).  When that
+    automatic choice was MKL Pardiso or faer and the solve still ends in one
+    of these statuses, it is repeated once more with qdldl: a coupled cone in
+    a large graded domain stalled at a step that qdldl solved in 30
+    iterations.  A step that
+    solves the first time is not touched, so every such run is unchanged.
     """
     t0 = time.perf_counter()
     backend = options.resolved_linear_solver(A.shape[1], dim, coupled)
@@ -247,9 +257,14 @@ def solve_clarabel(
         sol = solver.solve()
         status = str(sol.status)
         iters = int(sol.iterations)
-        if status in ("InsufficientProgress", "NumericalError") and not (
-            settings.iterative_refinement_enable
-        ):
+        if status in STALLED and not settings.iterative_refinement_enable:
+            settings.iterative_refinement_enable = True
+            sol = clarabel.DefaultSolver(P, q, A, b, cones, settings).solve()
+            status = str(sol.status)
+            iters += int(sol.iterations)
+        if status in STALLED and backend != "qdldl" and options.linear_solver == "auto":
+            backend = "qdldl"
+            settings = options.clarabel_settings(backend)
             settings.iterative_refinement_enable = True
             sol = clarabel.DefaultSolver(P, q, A, b, cones, settings).solve()
             status = str(sol.status)

@@ -94,9 +94,10 @@ def move_particles(
 
     Active particles take the increments ``du_active`` of the step's solution
     (theta-scheme velocities and accelerations in dynamic steps); the others
-    move ballistically under gravity (docs/theory.md, "Nodal integration",
-    inactive particles); particles that crossed one of ``boundaries`` (behind
-    a wall, inside a body at ``t_end``) are put back on it
+    move ballistically under gravity in a dynamic step and stay where they are
+    in a static one (docs/theory.md, "Nodal integration", inactive
+    particles); particles that crossed one of ``boundaries`` (behind a wall,
+    inside a body at ``t_end``) are put back on it
     (:func:`~skfem_npfem.step.boundary_jobs.put_back`).  Shared by every method
     that moves the particles with the nodal increments of an implicit step
     (N-PFEM, FEM-remap).
@@ -115,17 +116,20 @@ def move_particles(
     th1, th2 = model.theta1, model.theta2
     inactive = np.ones(p.n, bool)
     inactive[active] = False
-    if np.any(inactive):
-        du[inactive] = dt * p.v[inactive] + th2 * dt**2 * g
     if dynamic:
+        if np.any(inactive):
+            du[inactive] = dt * p.v[inactive] + th2 * dt**2 * g
         v = p.v + (du - dt * p.v) / (th2 * dt)
         a = ((v - p.v) / dt - (1 - th1) * p.a) / th1
+        if np.any(inactive):
+            v[inactive] = p.v[inactive] + dt * g
+            a[inactive] = g
     else:
+        # A static step has no inertia: a particle outside every element has
+        # nothing to move it and stays where it is (its "velocity" is the last
+        # increment over a load step, not a speed it could fly on with).
         v = du / dt
         a = np.zeros_like(p.a)
-    if np.any(inactive):
-        v[inactive] = p.v[inactive] + dt * g
-        a[inactive] = g
     if not model.update_geometry:
         return {"x": p.x, "v": v, "a": a, "u": p.u + du}, [None] * len(boundaries)
     # Accumulate du itself (x - p.x would lose increments below ~1e-16 |x|);

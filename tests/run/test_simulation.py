@@ -319,3 +319,38 @@ def test_a_run_keeps_scalars_only_per_step():
         # The volume correction's filter state: one number per material.
         values = [v[0] if isinstance(v, list) and len(v) == 1 else v for v in values]
         assert all(isinstance(v, int | float | str) for v in values)
+
+
+@pytest.mark.parametrize("mode", ["static", "dynamic"])
+def test_grain_outside_the_mesh_falls_only_in_a_dynamic_step(mode: str):
+    # A grain far above a resting block is outside every element.  A dynamic
+    # step moves it ballistically from rest: after n steps of the theta scheme
+    # y = y0 - g dt^2 sum_{k<n} (k + theta2); a static step has no
+    # inertia and leaves it where it is (a coupled cone's weightless soil with
+    # gravity only for gamma_w once lost a grain that fell for kilometres).
+    p, model, mesher = resting_block(spacing=0.05)
+    p = Particles.create(
+        np.vstack([p.x, [[0.2, 1.0]]]),
+        np.append(p.mass, p.mass[0]),
+        stress=np.vstack([p.stress, np.zeros((1, p.stress.shape[1]))]),
+        n_walls=1,
+    )
+    model = Model(
+        dim=2,
+        materials=model.materials,
+        gravity=9.81,
+        walls=model.walls,
+        mode=mode,
+    )
+    dt = 5e-3
+    sim = Simulation(p, model, mesher, dt)
+    sim.run(steps=3)
+    assert [r.n_inactive for r in sim.records] == [1, 1, 1]
+    grain = sim.particles.x[-1]
+    if mode == "static":
+        np.testing.assert_array_equal(grain, [0.2, 1.0])
+        np.testing.assert_array_equal(sim.particles.v[-1], [0.0, 0.0])
+    else:
+        drop = 9.81 * dt**2 * sum(k + model.theta2 for k in range(3))
+        assert grain[0] == 0.2
+        assert grain[1] == pytest.approx(1.0 - drop, rel=1e-12)

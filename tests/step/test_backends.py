@@ -217,3 +217,55 @@ def test_faer_thread_default_follows_the_core_count(monkeypatch):
     assert opts.clarabel_settings("faer").max_threads == 0
     explicit = npfem.SolverOptions(linear_solver="faer", max_threads=3)
     assert explicit.clarabel_settings("faer").max_threads == 3
+
+
+@pytest.mark.parametrize(
+    ("requested", "expected"), [("auto", "qdldl"), ("faer", "faer")]
+)
+def test_stalled_automatic_backend_falls_back_to_qdldl(
+    monkeypatch, requested, expected
+):
+    # A backend chosen automatically that stalls (InsufficientProgress even with
+    # iterative refinement) is replaced by qdldl for one more solve, whose
+    # answer is the same program's optimum; a backend the user asked for is
+    # kept and its failure reported.
+    import clarabel
+    import scipy.sparse as sp
+
+    real = clarabel.DefaultSolver
+
+    class Stalling:
+        def __init__(self, P, q, A, b, cones, settings):
+            self.method = settings.direct_solve_method
+            self.inner = real(P, q, A, b, cones, settings)
+
+        def solve(self):
+            sol = self.inner.solve()
+            if self.method == "faer":
+                return type("Stalled", (), {
+                    "status": "InsufficientProgress", "iterations": 7,
+                    "x": sol.x, "z": sol.z,
+                })()  # fmt: skip
+            return sol
+
+    monkeypatch.setattr(clarabel, "DefaultSolver", Stalling)
+    monkeypatch.setattr(solver, "choose_linear_solver", lambda *a, **k: "faer")
+    # min (x - 1)^2 / 2 subject to x <= 0.25: x = 0.25
+    P = sp.csc_matrix([[1.0]])
+    A = sp.csc_matrix([[1.0]])
+    res = solver.solve_clarabel(
+        P,
+        np.array([-1.0]),
+        A,
+        np.array([0.25]),
+        [clarabel.NonnegativeConeT(1)],
+        solver.SolverOptions(linear_solver=requested),
+        1,
+    )
+    assert res.linear_solver == expected
+    if expected == "qdldl":
+        assert res.status == "Solved"
+        assert res.x[0] == pytest.approx(0.25, abs=1e-7)
+        assert res.iterations > 7  # the stalled solve's 7 are counted
+    else:
+        assert res.status == "InsufficientProgress"
