@@ -5,16 +5,18 @@ Runs ``cone-penetration`` with the weightless effective-stress clay of
 docs/validation/cone_penetration.md (c' = 0, phi' = 25 deg, psi = 0,
 p'_0 = sigma0 = 50 kPa, nu' = 0.3, I_r = G/s_u = 100) with coupled drainage
 (k = 1e-8 m/s: c_h = k M / gamma_w = 7.5e-6 m^2/s, V = v D / c_h = 95 at
-2 cm/s), pushed ``push`` x D from 4 D deep in a 10 D radius, then held
+2 cm/s), pushed ``push`` x D (from 10 D deep in the scene's 30 D radius, or
+from 4 D deep in a 10 D radius with ``--domain small``), then held
 (``dissipation=true``) to T* = 2.  At each spacing D/n and cone step
-(spacing / ``per`` a step) it tabulates u2 at the end of the push and its
-largest value, the u2 of the held cone's first step, and the T* at which u2
-fell to half its value at the end of the push, against Teh & Houlsby's (1991)
-T*_50 = 0.245 at u2.
+(spacing / ``per`` a step) it tabulates u2(0) (the steady u2: its mean over
+the push's last diameter), u2 at the end of the push and its largest value,
+the u2 of the held cone's first step over u2(0), and the T* at which u2 fell
+to half of u2(0), against Teh & Houlsby's (1991) T*_50 = 0.245 at u2.
 
 Usage (from the repository root)::
 
-    python demos/studies/cptu.py [--n 6 8] [--push 4 3] [--per 4 4] [--tables]
+    python demos/studies/cptu.py [--n 8 10] [--push 4 4] [--per 4 4]
+        [--domain scene scene] [--tables]
 
 ``--tables`` writes ``docs/validation/cptu.json``, the table
 ``docs/validation/cptu.inc`` and the figure ``docs/validation/cptu.png``
@@ -26,6 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -33,7 +36,10 @@ from _common import VALIDATION
 from _reporting import save_png
 
 import skfem_npfem as npfem
-from skfem_npfem.scenes.footing.cone_dissipation import TEH_HOULSBY_T50_U2
+from skfem_npfem.scenes.footing.cone_dissipation import (
+    TEH_HOULSBY_T50_U2,
+    half_time,
+)
 
 D = 0.0357
 K = 1.0e-8
@@ -47,15 +53,20 @@ STAGE = {
     "dT_max": 0.1,
     "T_end": 2.0,
 }
-SMALL = {"depth": 4 * D, "domain_below": 3.0, "domain_radius": 10.0}
+#: The domains: the scene's (the cone 10 D deep at the start, 30 D wide, 8 D of
+#: soil under the tip's last position) and a small one (4 D, 10 D, 3 D).
+DOMAINS = {
+    "scene": {},
+    "small": {"depth": 4 * D, "domain_below": 3.0, "domain_radius": 10.0},
+}
 
 
-def run_row(n: int, push: float, per: float) -> dict:
+def run_row(n: int, push: float, per: float, domain: str = "scene") -> dict:
     """The CPTu at D/n pushed ``push`` D, the cone moving spacing/per a step."""
     h = D / n
     over = {
         **CLAY,
-        **SMALL,
+        **DOMAINS[domain],
         **STAGE,
         "spacing": h,
         "dt": h / per / 0.02,
@@ -68,11 +79,16 @@ def run_row(n: int, push: float, per: float) -> dict:
         "n": n,
         "push": push,
         "per": per,
+        "domain": domain,
         "su": m["undrained_strength"],
         "u2_max": m["u2_max"],
         "u2_end": m["u2_end"],
+        "u2_steady": m["u2_steady"],
         "first_held": curve[1][1] if len(curve) > 1 else None,
         "t50_star": m["t50_star"],
+        "t50_star_steady": half_time(
+            [[t, u * m["u2_end"] / m["u2_steady"]] for t, u in curve]
+        ),
         "V": m["normalised_velocity"],
         "c_h": m["consolidation_coefficient"],
         "N_c": m["cone_factor"],
@@ -81,21 +97,29 @@ def run_row(n: int, push: float, per: float) -> dict:
     }
 
 
+def fmt(t50: float | None) -> str:
+    """``T*_50 (+x %)`` against Teh & Houlsby, or n/a."""
+    if t50 is None:
+        return "n/a"
+    return f"{t50:.3g} ({t50 / TEH_HOULSBY_T50_U2 - 1:+.0%})"
+
+
 def markdown(rows: list[dict]) -> str:
-    """One line per spacing, push and cone step."""
+    """One line per domain, spacing, push and cone step."""
     lines = [
-        "| D/n, push, cone step | V | N_c | u2 end of push / s_u | u2_max / s_u "
-        "| first held step: u2/u2(0) | T*_50 | vs 0.245 | wall (s) |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| domain, D/n, push, cone step | V | N_c | u2(0) = u2 at the end of the "
+        "push / s_u | steady u2 / s_u | u2_max / s_u | first held step: u2/u2(0) "
+        "| T*_50 (vs 0.245) | T*_50 from the steady u2 | wall (s) |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
-        t50 = r["t50_star"]
-        vs = "n/a" if t50 is None else f"{t50 / TEH_HOULSBY_T50_U2 - 1:+.0%}"
+        su = r["su"]
         lines.append(
-            f"| D/{r['n']}, {r['push']:g} D, h/{r['per']:g} | {r['V']:.0f} | "
-            f"{r['N_c']:.2f} | {r['u2_end'] / r['su']:.2f} | "
-            f"{r['u2_max'] / r['su']:.2f} | {r['first_held']:.2f} | "
-            f"{'n/a' if t50 is None else f'{t50:.3g}'} | {vs} | {r['wall_s']:.0f} |"
+            f"| {r['domain']}, D/{r['n']}, {r['push']:g} D, h/{r['per']:g} | "
+            f"{r['V']:.0f} | {r['N_c']:.2f} | {r['u2_end'] / su:.2f} | "
+            f"{r['u2_steady'] / su:.2f} | {r['u2_max'] / su:.2f} | "
+            f"{r['first_held']:.2f} | {fmt(r['t50_star'])} | "
+            f"{fmt(r['t50_star_steady'])} | {r['wall_s']:.0f} |"
         )
     return "\n".join(lines).replace("%", " %") + "\n"
 
@@ -115,7 +139,8 @@ def figure(rows: list[dict], path: Path) -> None:
             c[:, 1],
             ".-",
             ms=4,
-            label=f"N-PFEM, D/{r['n']}, push {r['push']:g} D, step h/{r['per']:g}",
+            label=f"N-PFEM, {r['domain']} domain, D/{r['n']}, push {r['push']:g} D, "
+            f"step h/{r['per']:g}",
         )
     ax.plot(
         [TEH_HOULSBY_T50_U2],
@@ -136,14 +161,18 @@ def figure(rows: list[dict], path: Path) -> None:
 def main() -> None:
     """Run the rows; print the table; with ``--tables`` write it and the figure."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--n", type=int, nargs="+", default=[6, 8])
-    parser.add_argument("--push", type=float, nargs="+", default=[4.0, 3.0])
+    parser.add_argument("--n", type=int, nargs="+", default=[8, 10])
+    parser.add_argument("--push", type=float, nargs="+", default=[4.0, 4.0])
     parser.add_argument("--per", type=float, nargs="+", default=[4.0, 4.0])
+    parser.add_argument(
+        "--domain", nargs="+", default=["scene", "scene"], choices=list(DOMAINS)
+    )
+    parser.add_argument("--jobs", type=int, default=1, help="rows run at once")
     parser.add_argument("--tables", action="store_true", help="write the results")
     args = parser.parse_args()
-    rows = [
-        run_row(n, w, p) for n, w, p in zip(args.n, args.push, args.per, strict=True)
-    ]
+    specs = list(zip(args.n, args.push, args.per, args.domain, strict=True))
+    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+        rows = list(pool.map(run_row, *zip(*specs, strict=True)))
     page = markdown(rows)
     print(page)
     if args.tables:

@@ -47,6 +47,7 @@ __all__ = [
     "half_time",
     "hold_on_restore",
     "in_push",
+    "steady_mean",
     "time_factor_seconds",
 ]
 
@@ -107,12 +108,16 @@ DISSIPATION_METRICS = {
     "at the shoulder (u2, as shoulder_excess_pore_pressure) over the push, Pa",
     "u2_end": "drainage=undrained or coupled: u2 at the end of the push, Pa "
     "(u2(0) of the dissipation test)",
+    "u2_steady": "drainage=undrained or coupled: the mean of u2 over the steady "
+    "part of the push (its last steady_window x D), Pa (one step's u2 "
+    "scatters about it by 10 to 25 %)",
     "consolidation_coefficient": "drainage=coupled: c_h = k M / gamma_w "
     "(M = 2 G (1 - nu)/(1 - 2 nu), the skeleton's constrained modulus), m^2/s",
     "normalised_velocity": "drainage=coupled: V = speed D / c_h (undrained "
     "penetration for V above about 30)",
     "dissipation": "dissipation=true: list of [T*, u2(t)/u2(0)] from the end of "
-    "the push (T* = c_h t / (R^2 sqrt(I_r)), R = D/2, I_r = rigidity_index)",
+    "the push (T* = c_h t / (R^2 sqrt(I_r)), R = D/2, I_r = rigidity_index, "
+    "u2(0) = u2_end)",
     "t50_star": "dissipation=true: T* at which u2 fell to half u2(0) (log-linear "
     "between steps; None if it did not)",
     "t50_star_reference": "Teh & Houlsby (1991): T*_50 = 0.245 at u2",
@@ -293,10 +298,12 @@ def dissipation_metrics(
 ) -> dict[str, Any]:
     """``u2_max`` and, coupled, c_h, V and the dissipation curve with its T*_50."""
     recs = sim.records
-    push = [r.extra["u2"] for r in in_push(sim, t_push) if "u2" in r.extra]
+    pushed = [r for r in in_push(sim, t_push) if "u2" in r.extra]
+    push = [r.extra["u2"] for r in pushed]
     out: dict[str, Any] = {
         "u2_max": max(push) if push else None,
         "u2_end": push[-1] if push else None,
+        "u2_steady": steady_mean(pushed, values) if push else None,
     }
     if values["drainage"] != "coupled":
         return out
@@ -306,7 +313,7 @@ def dissipation_metrics(
     if not values["dissipation"]:
         return out
     unit = time_factor_seconds(values)
-    u0 = push[-1] if push else None
+    u0 = out["u2_end"]
     after = [r for r in recs if r.time > t_push * (1 + 1e-9)]
     curve = [[0.0, 1.0]] if u0 else []
     if u0:
@@ -315,6 +322,24 @@ def dissipation_metrics(
     out["t50_star"] = half_time(curve) if curve else None
     out["t50_star_reference"] = TEH_HOULSBY_T50_U2
     return out
+
+
+def steady_mean(pushed: list, values: Mapping[str, Any]) -> float:
+    """The mean u2 of the records over the push's last ``steady_window`` x D.
+
+    u2 is the mean excess pore pressure of the few particles of the filter,
+    which change as the soil flows past the shoulder: one step's value
+    scatters by 10 to 25 % about this mean (coefficient of variation over the
+    last diameter at D/8), and a dissipation curve normalised by it carries
+    that scatter into its T*_50 (docs/validation/cone_penetration.md, "CPTu").
+    The steady mean is the u2 a piezocone reads in the push without the
+    scatter.
+    """
+    D = values["diameter"]
+    depth = np.array([-r.extra.get("cone_y", 0.0) / D for r in pushed])
+    u2 = np.array([r.extra["u2"] for r in pushed])
+    window = depth >= depth[-1] - values["steady_window"] * (1 + 1e-9)
+    return float(u2[window].mean())
 
 
 def in_push(sim: Simulation, t_push: float) -> list:
