@@ -150,7 +150,8 @@ def cptu_d8() -> dict:
 def test_cptu_push_is_the_undrained_cone(cptu_d8):
     # V = 95: the push is undrained.  Biot's limit k -> 0 is the undrained
     # cone of the same clay, spacing, steps and domain (about 5 minutes):
-    # N_c within 5 % (measured 11.43 against 11.25, +1.6 %).
+    # N_c within 5 % (the coupled cone 11.43; its undrained twin 11.25 on the
+    # lattice of a tip depth one ulp away, docs/validation/cone_penetration.md).
     assert cptu_d8["normalised_velocity"] == pytest.approx(94.7, rel=1e-3)
     h = D / 8
     undrained = run_scene(
