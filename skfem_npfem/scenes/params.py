@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
@@ -51,6 +52,9 @@ class Param:
     note : str
         Appended in parentheses to the allowed values (in the docs and in the
         error of a refused value), e.g. why a method is not offered.
+    or_file : bool
+        A number parameter that also takes the path of a file (text that is
+        not a number is kept as it is; the scene reads and checks the file).
     """
 
     name: str
@@ -64,6 +68,7 @@ class Param:
     lo_open: bool = False
     hi_open: bool = False
     note: str = ""
+    or_file: bool = False
 
     def allowed(self) -> str:
         """Human-readable allowed values."""
@@ -83,7 +88,8 @@ class Param:
         left = "(" if lo_open or math.isinf(lo) else "["
         right = ")" if hi_open or math.isinf(hi) else "]"
         text = f"{what} in {left}{lo:g}, {hi:g}{right}"
-        return f"0 or {text}" if zero else text
+        text = f"0 or {text}" if zero else text
+        return f"{text}, or a file's path" if self.or_file else text
 
     def bounds(self) -> tuple[float, float, bool, bool, bool]:
         """``(lo, hi, lo_open, hi_open, zero_allowed)`` of a number.
@@ -114,6 +120,10 @@ class Param:
         v = parse_value(self, value) if isinstance(value, str) else value
         if isinstance(v, np.generic) and v.ndim == 0:
             v = v.item()  # numpy scalar -> Python bool/int/float/str
+        if self.or_file and isinstance(v, str | Path):
+            if not str(v).strip():
+                raise ParameterError(self.name, value, self.allowed())
+            return str(v)
         if self.kind is bool:
             if not isinstance(v, bool):
                 raise ParameterError(self.name, value, self.allowed())
@@ -156,6 +166,8 @@ def parse_value(param: Param, text: str) -> Any:
         if param.kind is float:
             return float(t)
     except (ValueError, OverflowError):
+        if param.or_file and t and param.kind is float:
+            return t
         raise ParameterError(param.name, text, param.allowed()) from None
     return t
 

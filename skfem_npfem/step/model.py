@@ -127,6 +127,13 @@ class Model:
         coupled step's facets whose nodes are all tied along their normal
         are impermeable, as the plate is.  Static N-PFEM steps; None
         (default): none.
+    kh : float or ndarray (n, 2)
+        Pseudo-static horizontal acceleration ``k_h g`` along ``+e_x``, as a
+        coefficient of ``gravity``: a number, or rows ``[t, k_h]`` (s, -) with
+        increasing ``t``, linear between rows and held beyond the first and
+        the last (a recorded acceleration history).  Each step takes it at the
+        step's end (backward Euler); a particle in free flight too.  0
+        (default): none.  N-PFEM only.
     """
 
     dim: int
@@ -149,6 +156,7 @@ class Model:
     loads: np.ndarray | None = None
     water: Water | None = None
     tied: list | None = None
+    kh: float | np.ndarray = 0.0
 
     def __post_init__(self) -> None:
         if self.dim not in (2, 3):
@@ -183,6 +191,7 @@ class Model:
             if w.normal.size != self.dim:
                 raise ParameterError("walls", w, f"walls must be {self.dim}D")
         self._check_bodies()
+        self._check_kh()
         b = self.stabilisation
         if isinstance(b, bool) or not (
             isinstance(b, int | float) and math.isfinite(b) and b >= 0
@@ -279,6 +288,10 @@ class Model:
             raise ParameterError(
                 "tied", "tied dofs", f"None with {method} (N-PFEM only)"
             )
+        if np.ndim(self.kh) or self.kh:
+            raise ParameterError(
+                "kh", "pseudo-static shaking", f"0 with {method} (N-PFEM only)"
+            )
         if self.loads is not None:
             raise ParameterError(
                 "loads",
@@ -287,12 +300,17 @@ class Model:
             )
 
     def external_force(
-        self, n: int, active: np.ndarray, mass: np.ndarray
+        self,
+        n: int,
+        active: np.ndarray,
+        mass: np.ndarray,
+        time: float | None = None,
     ) -> np.ndarray:
         """Weight of a step's nodes plus the dead loads of their particles, N.
 
         ``n`` is the number of particles, ``active`` the indices of the
-        step's nodes among them and ``mass`` their masses.
+        step's nodes among them and ``mass`` their masses; ``time`` (s) is
+        where a history of ``kh`` is read (:meth:`body_acceleration`).
 
         Examples
         --------
@@ -303,7 +321,7 @@ class Model:
         array([[  0., -25.],
                [  1., -10.]])
         """
-        force = mass[:, None] * self.gravity_vector[None, :]
+        force = mass[:, None] * self.body_acceleration(time)[None, :]
         if self.loads is None:
             return force
         if self.loads.shape[0] != n:
@@ -415,3 +433,52 @@ class Model:
         g = np.zeros(self.dim)
         g[-1] = -self.gravity
         return g
+
+    def kh_at(self, time: float | None) -> float:
+        """The pseudo-static coefficient ``k_h`` at ``time`` (s).
+
+        Examples
+        --------
+        >>> from skfem_npfem.materials import LinearElastic
+        >>> m = Model(dim=2, materials=[LinearElastic(1e6, 0.3)],
+        ...           kh=np.array([[0.0, 0.0], [1.0, 0.2], [2.0, -0.2]]))
+        >>> [m.kh_at(t) for t in (-1.0, 0.5, 1.5, 3.0)]
+        [0.0, 0.1, 0.0, -0.2]
+        """
+        kh = self.kh
+        if np.ndim(kh) == 0:
+            return float(kh)
+        t = 0.0 if time is None else float(time)
+        return float(np.interp(t, kh[:, 0], kh[:, 1]))
+
+    def body_acceleration(self, time: float | None = None) -> np.ndarray:
+        """Gravity plus the pseudo-static ``k_h g`` along ``+e_x`` at ``time``."""
+        g = self.gravity_vector
+        kh = self.kh_at(time)
+        if kh:
+            g[0] = kh * self.gravity
+        return g
+
+    def _check_kh(self) -> None:
+        """``kh``: a finite number, or rows ``[t, k_h]`` with increasing ``t``."""
+        kh = self.kh
+        if isinstance(kh, bool):
+            raise ParameterError("kh", kh, "a number or rows [t, k_h]")
+        if np.ndim(kh) == 0:
+            if not (isinstance(kh, int | float) and math.isfinite(kh)):
+                raise ParameterError("kh", kh, "a finite number or rows [t, k_h]")
+            return
+        a = np.asarray(kh, float)
+        if (
+            a.ndim != 2
+            or a.shape[1] != 2
+            or a.shape[0] < 1
+            or not np.all(np.isfinite(a))
+            or np.any(np.diff(a[:, 0]) <= 0)
+        ):
+            raise ParameterError(
+                "kh",
+                f"an array of shape {a.shape}",
+                "rows [t, k_h] (shape (n, 2), finite) with increasing t",
+            )
+        self.kh = a

@@ -114,7 +114,7 @@ def build_operators(
     nodes = particle_nodes(with_columns(boundaries, p), active, local_t)
     contacts, wall_ids = step_contacts(boundaries, nodes, dt, h, time)
     mass = model.node_masses(p.mass[active], p.material[active], op.volumes)
-    force = model.external_force(p.x.shape[0], active, mass)
+    force = model.external_force(p.x.shape[0], active, mass, time + dt)
     pore = None
     if model.water is not None:
         pore, water = pore_input(model, p, active, op, contacts, dt)

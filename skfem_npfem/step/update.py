@@ -110,7 +110,7 @@ def move_particles(
         Each boundary's mark (a body group's penetration depths); None each
         when the geometry is not updated.
     """
-    g = model.gravity_vector
+    g = model.body_acceleration(t_end)
     du = np.zeros_like(p.x)
     du[active] = du_active
     th1, th2 = model.theta1, model.theta2

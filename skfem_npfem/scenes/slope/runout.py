@@ -29,6 +29,7 @@ from .section import (
 from .water import static_pressure
 
 __all__ = [
+    "base_metrics",
     "deposit_factor_of_safety",
     "deposit_slopes",
     "runout_metrics",
@@ -149,3 +150,54 @@ def deposit_factor_of_safety(sim: Simulation, values: Mapping[str, Any]) -> floa
         options=solver_from(values),
     )
     return float(res.factor_of_safety)
+
+
+def base_metrics(
+    fos: dict[str, Any],
+    resid: float | None,
+    n_particles: int,
+    state: dict[str, Any],
+    sim: Simulation,
+) -> dict[str, Any]:
+    """The slope's metrics before the run-out's: those left null without it.
+
+    Parameters
+    ----------
+    fos : dict
+        The factor of safety's metrics (:func:`fos_metrics`).
+    resid : float or None
+        Equilibrium residual of the initial stresses (None: limit only).
+    n_particles : int
+        Number of particles.
+    state : dict
+        The run's shared state (stage times).
+    sim : Simulation
+        The run (its step timings).
+
+    Returns
+    -------
+    dict
+    """
+    return {
+        **fos,
+        "initial_equilibrium_residual": resid,
+        "reduction": None,
+        "runout": None,
+        "crest_settlement": None,
+        "mass_centre_travel": None,
+        "moved_volume": None,
+        "deposit_profile": None,
+        "deposit_max_slope": None,
+        "mass_change": None,
+        "volume_change": None,
+        "at_rest": None,
+        "deposit_factor_of_safety": None,
+        "n_particles": n_particles,
+        "stage_wall_time": {
+            "initial_stress": state.get("t_initial", 0.0),
+            "factor_of_safety": state.get("t_fos", 0.0),
+            "factor_of_safety_check": state.get("t_fos_check", 0.0),
+            "critical_kh": state.get("t_critical_kh", 0.0),
+            "runout": float(sum(sum(r.timings.values()) for r in sim.records)),
+        },
+    }

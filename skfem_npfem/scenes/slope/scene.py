@@ -63,10 +63,9 @@ from ..params import ANGLE, POSITIVE, Param, Values
 from ..scenery import Scenery, number, section_lines
 from ..water import WATER_PARAMS
 from ..wet_soil import recorded_parameters
-from .runout import (
-    runout_metrics,
-)
+from .runout import base_metrics, runout_metrics
 from .section import check_section, section_of, toe_and_crest
+from .seismic import KH_PARAM, SEISMIC_METRICS, check_kh
 from .stages import (
     flow_model,
     fos_metrics,
@@ -126,6 +125,7 @@ PARAMS = [
         **ANGLE,
     ),
     Param("rho", 2000.0, "kg/m^3", "density (saturated with water)", float, **POSITIVE),
+    KH_PARAM,
     *WATER_PARAMS,
     Param(
         "initial_stress",
@@ -212,12 +212,13 @@ METRICS = {
     "run-out's strengths (a second limit analysis; >= 1: statically admissible)",
     "n_particles": "number of particles",
     "stage_wall_time": "seconds per stage: initial_stress, factor_of_safety (all "
-    "its cone programs), factor_of_safety_check (at twice the spacing), runout "
-    "(the steps)",
+    "its cone programs), factor_of_safety_check (at twice the spacing), "
+    "critical_kh (its program), runout (the steps)",
     **LIMIT_METRICS,
     "collapse_multiplier": "gravity multiplier of the unreduced strengths (the "
     "first program; capped at 1e3: a cohesionless slope that stands carries "
     "any multiple of its weight)",
+    **SEISMIC_METRICS,
     "undrained_strength_min": "drainage=undrained: the smallest strength s_u = "
     "c' cos phi' + s'_0 sin phi' (initial effective stress) used for F, Pa",
     "undrained_strength_max": "drainage=undrained only: the largest one, Pa",
@@ -225,56 +226,6 @@ METRICS = {
 
 
 # -- build ----------------------------------------------------------------------
-def base_metrics(
-    fos: dict[str, Any],
-    resid: float | None,
-    n_particles: int,
-    state: dict[str, Any],
-    sim: Simulation,
-) -> dict[str, Any]:
-    """The slope's metrics before the run-out's: those left null without it.
-
-    Parameters
-    ----------
-    fos : dict
-        The factor of safety's metrics (:func:`fos_metrics`).
-    resid : float or None
-        Equilibrium residual of the initial stresses (None: limit only).
-    n_particles : int
-        Number of particles.
-    state : dict
-        The run's shared state (stage times).
-    sim : Simulation
-        The run (its step timings).
-
-    Returns
-    -------
-    dict
-    """
-    return {
-        **fos,
-        "initial_equilibrium_residual": resid,
-        "reduction": None,
-        "runout": None,
-        "crest_settlement": None,
-        "mass_centre_travel": None,
-        "moved_volume": None,
-        "deposit_profile": None,
-        "deposit_max_slope": None,
-        "mass_change": None,
-        "volume_change": None,
-        "at_rest": None,
-        "deposit_factor_of_safety": None,
-        "n_particles": n_particles,
-        "stage_wall_time": {
-            "initial_stress": state.get("t_initial", 0.0),
-            "factor_of_safety": state.get("t_fos", 0.0),
-            "factor_of_safety_check": state.get("t_fos_check", 0.0),
-            "runout": float(sum(sum(r.timings.values()) for r in sim.records)),
-        },
-    }
-
-
 #: Parameters only the failure and run-out stage uses.
 RUNOUT_ONLY = (
     "psi",
@@ -319,6 +270,7 @@ def ignored(values: dict[str, Any], given: frozenset[str]) -> None:
             "false with analysis=limit (one cone program: no failure and "
             "run-out stage); choose analysis=incremental for the run-out",
         )
+    check_kh(values)
     if not stresses:
         warn_unused(
             given,

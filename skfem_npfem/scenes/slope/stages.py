@@ -24,7 +24,6 @@ from skfem import MeshTri
 from ...boundary import Contacts
 from ...constants import GRAVITY
 from ...errors import NpfemError
-from ...limit.loads import gravity_load
 from ...limit.safety import SafetyResult, reduced_strength, strength_reduction
 from ...limit.undrained import undrained_materials
 from ...materials import LinearElastic, Material
@@ -44,6 +43,7 @@ from .section import (
     section_warnings,
     supports,
 )
+from .seismic import critical_kh, model_kh, slope_loads, static_kh
 from .water import (
     slope_water,
     static_pressure,
@@ -178,10 +178,9 @@ def factor_of_safety(
         The (unreduced) materials of the analysis.
     """
     ni = nodal_integration(mesh, (0, 1, 3))
-    rho = np.array([m.rho for m in mats])[material]
-    x = mesh.p.T
-    p = static_pressure(water, x, mesh.t, material)
-    load = gravity_load(ni, rho, GRAVITY, x=x, pore_pressure=p)
+    load, shaking = slope_loads(ni, mats, material, mesh, water)
+    if static_kh(values):
+        load = load + static_kh(values) * shaking
     if water is not None and water.undrained:
         if stress is None:
             stress = initial_stress(values, mesh, mats, material, fixed, water)[0]
@@ -307,7 +306,12 @@ def fos_metrics(
             "collapse_multiplier": res.multiplier_unreduced,
             **spacing_check(values, res.factor_of_safety, state),
             **undrained_metrics(mats),
+            "critical_kh": None,
         }
+        if values["analysis"] == "limit":
+            t0 = time.perf_counter()
+            state["fos_metrics"]["critical_kh"] = critical_kh(values, body, mats)[0]
+            state["t_critical_kh"] = time.perf_counter() - t0
         state["fos_volumes"] = ni_.volumes
     if out is not None and not state.get("mechanism_saved"):
         # Written once the run owns its folder (never while the scene is built).
@@ -427,6 +431,7 @@ def flow_model(
         water=slope_water(values, body.sec),
         gravity=GRAVITY,
         mode="dynamic",
+        kh=model_kh(values),
         solver=solver_from(values),
         **fidelity_from(values, 0.0),
     )

@@ -1,0 +1,191 @@
+"""Pseudo-static shaking of the slope: a horizontal body force ``k_h`` x the weight.
+
+A horizontal acceleration ``k_h g`` toward ``+x`` (out of the parametric
+slope's face) loads every particle with ``k_h`` times its weight along
+``+x``.  The factor of safety takes a constant ``kh`` with gravity; the
+critical ``k_h`` (:func:`critical_kh`) is one limit analysis with gravity as
+the dead load and ``k_h`` as the multiplier; the run-out is shaken by the
+constant or by a recorded history (a file of ``t, k_h`` rows,
+:func:`kh_history`) through :attr:`~skfem_npfem.Model.kh`.  The pore
+pressure stays the static field (its force is gravity's).  docs/theory.md
+("Limit analysis") derives the program.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from skfem import MeshTri
+
+from ...constants import GRAVITY
+from ...errors import ParameterError, SolverError
+from ...limit.analysis import LimitResult, limit_analysis
+from ...limit.loads import gravity_load
+from ...limit.safety import CAP
+from ...materials import Material
+from ...mesh.smoothing import nodal_integration
+from ...water import Water
+from ..common import solver_from
+from ..params import Param
+from .water import slope_water, static_pressure
+
+__all__ = [
+    "KH_PARAM",
+    "SEISMIC_METRICS",
+    "check_kh",
+    "critical_kh",
+    "kh_history",
+    "model_kh",
+    "slope_loads",
+    "static_kh",
+]
+
+KH_PARAM = Param(
+    "kh",
+    0.0,
+    "-",
+    "pseudo-static horizontal acceleration k_h g toward +x (out of the "
+    "slope's face; negative: into it), a body force k_h times the weight: a "
+    "number acts in the factor of safety and shakes the run-out; a file of "
+    "rows t, k_h (s, -; commas or spaces, # comments) is a recorded history "
+    "that shakes the run-out from its start, with the static factor of "
+    "safety (0: none)",
+    float,
+    lo=-10,
+    hi=10,
+    or_file=True,
+)
+
+SEISMIC_METRICS = {
+    "critical_kh": "analysis=limit: the pseudo-static k_h (toward +x, with "
+    "gravity) at which the slope just fails with its strengths unreduced (one "
+    "more limit analysis: gravity the dead load, k_h the multiplier, capped at "
+    "1e3); null without analysis=limit or when gravity alone brings the slope "
+    "down",
+}
+
+
+def kh_history(values: Mapping[str, Any]) -> np.ndarray | None:
+    """The rows ``[t, k_h]`` of ``kh``'s file, checked; None for a number."""
+    kh = values["kh"]
+    if not isinstance(kh, str):
+        return None
+    path = Path(kh)
+    if not path.is_file():
+        raise ParameterError("kh", kh, "a number, or the path of an existing file")
+    try:
+        rows = np.loadtxt(path, delimiter="," if "," in path.read_text() else None)
+    except ValueError as err:
+        raise ParameterError(
+            "kh", kh, f"a file of rows t, k_h (two numbers a row): {err}"
+        ) from None
+    rows = np.atleast_2d(rows)
+    if rows.ndim != 2 or rows.shape[1] != 2 or not np.all(np.isfinite(rows)):
+        raise ParameterError(
+            "kh", kh, f"rows of two finite numbers t, k_h (read {rows.shape})"
+        )
+    if np.any(np.diff(rows[:, 0]) <= 0):
+        i = int(np.flatnonzero(np.diff(rows[:, 0]) <= 0)[0])
+        raise ParameterError(
+            "kh",
+            kh,
+            f"rows with increasing t (row {i + 2}: t = {rows[i + 1, 0]:g} after "
+            f"{rows[i, 0]:g})",
+        )
+    if np.any(np.abs(rows[:, 1]) > 10):
+        raise ParameterError("kh", kh, "k_h within [-10, 10] in every row")
+    return rows
+
+
+def static_kh(values: Mapping[str, Any]) -> float:
+    """The ``k_h`` of the factor of safety: the number, or 0 with a history."""
+    kh = values["kh"]
+    return 0.0 if isinstance(kh, str) else float(kh)
+
+
+def model_kh(values: Mapping[str, Any]) -> float | np.ndarray:
+    """What the run-out's :class:`~skfem_npfem.Model` takes as ``kh``."""
+    rows = kh_history(values)
+    return static_kh(values) if rows is None else rows
+
+
+def check_kh(values: Mapping[str, Any]) -> None:
+    """A history of ``kh`` is read (and refused) before anything is solved.
+
+    It shakes the run-out only: without ``runout=true`` it is refused.
+    """
+    if kh_history(values) is not None and not values["runout"]:
+        raise ParameterError(
+            "kh",
+            values["kh"],
+            "a number without runout=true (a file of t, k_h rows shakes the "
+            "run-out; the factor of safety takes a number)",
+        )
+
+
+def slope_loads(
+    ni: Any,
+    mats: list[Material],
+    material: np.ndarray,
+    mesh: MeshTri,
+    water: Water | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The slope's gravity load and the load of a unit pseudo-static ``k_h``.
+
+    Gravity's load is the (saturated) weight plus the pore water's force
+    (:func:`~skfem_npfem.limit.loads.gravity_load`); a horizontal
+    acceleration ``k_h g`` toward ``+x`` (out of the parametric slope's face)
+    puts ``k_h`` times the weight ``rho g V`` on every node along ``+x``
+    (the mixture's inertia; the pore pressure stays the static field).
+
+    Returns
+    -------
+    gravity : ndarray (N, 2)
+        N.
+    shaking : ndarray (N, 2)
+        The load of ``k_h = 1``, N.
+    """
+    rho = np.array([m.rho for m in mats])[material]
+    x = mesh.p.T
+    p = static_pressure(water, x, mesh.t, material)
+    gravity = gravity_load(ni, rho, GRAVITY, x=x, pore_pressure=p)
+    shaking = np.zeros_like(gravity)
+    shaking[:, 0] = rho * GRAVITY * np.asarray(ni.volumes, float)
+    return gravity, shaking
+
+
+def critical_kh(
+    values: Mapping[str, Any], body: Any, mats: list[Material]
+) -> tuple[float | None, LimitResult | None]:
+    """The pseudo-static ``k_h`` at which the slope just fails (its F is 1).
+
+    One limit analysis on the initial mesh: gravity (with the pore water's
+    force) is the dead load and the load of a unit ``k_h``
+    (:func:`slope_loads`) the reference load, so the collapse multiplier is
+    the critical ``k_h`` with the strengths as they are (``mats``: undrained,
+    the undrained strengths of the factor of safety).  A slope that gravity
+    alone brings down has none (None).  ``body`` is the slope's
+    :class:`~.stages.SlopeBody`.
+    """
+    ni = nodal_integration(body.mesh, (0, 1, 3))
+    water = slope_water(values, body.sec)
+    gravity, shaking = slope_loads(ni, mats, body.material, body.mesh, water)
+    try:
+        res = limit_analysis(
+            ni,
+            mats,
+            body.material,
+            shaking,
+            dead_load=gravity,
+            fixed=body.fixed,
+            options=solver_from(values),
+            max_multiplier=CAP,
+        )
+    except SolverError as err:
+        if err.status in ("PrimalInfeasible", "AlmostPrimalInfeasible"):
+            return None, None
+        raise
+    return float(res.multiplier), res
