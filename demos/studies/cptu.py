@@ -8,10 +8,13 @@ p'_0 = sigma0 = 50 kPa, nu' = 0.3, I_r = G/s_u = 100) with coupled drainage
 2 cm/s), pushed ``push`` x D (from 10 D deep in the scene's 30 D radius, or
 from 4 D deep in a 10 D radius with ``--domain small``), then held
 (``dissipation=true``) to T* = 2.  At each spacing D/n and cone step
-(spacing / ``per`` a step) it tabulates u2(0) (the steady u2: its mean over
-the push's last diameter), u2 at the end of the push and its largest value,
+(spacing / ``per`` a step) it tabulates u2 at the end of the push (u2(0)),
+the steady u2 (its mean over the push's last diameter) and u2's largest value,
 the u2 of the held cone's first step over u2(0), and the T* at which u2 fell
-to half of u2(0), against Teh & Houlsby's (1991) T*_50 = 0.245 at u2.
+to half of u2(0), against Teh & Houlsby's (1991) T*_50 = 0.245 at u2; then
+the T* of 20 to 80 % dissipation against their table, and the curves beside
+theirs in the figure.  u2 is read on the shaft just behind the shoulder
+(the scene's filter, 0.15 D tall).
 
 Usage (from the repository root)::
 
@@ -38,6 +41,7 @@ from _reporting import save_png
 import skfem_npfem as npfem
 from skfem_npfem.scenes.footing.cone_dissipation import (
     TEH_HOULSBY_T50_U2,
+    TEH_HOULSBY_U2,
     half_time,
 )
 
@@ -92,6 +96,7 @@ def run_row(n: int, push: float, per: float, domain: str = "scene") -> dict:
         "V": m["normalised_velocity"],
         "c_h": m["consolidation_coefficient"],
         "N_c": m["cone_factor"],
+        "times": [half_time(curve, 1.0 - U) for U, _ in TEH_HOULSBY_U2],
         "curve": curve,
         "wall_s": time.perf_counter() - t0,
     }
@@ -121,6 +126,22 @@ def markdown(rows: list[dict]) -> str:
             f"{r['first_held']:.2f} | {fmt(r['t50_star'])} | "
             f"{fmt(r['t50_star_steady'])} | {r['wall_s']:.0f} |"
         )
+    lines += [
+        "",
+        "T* at a degree of dissipation U = 1 - u2/u2(0), against Teh & Houlsby's "
+        "(1991) table at u2:",
+        "",
+        "| | " + " | ".join(f"U = {U:.0%}" for U, _ in TEH_HOULSBY_U2) + " |",
+        "|---" * (len(TEH_HOULSBY_U2) + 1) + "|",
+        "| Teh & Houlsby | " + " | ".join(f"{T:g}" for _, T in TEH_HOULSBY_U2) + " |",
+    ]
+    for r in rows:
+        cells = [
+            "n/a" if t is None else f"{t:.3g} ({t / T - 1:+.0%})"
+            for t, (_, T) in zip(r["times"], TEH_HOULSBY_U2, strict=True)
+        ]
+        row = f"| {r['domain']}, D/{r['n']}, {r['push']:g} D | "
+        lines.append(row + " | ".join(cells) + " |")
     return "\n".join(lines).replace("%", " %") + "\n"
 
 
@@ -142,13 +163,15 @@ def figure(rows: list[dict], path: Path) -> None:
             label=f"N-PFEM, {r['domain']} domain, D/{r['n']}, push {r['push']:g} D, "
             f"step h/{r['per']:g}",
         )
-    ax.plot(
-        [TEH_HOULSBY_T50_U2],
-        [0.5],
-        "k*",
-        ms=12,
-        label="Teh & Houlsby (1991): T*_50 = 0.245 at u2",
+    th = np.asarray(TEH_HOULSBY_U2)
+    ax.semilogx(
+        th[:, 1],
+        1.0 - th[:, 0],
+        "ks--",
+        ms=5,
+        label="Teh & Houlsby (1991), u2: their table, U = 20 to 80 %",
     )
+    ax.plot([TEH_HOULSBY_T50_U2], [0.5], "k*", ms=12)
     ax.axhline(0.5, color="0.7", lw=0.8)
     ax.set_xlabel("T* = c_h t / (R^2 sqrt(I_r))")
     ax.set_ylabel("u2(t) / u2(end of push)")

@@ -22,14 +22,13 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import math
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 from _common import VALIDATION
 
 from skfem_npfem.scenes import get_scene
-from skfem_npfem.scenes.footing.cone import APEX, sizes
+from skfem_npfem.scenes.footing.cone import shoulder_height, sizes
 from skfem_npfem.scenes.footing.cone_dissipation import time_factor_seconds
 
 D = 0.0357
@@ -66,7 +65,7 @@ def run(no_flow: bool) -> dict:
 
     def record(s, p, step) -> bool:
         w = -step.record.extra.get("cone_y", 0.0) / D
-        shoulder = g["z_tip"] - w * D + R / math.tan(math.radians(APEX / 2))
+        shoulder = shoulder_height(g, w)
         x = p.x
         near = np.hypot(x[:, 0] - R, x[:, 1] - shoulder) <= h
         shaft = (

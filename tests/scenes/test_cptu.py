@@ -163,24 +163,17 @@ def test_cptu_push_is_the_undrained_cone(cptu_d8):
 
 
 @pytest.mark.slow
-def test_t50_star_is_of_teh_houlsby_order(cptu_d8):
-    # Teh & Houlsby (1991), Geotechnique 41(1) 17-34: T*_50 = 0.245 at u2.
-    # Within a factor of two; measured 0.151 (-38 %) here, 0.184 (-25 %) at
-    # D/10 (docs/validation/cone_penetration.md, "CPTu").
-    t50 = cptu_d8["t50_star"]
-    assert 0.245 / 2 < t50 < 0.245 * 2
-    assert cptu_d8["dissipation"][-1][1] < 0.2  # drained by T* = 2
+def test_dissipation_drains_u2_by_t_star_2(cptu_d8):
+    # Teh & Houlsby's u2 is 80 % dissipated at T* = 1.6: below 0.2 by T* = 2.
+    assert cptu_d8["dissipation"][-1][1] < 0.2
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    reason="T*_50 = 0.151 at D/8 and 0.184 at D/10 (0.17 to 0.19 from the steady "
-    "u2), 24 to 38 % under Teh & Houlsby's 0.245: the held cone's first step "
-    "drains an oscillation over one spacing of the pore pressure along the "
-    "contact, taking up to 22 % of u2",
-    strict=False,
-)
 def test_t50_star_within_25_percent_of_teh_houlsby(cptu_d8):
+    # Teh & Houlsby (1991), Geotechnique 41(1) 17-34: T*_50 = 0.245 at u2.
+    # u2 is read on the shaft just behind the shoulder (the filter of the
+    # scene): measured 0.247 (+1 %) here, 0.296 (+21 %) at D/10
+    # (docs/validation/cone_penetration.md, "CPTu").
     assert cptu_d8["t50_star"] == pytest.approx(0.245, rel=0.25)
 
 

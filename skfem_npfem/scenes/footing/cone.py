@@ -259,8 +259,9 @@ METRICS = {
     "the cone)",
     **WATER_METRICS,
     "shoulder_excess_pore_pressure": "with water only: the mean excess pore "
-    "pressure at the end of the particles within one spacing of the cone's "
-    "shoulder (the u2 filter of a piezocone) / s_u",
+    "pressure at the end of the particles beside the shaft (r <= R + spacing) "
+    "from the shoulder up to max(0.15 D, spacing) above it (the u2 filter of "
+    "a piezocone) / s_u",
     **DISSIPATION_METRICS,
 }
 
@@ -376,14 +377,29 @@ def start_state(
     return with_pore_pressure(particles, values), loads
 
 
-def shoulder_filter(x: np.ndarray, g: dict[str, float], push: float) -> np.ndarray:
-    """The particles within one spacing of the shoulder after ``push`` x D.
+#: Height of the u2 filter behind the shoulder, in D: a standard piezocone's
+#: ring filter is about 5 mm tall on a 35.7 mm cone.
+U2_FILTER_HEIGHT = 0.15
 
-    Where a piezocone's u2 filter sits, just behind the cone.
+
+def shoulder_filter(x: np.ndarray, g: dict[str, float], push: float) -> np.ndarray:
+    """The particles of the u2 filter after ``push`` x D.
+
+    A piezocone reads u2 on a ring filter on the shaft just behind the
+    cone: the particles beside the shaft (``r <= R + h``) from the shoulder
+    up to :data:`U2_FILTER_HEIGHT` x D above it (at least one spacing ``h``,
+    so that a coarse lattice has a row there).  The cone's face below the
+    shoulder is left out: it reads u1, which dissipates about twice as fast.
     """
+    above = x[:, 1] - shoulder_height(g, push)
+    height = max(U2_FILTER_HEIGHT * g["D"], g["h"])
+    return (above >= 0.0) & (above <= height) & (x[:, 0] <= g["D"] / 2 + g["h"])
+
+
+def shoulder_height(g: dict[str, float], push: float) -> float:
+    """The height of the cone's shoulder after ``push`` x D (``g``: :func:`sizes`)."""
     R = g["D"] / 2
-    shoulder = g["z_tip"] - push * g["D"] + R / math.tan(math.radians(APEX / 2))
-    return np.hypot(x[:, 0] - R, x[:, 1] - shoulder) <= g["h"]
+    return g["z_tip"] - push * g["D"] + R / math.tan(math.radians(APEX / 2))
 
 
 def cone_soil(values: Mapping[str, Any], E: float) -> AxisymmetricMohrCoulomb:

@@ -33,11 +33,13 @@ from ...run.simulation import Simulation
 from ..consolidation.scene import growing_step
 from ..params import Param
 from ..water import is_wet
+from .penetration_common import steady_factor
 
 __all__ = [
     "DISSIPATION_METRICS",
     "DISSIPATION_PARAMS",
     "TEH_HOULSBY_T50_U2",
+    "TEH_HOULSBY_U2",
     "HeldBody",
     "attach_piezocone",
     "check_dissipation",
@@ -54,6 +56,18 @@ __all__ = [
 #: Teh & Houlsby (1991), Geotechnique 41(1) 17-34: the modified time factor
 #: T* at 50 % dissipation at the shoulder (u2) of a 60-degree cone.
 TEH_HOULSBY_T50_U2 = 0.245
+
+#: Teh & Houlsby (1991), their table of T* at the shoulder (u2): ``(U, T*)``
+#: for degrees of dissipation ``U = 1 - u/u0`` of 20 to 80 %.
+TEH_HOULSBY_U2 = (
+    (0.2, 0.038),
+    (0.3, 0.078),
+    (0.4, 0.142),
+    (0.5, 0.245),
+    (0.6, 0.439),
+    (0.7, 0.804),
+    (0.8, 1.60),
+)
 
 DISSIPATION_PARAMS = [
     Param(
@@ -198,8 +212,10 @@ def time_factor_seconds(values: Mapping[str, Any]) -> float:
     )
 
 
-def half_time(curve: list[list[float]]) -> float | None:
-    """T* where ``[T*, u/u0]`` first falls to 0.5 (log-linear in T*).
+def half_time(curve: list[list[float]], level: float = 0.5) -> float | None:
+    """T* where ``[T*, u/u0]`` first falls to ``level`` (log-linear in T*).
+
+    ``level = 1 - U`` reads the time of a degree of dissipation ``U``.
 
     Examples
     --------
@@ -207,14 +223,14 @@ def half_time(curve: list[list[float]]) -> float | None:
     0.3981
     """
     c = np.asarray(curve, float)
-    below = np.flatnonzero(c[:, 1] <= 0.5)
+    below = np.flatnonzero(c[:, 1] <= level)
     if below.size == 0:
         return None
     i = int(below[0])
     if i == 0:
         return float(c[0, 0])
     (t0, u0), (t1, u1) = c[i - 1], c[i]
-    s = (u0 - 0.5) / (u0 - u1)
+    s = (u0 - level) / (u0 - u1)
     if t0 <= 0.0:
         return float(t0 + s * (t1 - t0))
     return float(math.exp(math.log(t0) + s * (math.log(t1) - math.log(t0))))
@@ -327,6 +343,9 @@ def dissipation_metrics(
 def steady_mean(pushed: list, values: Mapping[str, Any]) -> float:
     """The mean u2 of the records over the push's last ``steady_window`` x D.
 
+    The mean of the linear interpolant of u2 against depth over the window,
+    as the steady cone factor's (:func:`~.penetration_common.steady_factor`).
+
     u2 is the mean excess pore pressure of the few particles of the filter,
     which change as the soil flows past the shoulder: one step's value
     scatters by 10 to 25 % about this mean (coefficient of variation over the
@@ -336,10 +355,8 @@ def steady_mean(pushed: list, values: Mapping[str, Any]) -> float:
     scatter.
     """
     D = values["diameter"]
-    depth = np.array([-r.extra.get("cone_y", 0.0) / D for r in pushed])
-    u2 = np.array([r.extra["u2"] for r in pushed])
-    window = depth >= depth[-1] - values["steady_window"] * (1 + 1e-9)
-    return float(u2[window].mean())
+    curve = [[-r.extra.get("cone_y", 0.0) / D, r.extra["u2"]] for r in pushed]
+    return steady_factor(curve, values["steady_window"]).mean
 
 
 def in_push(sim: Simulation, t_push: float) -> list:
