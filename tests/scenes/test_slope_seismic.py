@@ -60,6 +60,7 @@ def test_factor_of_safety_under_kh_is_the_infinite_slope_value(sand):
     )
 
 
+@pytest.mark.slow
 def test_critical_kh_converges_with_the_spacing(sand):
     fine = npfem.run_scene("slope", {**SAND, "spacing": 0.5})["metrics"]
     exact = math.tan(math.radians(PHI - BETA))

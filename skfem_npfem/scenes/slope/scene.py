@@ -72,6 +72,12 @@ from .stages import (
     initial_stress,
     slope_body,
 )
+from .surcharge import (
+    SURCHARGE_METRICS,
+    SURCHARGE_PARAMS,
+    check_surcharge,
+    surcharge_load,
+)
 from .water import (
     derive_slope_drainage,
     slope_water,
@@ -126,6 +132,7 @@ PARAMS = [
     ),
     Param("rho", 2000.0, "kg/m^3", "density (saturated with water)", float, **POSITIVE),
     KH_PARAM,
+    *SURCHARGE_PARAMS,
     *WATER_PARAMS,
     Param(
         "initial_stress",
@@ -219,6 +226,7 @@ METRICS = {
     "first program; capped at 1e3: a cohesionless slope that stands carries "
     "any multiple of its weight)",
     **SEISMIC_METRICS,
+    **SURCHARGE_METRICS,
     "undrained_strength_min": "drainage=undrained: the smallest strength s_u = "
     "c' cos phi' + s'_0 sin phi' (initial effective stress) used for F, Pa",
     "undrained_strength_max": "drainage=undrained only: the largest one, Pa",
@@ -271,6 +279,7 @@ def ignored(values: dict[str, Any], given: frozenset[str]) -> None:
             "run-out stage); choose analysis=incremental for the run-out",
         )
     check_kh(values)
+    check_surcharge(values)
     if not stresses:
         warn_unused(
             given,
@@ -359,7 +368,13 @@ def build(
     else:
         t0 = time.perf_counter()
         sigma, resid = initial_stress(
-            values, body.mesh, body.mats, material, fixed, water
+            values,
+            body.mesh,
+            body.mats,
+            material,
+            fixed,
+            water,
+            surcharge_load(pts, body.sec, values),
         )
         state["t_initial"] = time.perf_counter() - t0
         state["initial_stress"] = sigma

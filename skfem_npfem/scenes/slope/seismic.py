@@ -21,15 +21,14 @@ import numpy as np
 from skfem import MeshTri
 
 from ...constants import GRAVITY
-from ...errors import ParameterError, SolverError
-from ...limit.analysis import LimitResult, limit_analysis
+from ...errors import ParameterError
 from ...limit.loads import gravity_load
 from ...limit.safety import CAP
 from ...materials import Material
 from ...mesh.smoothing import nodal_integration
 from ...water import Water
-from ..common import solver_from
 from ..params import Param
+from .surcharge import dead_load_multiplier, surcharge_collapse, surcharge_load
 from .water import slope_water, static_pressure
 
 __all__ = [
@@ -38,6 +37,7 @@ __all__ = [
     "check_kh",
     "critical_kh",
     "kh_history",
+    "loaded_limits",
     "model_kh",
     "slope_loads",
     "static_kh",
@@ -159,33 +159,36 @@ def slope_loads(
 
 def critical_kh(
     values: Mapping[str, Any], body: Any, mats: list[Material]
-) -> tuple[float | None, LimitResult | None]:
+) -> float | None:
     """The pseudo-static ``k_h`` at which the slope just fails (its F is 1).
 
     One limit analysis on the initial mesh: gravity (with the pore water's
     force) is the dead load and the load of a unit ``k_h``
     (:func:`slope_loads`) the reference load, so the collapse multiplier is
     the critical ``k_h`` with the strengths as they are (``mats``: undrained,
-    the undrained strengths of the factor of safety).  A slope that gravity
-    alone brings down has none (None).  ``body`` is the slope's
-    :class:`~.stages.SlopeBody`.
+    the undrained strengths of the factor of safety); a surcharge on the
+    crest is held with gravity.  A slope that gravity alone brings down has
+    none (None).  ``body`` is the slope's :class:`~.stages.SlopeBody`.
     """
     ni = nodal_integration(body.mesh, (0, 1, 3))
     water = slope_water(values, body.sec)
     gravity, shaking = slope_loads(ni, mats, body.material, body.mesh, water)
-    try:
-        res = limit_analysis(
-            ni,
-            mats,
-            body.material,
-            shaking,
-            dead_load=gravity,
-            fixed=body.fixed,
-            options=solver_from(values),
-            max_multiplier=CAP,
-        )
-    except SolverError as err:
-        if err.status in ("PrimalInfeasible", "AlmostPrimalInfeasible"):
-            return None, None
-        raise
-    return float(res.multiplier), res
+    strip = surcharge_load(body.pts, body.sec, values)
+    if strip is not None:
+        gravity = gravity + strip
+    return dead_load_multiplier(values, body, mats, shaking, gravity, CAP)
+
+
+def loaded_limits(
+    values: Mapping[str, Any], body: Any, mats: list[Material]
+) -> dict[str, float | None]:
+    """``critical_kh`` and ``surcharge_collapse`` of a limit run, Pa and -."""
+    ni = nodal_integration(body.mesh, (0, 1, 3))
+    water = slope_water(values, body.sec)
+    dead, shaking = slope_loads(ni, mats, body.material, body.mesh, water)
+    if static_kh(values):
+        dead = dead + static_kh(values) * shaking
+    return {
+        "critical_kh": critical_kh(values, body, mats),
+        "surcharge_collapse": surcharge_collapse(values, body, mats, dead),
+    }

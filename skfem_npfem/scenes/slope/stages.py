@@ -43,7 +43,8 @@ from .section import (
     section_warnings,
     supports,
 )
-from .seismic import critical_kh, model_kh, slope_loads, static_kh
+from .seismic import loaded_limits, model_kh, slope_loads, static_kh
+from .surcharge import surcharge_load
 from .water import (
     slope_water,
     static_pressure,
@@ -74,6 +75,7 @@ def initial_stress(
     material: np.ndarray,
     fixed: np.ndarray,
     water: Water | None = None,
+    loads: np.ndarray | None = None,
 ) -> tuple[np.ndarray, float]:
     """Stage 1: the initial (effective) stresses and their equilibrium residual.
 
@@ -98,6 +100,9 @@ def initial_stress(
         Supports.
     water : Water, optional
         The pore water (None: dry).
+    loads : ndarray (n, 2), optional
+        Dead loads beside the weight (a surcharge), N: in the gravity step
+        (``k0`` ignores them).
 
     Returns
     -------
@@ -114,6 +119,8 @@ def initial_stress(
     p = static_pressure(water, x, mesh.t, material)
     if p is not None:
         force = force + water_force(ni, x, p)
+    if loads is not None:
+        force = force + loads
     if values["initial_stress"] == "gravity":
         elastic = [LinearElastic(m.E, m.nu, m.rho) for m in mats]
         data = ConeInput(
@@ -152,6 +159,7 @@ def factor_of_safety(
     fixed: np.ndarray,
     water: Water | None = None,
     stress: np.ndarray | None = None,
+    sec: CrossSection | None = None,
 ) -> tuple[SafetyResult, Any, list[Material]]:
     """Stage 2: strength reduction on the initial mesh (its limit analysis).
 
@@ -167,6 +175,8 @@ def factor_of_safety(
     stress : ndarray (n, 4), optional
         Initial effective stresses of an undrained analysis (default: those
         of :func:`initial_stress`).
+    sec : CrossSection, optional
+        The section, whose crest carries the surcharge (default: none).
 
     Returns
     -------
@@ -181,6 +191,9 @@ def factor_of_safety(
     load, shaking = slope_loads(ni, mats, material, mesh, water)
     if static_kh(values):
         load = load + static_kh(values) * shaking
+    strip = None if sec is None else surcharge_load(mesh.p.T, sec, values)
+    if strip is not None:
+        load = load + strip
     if water is not None and water.undrained:
         if stress is None:
             stress = initial_stress(values, mesh, mats, material, fixed, water)[0]
@@ -287,6 +300,7 @@ def fos_metrics(
             body.fixed,
             slope_water(values, body.sec),
             state.get("initial_stress"),
+            body.sec,
         )
         state["t_fos"] = time.perf_counter() - t0
         state["fos"] = res
@@ -307,10 +321,11 @@ def fos_metrics(
             **spacing_check(values, res.factor_of_safety, state),
             **undrained_metrics(mats),
             "critical_kh": None,
+            "surcharge_collapse": None,
         }
         if values["analysis"] == "limit":
             t0 = time.perf_counter()
-            state["fos_metrics"]["critical_kh"] = critical_kh(values, body, mats)[0]
+            state["fos_metrics"].update(loaded_limits(values, body, mats))
             state["t_critical_kh"] = time.perf_counter() - t0
         state["fos_volumes"] = ni_.volumes
     if out is not None and not state.get("mechanism_saved"):
@@ -362,6 +377,7 @@ def spacing_check(
             body.material,
             body.fixed,
             slope_water(coarse, body.sec),
+            sec=body.sec,
         )
         F2: float | None = float(res.factor_of_safety)
     except (NpfemError, ValueError):
@@ -432,6 +448,7 @@ def flow_model(
         gravity=GRAVITY,
         mode="dynamic",
         kh=model_kh(values),
+        loads=surcharge_load(body.pts, body.sec, values),
         solver=solver_from(values),
         **fidelity_from(values, 0.0),
     )

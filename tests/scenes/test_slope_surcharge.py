@@ -1,0 +1,153 @@
+"""A strip surcharge on the slope's crest.
+
+References: Prandtl's collapse pressure ``(2 + pi) s_u`` of a uniform
+pressure on a strip of a Tresca half-space (its stress field has that
+pressure all along the strip, so a flexible strip and a smooth rigid footing
+collapse at the same load), which a strip far behind the crest of a stable
+slope must reach: with a horizontal surface the weight does no work on an
+isochoric mechanism.  For a purely cohesive soil the strength reduction is
+exact, ``lambda(F) = lambda(1) / F``, so on level ground, where gravity does
+no work on the strip's mechanism, ``F = q_collapse / q``.  Nearer the crest
+the mechanism can run out of the slope's face, so the collapse pressure
+falls.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from slope_loads import CLAY as STRIP_SLOPE  # demos/studies (tests/conftest.py)
+
+import skfem_npfem as npfem
+from skfem_npfem import ParameterError
+
+#: A stable Tresca slope (gamma H / s_u = 3.3, F = 1.75), a 2 m strip, at 0.5 m.
+CLAY = {**STRIP_SLOPE, "spacing": 0.5}
+
+
+@pytest.fixture(scope="module")
+def far() -> dict:
+    return npfem.run_scene("slope", {**CLAY, "surcharge_offset": 8.0})["metrics"]
+
+
+def test_a_strip_far_from_the_crest_collapses_at_prandtls_pressure(far):
+    # Measured 5.184 s_u (+0.8 %) at 0.5 m (B/4) and 5.010 (-2.6 %) at 0.25 m.
+    assert far["surcharge_collapse"] / 3.0e4 == pytest.approx(2 + math.pi, rel=0.05)
+
+
+def test_the_collapse_pressure_falls_toward_the_crest(far):
+    # 5.18, 4.29 and 3.82 s_u at 8, 2 and 0 m from the crest's edge.
+    near = [
+        npfem.run_scene("slope", {**CLAY, "surcharge_offset": off})["metrics"]
+        for off in (2.0, 0.0)
+    ]
+    q = [m["surcharge_collapse"] for m in (far, *near)]
+    assert q[0] > q[1] > q[2]
+    assert q[2] < 0.85 * q[0]
+
+
+def test_a_surcharge_on_level_ground_sets_the_factor_of_safety():
+    # A 0.5 m step at 10 deg is level ground for a 2 m strip 8 m behind it:
+    # gravity does no work on the strip's mechanism, so F = q_collapse / q.
+    level = {**CLAY, "height": 0.5, "angle": 10.0, "surcharge_offset": 8.0}
+    free = npfem.run_scene("slope", level)["metrics"]
+    q = 1.0e5
+    m = npfem.run_scene("slope", {**level, "surcharge": q})["metrics"]
+    assert m["factor_of_safety"] == pytest.approx(
+        free["surcharge_collapse"] / q, rel=0.01
+    )
+    # The collapse pressure is a property of the strip, not of its load.
+    assert m["surcharge_collapse"] == pytest.approx(
+        free["surcharge_collapse"], rel=1e-6
+    )
+
+
+def test_a_surcharge_lowers_the_factor_of_safety(far):
+    # On the slope the strip adds to the driving load of deeper mechanisms:
+    # F falls below both the slope's own and q_collapse / q.
+    q = 1.0e5
+    m = npfem.run_scene("slope", {**CLAY, "surcharge_offset": 8.0, "surcharge": q})[
+        "metrics"
+    ]
+    assert m["factor_of_safety"] < far["factor_of_safety"]
+    assert m["factor_of_safety"] <= far["surcharge_collapse"] / q * (1 + 1e-6)
+
+
+def test_the_initial_stresses_carry_the_surcharge():
+    # The gravity step with the surcharge is in equilibrium; its vertical
+    # reaction on the base is the weight plus the strip's load.
+    m = npfem.run_scene(
+        "slope",
+        {
+            **CLAY,
+            "analysis": "incremental",
+            "surcharge": 5.0e4,
+            "surcharge_offset": 8.0,
+        },
+    )["metrics"]
+    assert m["initial_equilibrium_residual"] < 1e-8
+    assert m["surcharge_collapse"] is None  # limit analysis only
+
+
+def test_a_surcharge_loads_the_runout():
+    # A stable slope (F = 2.8) of a slightly cohesive sand under a strip at 1.5
+    # times its collapse pressure (F = 0.89) slides; without the strip it stays.
+    sand = {
+        "c": 2.0e3,
+        "phi": 35.0,
+        "angle": 20.0,
+        "height": 2.0,
+        "foundation_depth": 0.4,
+        "spacing": 0.4,
+        "crest_length": 2.4,
+        "toe_length": 4.0,
+        "reduction": 1.0,
+        "runout": True,
+        "surcharge_width": 1.2,
+    }
+    limit = {k: v for k, v in sand.items() if k not in ("reduction", "runout")}
+    qc = npfem.run_scene("slope", {**limit, "analysis": "limit"})["metrics"][
+        "surcharge_collapse"
+    ]
+    still = npfem.run_scene("slope", sand)["metrics"]
+    loaded = npfem.run_scene("slope", {**sand, "surcharge": 1.5 * qc, "t_end": 0.5})[
+        "metrics"
+    ]
+    assert still["moved_volume"] == 0.0
+    assert loaded["factor_of_safety"] < 1.0
+    assert loaded["moved_volume"] > 0.5
+
+
+@pytest.mark.parametrize(
+    ("over", "name"),
+    [
+        ({"surcharge": 1e4, "surcharge_width": None}, "surcharge_width"),
+        ({"surcharge_width": 10.0, "surcharge_offset": 6.0}, "surcharge_width"),
+        ({"surcharge_width": 0.1}, "surcharge_width"),  # under one spacing
+        # The default crest, 1.5 H = 7.5 m, is checked before it is derived.
+        ({"crest_length": None, "surcharge_width": 8.0}, "surcharge_width"),
+    ],
+)
+def test_bad_strips_are_refused(over, name):
+    with pytest.raises(ParameterError) as err:
+        npfem.run_scene("slope", {**CLAY, **over})
+    assert err.value.name == name
+
+
+def test_the_strip_holds_the_crest_particles_under_it():
+    from skfem_npfem.scenes import get_scene
+    from skfem_npfem.scenes.slope.stages import slope_body
+    from skfem_npfem.scenes.slope.surcharge import surcharge_load
+
+    values = get_scene("slope").resolve({**CLAY, "surcharge": 1.0e4})
+    body = slope_body(values)
+    f = surcharge_load(body.pts, body.sec, values)
+    # The loads sum to the pressure times the width, all downward, all on
+    # the crest's surface between 15 - 2 and 15 m.
+    assert f[:, 1].sum() == pytest.approx(-1.0e4 * 2.0, rel=1e-12)
+    loaded = np.flatnonzero(f[:, 1] != 0)
+    assert np.all(body.pts[loaded, 1] == body.pts[:, 1].max())
+    assert body.pts[loaded, 0].min() == pytest.approx(13.0)
+    assert body.pts[loaded, 0].max() == pytest.approx(15.0)
