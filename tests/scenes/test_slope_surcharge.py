@@ -151,3 +151,22 @@ def test_the_strip_holds_the_crest_particles_under_it():
     assert np.all(body.pts[loaded, 1] == body.pts[:, 1].max())
     assert body.pts[loaded, 0].min() == pytest.approx(13.0)
     assert body.pts[loaded, 0].max() == pytest.approx(15.0)
+
+
+def test_a_deposit_without_a_factor_of_safety_keeps_the_runs_metrics(monkeypatch):
+    # The deposit's factor of safety is a second analysis after the run-out:
+    # when it fails, it is null with a warning, and the rest stands.
+    import skfem_npfem.scenes.slope.runout as runout
+    from skfem_npfem.errors import NpfemError
+
+    def fails(sim, values):
+        raise NpfemError("no factor of safety in 20 cone programs")
+
+    monkeypatch.setattr(runout, "deposit_factor_of_safety", fails)
+    from slope_fos import RUNOUT  # the small dry-sand cut of the slope tests
+
+    with pytest.warns(UserWarning, match="deposit's factor of safety"):
+        m = npfem.run_scene("slope", RUNOUT)["metrics"]
+    assert m["deposit_factor_of_safety"] is None
+    assert any("deposit" in w for w in m["warnings"])
+    assert m["runout"] > 0 and m["at_rest"]

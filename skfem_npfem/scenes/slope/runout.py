@@ -15,6 +15,7 @@ import numpy as np
 from skfem import MeshTri
 
 from ...constants import GRAVITY
+from ...errors import NpfemError, SolverError, warn_user
 from ...limit.loads import gravity_load
 from ...limit.safety import strength_reduction
 from ...limit.undrained import undrained_materials
@@ -57,7 +58,11 @@ def save_mechanism(folder: Path, pts, tri, res, volumes) -> None:
 
 
 def runout_metrics(sim, state, values, h, x_toe, y_toe, x_crest, y_crest) -> dict:
-    """The run-out stage's metrics from the particles at the end of the run."""
+    """The run-out stage's metrics from the particles at the end of the run.
+
+    ``notes`` lists what went wrong in the deposit's factor of safety (which
+    is then None; the other metrics stand).
+    """
     p = sim.particles
     x0 = p.x - p.u
     moved = np.linalg.norm(p.u, axis=1) > 0.5 * h
@@ -77,8 +82,19 @@ def runout_metrics(sim, state, values, h, x_toe, y_toe, x_crest, y_crest) -> dic
     slope = deposit_slopes(xs, ys, final[moved, 0], h)
     summ = sim.summary()
     stop = state.get("stop")
-    deposit_fos = deposit_factor_of_safety(sim, values)
+    notes = []
+    try:
+        deposit_fos = deposit_factor_of_safety(sim, values)
+    except (NpfemError, SolverError) as err:
+        # A second analysis after the run: its failure must not cost the run.
+        deposit_fos = None
+        notes.append(
+            f"slope: the deposit's factor of safety was not found ({err}); the "
+            "run-out's results stand"
+        )
+        warn_user(notes[0])
     return {
+        "notes": notes,
         "reduction": state.get("reduction"),
         "runout": max(runout, 0.0),
         "crest_settlement": float(y_crest - crest_now),

@@ -200,7 +200,7 @@ METRICS = {
     "warnings": "list of one-line warnings: implausible material values of a "
     "section file or of the parameters (a unit mistake), regions thinner than "
     "4 spacings, a factor of safety that changes by more than 5 % at twice the "
-    "spacing",
+    "spacing, a deposit whose factor of safety was not found",
     "initial_equilibrium_residual": "|G s - f| / |f| on the free dofs of the "
     "initial stresses (null with analysis=limit)",
     "reduction": "strength reduction factor of the run-out (null without it)",
@@ -216,7 +216,8 @@ METRICS = {
     "volume_change": "relative change of the meshed volume over the run-out",
     "at_rest": "the run-out ended by the at-rest rule (not t_end)",
     "deposit_factor_of_safety": "factor of safety of the final deposit with the "
-    "run-out's strengths (a second limit analysis; >= 1: statically admissible)",
+    "run-out's strengths (a second limit analysis; >= 1: statically admissible; "
+    "null with a warning when its strength reduction finds none)",
     "n_particles": "number of particles",
     "stage_wall_time": "seconds per stage: initial_stress, factor_of_safety (all "
     "its cone programs), factor_of_safety_check (at twice the spacing), "
@@ -406,7 +407,9 @@ def build(
         fos = fos_metrics(values, body, state, out)
         m = base_metrics(fos, resid, len(pts), state, sim_)
         if run_out:
-            m.update(runout_metrics(sim_, state, values, body.h, *toe_crest))
+            late = runout_metrics(sim_, state, values, body.h, *toe_crest)
+            m["warnings"] = [*m.get("warnings", []), *late.pop("notes")]
+            m.update(late)
         return m
 
     derived = {}
