@@ -35,7 +35,8 @@ import time
 
 import numpy as np
 from _common import VALIDATION
-from _reporting import save_png, write_result
+from _reporting import write_result
+from penetration_backbone import ratio_figure, with_ratios
 
 import skfem_npfem as npfem
 from skfem_npfem.constants import GRAVITY
@@ -95,9 +96,8 @@ def backbone(vs, n: int, per: float, push: float) -> dict:
         r = run({"drainage": "coupled", "k": conductivity(V, su)}, n, per, push)
         rows.append(r)
         print(f"V = {V:g}: N = {r['N']:.2f} (mean {r['N_mean']:.2f})", flush=True)
-    for r in [*rows, *ends.values()]:
-        r["ratio"] = r["N"] / ends["undrained"]["N"]
-        r["ratio_mean"] = r["N_mean"] / ends["undrained"]["N_mean"]
+    keys = {"N": "ratio", "N_mean": "ratio_mean"}
+    with_ratios([*rows, *ends.values()], ends["undrained"], keys)
     return {"n": n, "per": per, "push": push, "ends": ends, "rows": rows}
 
 
@@ -125,38 +125,14 @@ def markdown(res: dict) -> str:
 
 def figure(res: dict, path) -> None:
     """N/N_undrained against V (log), with the drained and undrained ends."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    V = np.array([r["V"] for r in res["rows"]])
-    fig, ax = plt.subplots(figsize=(6, 3.8))
-    for key, mark, colour, what in (
+    series = [
         ("ratio", "o-", "C0", "median over the last D"),
         ("ratio_mean", "s--", "C1", "mean over the last D"),
-    ):
-        ax.semilogx(
-            V,
-            [r[key] for r in res["rows"]],
-            mark,
-            color=colour,
-            ms=4,
-            label=f"N-PFEM coupled, {what}",
-        )
-        ax.axhline(
-            res["ends"]["drained"][key], color=colour, lw=0.8, ls=":",
-            label=f"drained, {what}",
-        )  # fmt: skip
-    ax.axhline(1.0, color="k", lw=0.8, label="undrained")
-    ax.set_xlabel("V = v D / c_h")
-    ax.set_ylabel("N / N_undrained")
-    ax.set_title(
+    ]
+    title = (
         f"Cone, c'-phi' clay with p'_0 = 50 kPa, D/{res['n']}, step h/{res['per']:g}"
     )
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    save_png(fig, path)
+    ratio_figure(res, series, ("V = v D / c_h", "N / N_undrained", title), path)
 
 
 def main() -> None:

@@ -87,6 +87,13 @@ def run(over: dict, spacing: float, per: float) -> dict:
     }
 
 
+def with_ratios(runs: list[dict], undrained: dict, keys: dict[str, str]) -> None:
+    """Each run's ``keys`` (value -> ratio name) over the undrained run's, in place."""
+    for r in runs:
+        for key, ratio in keys.items():
+            r[ratio] = r[key] / undrained[key]
+
+
 def backbone(vs, spacing: float, per: float) -> dict:
     """The drained and undrained ends and the coupled rows at each V."""
     ends = {
@@ -96,13 +103,10 @@ def backbone(vs, spacing: float, per: float) -> dict:
     rows = []
     for V in vs:
         r = run({"drainage": "coupled", "k": conductivity(V)}, spacing, per)
-        for key in ("q_01", "q_015"):
-            r[key + "_ratio"] = r[key] / ends["undrained"][key]
         rows.append(r)
         print(f"V = {V:g}: q/s_u = {r['q_01']:.3f}", flush=True)
-    for e in ends.values():
-        for key in ("q_01", "q_015"):
-            e[key + "_ratio"] = e[key] / ends["undrained"][key]
+    keys = {"q_01": "q_01_ratio", "q_015": "q_015_ratio"}
+    with_ratios([*rows, *ends.values()], ends["undrained"], keys)
     return {"spacing": spacing, "per": per, "ends": ends, "rows": rows}
 
 
@@ -128,8 +132,17 @@ def markdown(res: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def figure(res: dict, path: Path) -> None:
-    """q/q_undrained against V (log), with the drained and undrained ends."""
+def ratio_figure(
+    res: dict,
+    series: list[tuple[str, str, str, str]],
+    labels: tuple[str, str, str],
+    path: Path,
+) -> None:
+    """A backbone: each run's ratio to the undrained one against V (log).
+
+    ``series`` is ``(ratio key, marker, colour, what)``: the coupled rows and
+    the drained end of each; ``labels`` the x label, y label and title.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -137,35 +150,42 @@ def figure(res: dict, path: Path) -> None:
 
     V = np.array([r["V"] for r in res["rows"]])
     fig, ax = plt.subplots(figsize=(6, 3.8))
-    for key, w, mark, colour in (
-        ("q_01", 0.1, "o-", "C0"),
-        ("q_015", 0.15, "s--", "C1"),
-    ):
+    for key, mark, colour, what in series:
         ax.semilogx(
             V,
-            [r[key + "_ratio"] for r in res["rows"]],
+            [r[key] for r in res["rows"]],
             mark,
             color=colour,
             ms=4,
-            label=f"N-PFEM coupled, w/B = {w:g}",
+            label=f"N-PFEM coupled, {what}",
         )
         ax.axhline(
-            res["ends"]["drained"][key + "_ratio"],
+            res["ends"]["drained"][key],
             color=colour,
             lw=0.8,
             ls=":",
-            label=f"drained, w/B = {w:g}",
+            label=f"drained, {what}",
         )
     ax.axhline(1.0, color="k", lw=0.8, label="undrained")
-    ax.set_xlabel("V = v B / c_v")
-    ax.set_ylabel("q / q_undrained")
-    ax.set_title(
-        f"Strip footing, weightless c'-phi' clay, B/{1 / res['spacing']:g}, "
-        f"step h/{res['per']:g}"
-    )
+    ax.set_xlabel(labels[0])
+    ax.set_ylabel(labels[1])
+    ax.set_title(labels[2])
     ax.legend(fontsize=7)
     fig.tight_layout()
     save_png(fig, path)
+
+
+def figure(res: dict, path: Path) -> None:
+    """q/q_undrained against V (log), with the drained and undrained ends."""
+    series = [
+        ("q_01_ratio", "o-", "C0", "w/B = 0.1"),
+        ("q_015_ratio", "s--", "C1", "w/B = 0.15"),
+    ]
+    title = (
+        f"Strip footing, weightless c'-phi' clay, B/{1 / res['spacing']:g}, "
+        f"step h/{res['per']:g}"
+    )
+    ratio_figure(res, series, ("V = v B / c_v", "q / q_undrained", title), path)
 
 
 def main() -> None:

@@ -3,7 +3,7 @@
 A horizontal acceleration ``k_h g`` toward ``+x`` (out of the parametric
 slope's face) loads every particle with ``k_h`` times its weight along
 ``+x``.  The factor of safety takes a constant ``kh`` with gravity; the
-critical ``k_h`` (:func:`critical_kh`) is one limit analysis with gravity as
+critical ``k_h`` (:func:`loaded_limits`) is one limit analysis with gravity as
 the dead load and ``k_h`` as the multiplier; the run-out is shaken by the
 constant or by a recorded history (a file of ``t, k_h`` rows,
 :func:`kh_history`) through :attr:`~skfem_npfem.Model.kh`.  The pore
@@ -35,7 +35,6 @@ __all__ = [
     "KH_PARAM",
     "SEISMIC_METRICS",
     "check_kh",
-    "critical_kh",
     "kh_history",
     "loaded_limits",
     "model_kh",
@@ -157,38 +156,27 @@ def slope_loads(
     return gravity, shaking
 
 
-def critical_kh(
+def loaded_limits(
     values: Mapping[str, Any], body: Any, mats: list[Material]
-) -> float | None:
-    """The pseudo-static ``k_h`` at which the slope just fails (its F is 1).
+) -> dict[str, float | None]:
+    """``critical_kh`` and ``surcharge_collapse`` of a limit run, - and Pa.
 
-    One limit analysis on the initial mesh: gravity (with the pore water's
-    force) is the dead load and the load of a unit ``k_h``
-    (:func:`slope_loads`) the reference load, so the collapse multiplier is
-    the critical ``k_h`` with the strengths as they are (``mats``: undrained,
-    the undrained strengths of the factor of safety); a surcharge on the
-    crest is held with gravity.  A slope that gravity alone brings down has
-    none (None).  ``body`` is the slope's :class:`~.stages.SlopeBody`.
+    Two limit analyses on the initial mesh (``body``: the slope's
+    :class:`~.stages.SlopeBody`), with the strengths as they are (``mats``:
+    undrained, the undrained strengths of the factor of safety).  The critical
+    ``k_h`` is the multiplier of a unit ``k_h``'s load (:func:`slope_loads`)
+    with gravity (its water's force, a surcharge on the crest) held; the
+    strip's collapse pressure holds gravity and a constant ``kh``
+    (:func:`~.surcharge.surcharge_collapse`).  A slope that its dead load
+    alone brings down has neither (None).
     """
     ni = nodal_integration(body.mesh, (0, 1, 3))
     water = slope_water(values, body.sec)
     gravity, shaking = slope_loads(ni, mats, body.material, body.mesh, water)
     strip = surcharge_load(body.pts, body.sec, values)
-    if strip is not None:
-        gravity = gravity + strip
-    return dead_load_multiplier(values, body, mats, shaking, gravity, CAP)
-
-
-def loaded_limits(
-    values: Mapping[str, Any], body: Any, mats: list[Material]
-) -> dict[str, float | None]:
-    """``critical_kh`` and ``surcharge_collapse`` of a limit run, Pa and -."""
-    ni = nodal_integration(body.mesh, (0, 1, 3))
-    water = slope_water(values, body.sec)
-    dead, shaking = slope_loads(ni, mats, body.material, body.mesh, water)
-    if static_kh(values):
-        dead = dead + static_kh(values) * shaking
+    held = gravity if strip is None else gravity + strip
+    dead = gravity + static_kh(values) * shaking if static_kh(values) else gravity
     return {
-        "critical_kh": critical_kh(values, body, mats),
-        "surcharge_collapse": surcharge_collapse(values, body, mats, dead),
+        "critical_kh": dead_load_multiplier(values, body, mats, ni, shaking, held, CAP),
+        "surcharge_collapse": surcharge_collapse(values, body, mats, ni, dead),
     }

@@ -18,13 +18,13 @@ from typing import Any
 
 import numpy as np
 
+from ...constants import GRAVITY
 from ...errors import ParameterError, SolverError
 from ...limit.analysis import limit_analysis
 from ...limit.safety import CAP
 from ...loads import surface_load
 from ...materials import Material
 from ...mesh.regions import CrossSection
-from ...mesh.smoothing import nodal_integration
 from ..common import solver_from
 from ..params import POSITIVE, Param
 from .section import toe_and_crest
@@ -145,44 +145,47 @@ def surcharge_collapse(
     values: Mapping[str, Any],
     body: Any,
     mats: list[Material],
+    ni: Any,
     dead: np.ndarray,
 ) -> float | None:
     """The strip's collapse pressure with the strengths unreduced, Pa.
 
-    One limit analysis: ``dead`` (gravity, the water's force, a constant
-    ``kh``) held, the load of a unit pressure on the strip the reference.
-    ``body`` is the slope's :class:`~.stages.SlopeBody`; None without a strip
-    or when the dead load alone brings the slope down.
+    One limit analysis on ``ni`` (the body's strain operator): ``dead``
+    (gravity, the water's force, a constant ``kh``) held, the load of a unit
+    pressure on the strip the reference.  ``body`` is the slope's
+    :class:`~.stages.SlopeBody`; None without a strip or when the dead load
+    alone brings the slope down.
     """
     if values["surcharge_width"] is None:
         return None
     unit = surcharge_load(body.pts, body.sec, values, 1.0)
     # A stress scale of the slope: its largest cohesion or its deepest weight.
     depth = float(np.ptp(body.pts[:, 1]))
-    scale = max(
-        max(getattr(m, "c", 0.0) for m in mats), 9.81 * depth * max(m.rho for m in mats)
-    )
+    weight = GRAVITY * depth * max(m.rho for m in mats)
+    scale = max(max(getattr(m, "c", 0.0) for m in mats), weight)
     cap = CAP * max(scale, 1.0)
-    return dead_load_multiplier(values, body, mats, unit, dead, cap)
+    return dead_load_multiplier(values, body, mats, ni, unit, dead, cap)
 
 
 def dead_load_multiplier(
     values: Mapping[str, Any],
     body: Any,
     mats: list[Material],
+    ni: Any,
     load: np.ndarray,
     dead: np.ndarray,
     cap: float,
 ) -> float | None:
     """The collapse multiplier of ``load`` with ``dead`` held, on the slope.
 
-    One limit analysis on the body's initial mesh (``cap`` bounds the
+    One limit analysis on the body's initial mesh (``ni``: its strain
+    operator; ``cap`` bounds the
     multiplier); None when ``dead`` alone brings the slope down (the program
     is infeasible).
     """
     try:
         res = limit_analysis(
-            nodal_integration(body.mesh, (0, 1, 3)),
+            ni,
             mats,
             body.material,
             load,
