@@ -33,7 +33,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .elasticity import compliance_matrix
 from .errors import ParameterError
+from .profiles import strength_factors
 
 __all__ = [
     "ConeRows",
@@ -45,6 +47,7 @@ __all__ = [
     "VonMises",
     "compliance_matrix",
     "full_voigt_size",
+    "strength_factors",
 ]
 
 
@@ -76,48 +79,6 @@ def _check_number(name: str, value: float, lo: float, hi: float, closed: str) ->
     return v
 
 
-def compliance_matrix(E: float, nu: float, dim: int, components: tuple[int, ...]):
-    """Elastic compliance ``C`` (strain = C stress) on the selected components.
-
-    Parameters
-    ----------
-    E : float
-        Young's modulus, Pa.
-    nu : float
-        Poisson's ratio.
-    dim : int
-        2 (plane strain) or 3.
-    components : tuple of int
-        Selected full-Voigt components.  In 2D, omitting ``zz`` (index 2) gives the
-        plane-strain compliance with ``sigma_zz`` eliminated by ``eps_zz = 0``.
-
-    Returns
-    -------
-    ndarray, shape (n_s, n_s)
-
-    Examples
-    --------
-    >>> C = compliance_matrix(1.0, 0.25, 2, (0, 1, 3))
-    >>> float(C[2, 2])
-    2.5
-    """
-    c3 = np.zeros((6, 6))
-    c3[:3, :3] = -nu / E
-    c3[range(3), range(3)] = 1.0 / E
-    c3[range(3, 6), range(3, 6)] = 2.0 * (1.0 + nu) / E
-    if dim == 3:
-        full = c3
-    else:
-        full = c3[np.ix_([0, 1, 2, 3], [0, 1, 2, 3])]
-        if 2 not in components:
-            f = (1.0 + nu) / E
-            full = full.copy()
-            full[np.ix_([0, 1], [0, 1])] = f * np.array(
-                [[1.0 - nu, -nu], [-nu, 1.0 - nu]]
-            )
-    return full[np.ix_(components, components)]
-
-
 @dataclass(frozen=True)
 class ConeRows:
     """One yield cone per node: ``k - a^T s >= ||M s||`` (and an optional cut-off).
@@ -130,15 +91,16 @@ class ConeRows:
         Strength per node (Pa), ``>= 0``.
     M : ndarray, shape (m, n_s)
         Norm rows (the same for every node).
-    cutoff_a, cutoff_k : ndarray (n_s,), float, or None
-        Tension cut-off ``cutoff_a^T s <= cutoff_k``.
+    cutoff_a, cutoff_k : ndarray (n_s,), float (or ndarray (n,)), or None
+        Tension cut-off ``cutoff_a^T s <= cutoff_k`` (``cutoff_k`` per node
+        when the strength varies from node to node).
     """
 
     a: np.ndarray
     k: np.ndarray
     M: np.ndarray
     cutoff_a: np.ndarray | None = None
-    cutoff_k: float | None = None
+    cutoff_k: float | np.ndarray | None = None
 
 
 class Material:
@@ -189,9 +151,18 @@ class Material:
         return compliance_matrix(self.E, self.nu, dim, components)
 
     def cone(
-        self, dim: int, components: tuple[int, ...], sigma_n: np.ndarray
+        self,
+        dim: int,
+        components: tuple[int, ...],
+        sigma_n: np.ndarray,
+        strength: np.ndarray | None = None,
     ) -> ConeRows | None:
-        """Cone rows for nodes with previous stresses ``sigma_n`` (n, n_full)."""
+        """Cone rows for nodes with previous stresses ``sigma_n`` (n, n_full).
+
+        ``strength`` (n,), when given, scales each node's cohesive strength
+        (``c``, ``sigma_y``): the per-particle strength of a soil profile
+        (:attr:`~skfem_npfem.Particles.strength`); the friction is kept.
+        """
         return None
 
     @property
@@ -250,12 +221,18 @@ class _Frictional(Material):
         raise NotImplementedError
 
     def cone(
-        self, dim: int, components: tuple[int, ...], sigma_n: np.ndarray
+        self,
+        dim: int,
+        components: tuple[int, ...],
+        sigma_n: np.ndarray,
+        strength: np.ndarray | None = None,
     ) -> ConeRows:
         """Cone rows with the frozen-friction strength for ``psi < phi``."""
         sigma_n = np.atleast_2d(sigma_n)
         a_phi, k0 = self._a_k(self.phi)
         a_psi, _ = self._a_k(self.psi)
+        if strength is not None:
+            k0 = k0 * strength_factors(strength, sigma_n.shape[0])
         # Frozen friction: strength lagged on the previous stress, clamped >= 0.
         k = np.maximum(k0 - sigma_n @ (a_phi - a_psi), 0.0)
         comp = list(components)
@@ -418,13 +395,17 @@ class DruckerPrager(_Frictional):
         return alpha * np.array([1.0, 1, 1, 0, 0, 0]), k
 
     def cone(  # noqa: D102
-        self, dim: int, components: tuple[int, ...], sigma_n: np.ndarray
+        self,
+        dim: int,
+        components: tuple[int, ...],
+        sigma_n: np.ndarray,
+        strength: np.ndarray | None = None,
     ) -> ConeRows:
         sigma_n = np.atleast_2d(sigma_n)
         nfull = full_voigt_size(dim)
         pad = np.zeros((sigma_n.shape[0], 6))
         pad[:, :nfull] = sigma_n
-        rows = super().cone(3, tuple(range(6)), pad)
+        rows = super().cone(3, tuple(range(6)), pad, strength)
         comp = list(components)
         return ConeRows(
             a=rows.a[:, comp],
@@ -468,13 +449,20 @@ class VonMises(Material):
         return True
 
     def cone(  # noqa: D102
-        self, dim: int, components: tuple[int, ...], sigma_n: np.ndarray
+        self,
+        dim: int,
+        components: tuple[int, ...],
+        sigma_n: np.ndarray,
+        strength: np.ndarray | None = None,
     ) -> ConeRows:
         n = np.atleast_2d(sigma_n).shape[0]
         comp = list(components)
+        k = np.full(n, self.sigma_y / math.sqrt(3.0))
+        if strength is not None:
+            k = k * strength_factors(strength, n)
         return ConeRows(
             a=np.zeros((n, len(comp))),
-            k=np.full(n, self.sigma_y / math.sqrt(3.0)),
+            k=k,
             M=_dp_rows(dim)[:, comp],
         )
 

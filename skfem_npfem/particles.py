@@ -60,6 +60,21 @@ class Particles:
     excess_pore_pressure : ndarray (N,) or None
         The part of ``pore_pressure`` above the static field, Pa: the state an
         undrained step carries to the next (zero when drained).
+    strength : ndarray (N,) or None
+        Factor on the cohesive strength of the particle's material (``c``,
+        ``s_u``, ``sigma_y``; the friction angle is kept), >= 0: a soil
+        profile whose strength varies from particle to particle (e.g.
+        ``s_u(z) / s_u0``, :func:`~skfem_npfem.profiles.linear_strength`).
+        None: 1 everywhere.
+    stiffness : ndarray (N,) or None
+        Factor on the elastic moduli of the particle's material (``E``; the
+        Poisson's ratio is kept), > 0: e.g. ``E`` proportional to ``s_u``.
+        None: 1 everywhere.
+    shear_rate : ndarray (N,) or None
+        Plastic shear-strain rate of the last step, 1/s (``sqrt(3)`` times
+        the increment of ``eps_p`` over ``dt``): what a rate-dependent
+        strength (:attr:`~skfem_npfem.Model.strength_law`) reads.  None
+        without one.
     """
 
     x: np.ndarray
@@ -75,6 +90,9 @@ class Particles:
     wall_force: np.ndarray
     pore_pressure: np.ndarray | None = field(default=None, kw_only=True)
     excess_pore_pressure: np.ndarray | None = field(default=None, kw_only=True)
+    strength: np.ndarray | None = field(default=None, kw_only=True)
+    stiffness: np.ndarray | None = field(default=None, kw_only=True)
+    shear_rate: np.ndarray | None = field(default=None, kw_only=True)
 
     @classmethod
     def create(
@@ -309,13 +327,25 @@ class Particles:
         if self.wall_force.ndim != 2 or self.wall_force.shape[0] != n:
             raise ParameterError("wall_force", self.wall_force.shape, "(N, n_walls)")
         _check_finite("wall_force", self.wall_force)
-        for name in ("pore_pressure", "excess_pore_pressure"):
+        for name in _OPTIONAL:
             arr = getattr(self, name)
             if arr is None:
                 continue
             if arr.shape != (n,):
                 raise ParameterError(name, arr.shape, f"expected shape ({n},) or None")
             _check_finite(name, arr)
+        if self.strength is not None and np.any(self.strength < 0.0):
+            raise ParameterError(
+                "strength",
+                float(self.strength.min()),
+                "strength factors >= 0 (a factor on the material's cohesion)",
+            )
+        if self.stiffness is not None and np.any(self.stiffness <= 0.0):
+            raise ParameterError(
+                "stiffness",
+                float(self.stiffness.min()),
+                "stiffness factors > 0 (a factor on the material's moduli)",
+            )
         if np.any(self.mass <= 0):
             i = int(np.argmin(self.mass))
             raise ParameterError(
@@ -353,7 +383,13 @@ class Particles:
 
 
 #: Fields that may be None (left out of :meth:`Particles.arrays`).
-_OPTIONAL = ("pore_pressure", "excess_pore_pressure")
+_OPTIONAL = (
+    "pore_pressure",
+    "excess_pore_pressure",
+    "strength",
+    "stiffness",
+    "shear_rate",
+)
 
 
 def _describe(value: object) -> object:

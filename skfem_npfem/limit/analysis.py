@@ -240,6 +240,7 @@ def limit_analysis(
     options: SolverOptions | None = None,
     plastic_fraction: float = PLASTIC_FRACTION,
     max_multiplier: float | None = None,
+    strength: np.ndarray | None = None,
 ) -> LimitResult:
     """Collapse multiplier of a reference load, as one cone program.
 
@@ -271,6 +272,9 @@ def limit_analysis(
         Cap on ``lambda`` (one more row).  A cohesionless body under its own
         weight carries any multiple of it or none, so its multiplier is
         unbounded or zero; with a cap the program says which.
+    strength : ndarray (n_p,), optional
+        Factor on each point's cohesive strength (a soil profile,
+        :attr:`~skfem_npfem.Particles.strength`); default 1.
 
     Returns
     -------
@@ -296,7 +300,7 @@ def limit_analysis(
     operator = _strain_operator(operator, materials)
     d, N = operator.dim, operator.n_nodes
     load, f0, fixed = _checked_loads(load, dead_load, fixed, N, d)
-    prog = static_program(operator, materials, material, f0, fixed)
+    prog = static_program(operator, materials, material, f0, fixed, strength)
     T, n_red = dof_map(d * N, fixed.reshape(-1), list(tied or []))
     f1 = load.reshape(-1)
     f1_red = T.T @ f1

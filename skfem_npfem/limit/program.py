@@ -116,6 +116,7 @@ def static_program(
     material: np.ndarray,
     f0: np.ndarray,
     fixed: np.ndarray,
+    strength: np.ndarray | None = None,
 ) -> Program:
     """The step's program on zero stresses: its yield cones and stress components.
 
@@ -131,6 +132,8 @@ def static_program(
         Dead load, N.
     fixed : ndarray (N, d) bool
         Supports.
+    strength : ndarray (n_p,), optional
+        Factor on each point's cohesive strength (default 1).
 
     Returns
     -------
@@ -148,6 +151,7 @@ def static_program(
         fixed=fixed,
         du_prescribed=np.zeros((N, d)),
         contacts=Contacts.empty(d),
+        strength=None if strength is None else np.asarray(strength, float),
     )
     check_step_data(data)
     return Program(data)

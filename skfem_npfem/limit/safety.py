@@ -103,6 +103,7 @@ def strength_reduction(
     tol: float = 1e-4,
     max_programs: int = 30,
     options: SolverOptions | None = None,
+    strength: np.ndarray | None = None,
 ) -> SafetyResult:
     """Factor of safety ``F``: the strength reduction with collapse multiplier 1.
 
@@ -136,9 +137,10 @@ def strength_reduction(
 
     Parameters
     ----------
-    operator, materials, material, load, fixed, tied, options
+    operator, materials, material, load, fixed, tied, options, strength
         As :func:`limit_analysis` (``load``: the body's weight, with the
-        water's force when there is water).
+        water's force when there is water; the cohesion that ``strength``
+        scales is reduced with the rest).
     tol : float
         Tolerance on ``|log lambda|`` (about the relative error of ``F``).
     max_programs : int
@@ -169,6 +171,7 @@ def strength_reduction(
             tied=tied,
             options=options,
             max_multiplier=CAP,
+            strength=strength,
         )
 
     def interior(lam: float) -> bool:

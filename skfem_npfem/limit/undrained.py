@@ -27,7 +27,14 @@ import math
 import numpy as np
 
 from ..errors import ParameterError
-from ..materials import ConeRows, DruckerPrager, Material, MohrCoulomb, _dp_rows
+from ..materials import (
+    ConeRows,
+    DruckerPrager,
+    Material,
+    MohrCoulomb,
+    _dp_rows,
+    strength_factors,
+)
 from ..mesh.axisymmetric import AxisymmetricMohrCoulomb, mohr_coulomb_cones
 
 __all__ = [
@@ -142,17 +149,27 @@ class UndrainedStrength(Material):
     @property
     def s_u(self) -> np.ndarray:
         """Undrained strength per point (the shear strength ``R``), Pa."""
-        f = math.radians(self.phi)
+        return self.strengths(None)
+
+    def strengths(self, strength: np.ndarray | None) -> np.ndarray:
+        """``s_u`` per point with the cohesion scaled by ``strength`` (n,), Pa."""
+        f = 1.0 if strength is None else strength_factors(strength, self.pressure.size)
+        phi = math.radians(self.phi)
         if self.kind == "drucker-prager":
             dp = DruckerPrager(
                 self.E, self.nu, c=self.c, phi=self.phi, match=self.match
             )
             alpha, k = dp.alpha_k(self.phi)
-            return np.maximum(k + 3.0 * alpha * self.pressure, 0.0)
-        return np.maximum(self.c * math.cos(f) + self.pressure * math.sin(f), 0.0)
+            return np.maximum(f * k + 3.0 * alpha * self.pressure, 0.0)
+        cohesive = self.c * math.cos(phi)
+        return np.maximum(f * cohesive + self.pressure * math.sin(phi), 0.0)
 
     def cone(  # noqa: D102
-        self, dim: int, components: tuple[int, ...], sigma_n: np.ndarray
+        self,
+        dim: int,
+        components: tuple[int, ...],
+        sigma_n: np.ndarray,
+        strength: np.ndarray | None = None,
     ) -> ConeRows | list[ConeRows]:
         n = np.atleast_2d(sigma_n).shape[0]
         if n != self.pressure.size:
@@ -163,7 +180,7 @@ class UndrainedStrength(Material):
             )
         comp = list(components)
         zero = np.zeros((n, len(comp)))
-        s_u = self.s_u
+        s_u = self.s_u if strength is None else self.strengths(strength)
         if self.kind == "drucker-prager":
             return ConeRows(a=zero, k=s_u, M=_dp_rows(dim)[:, comp])
         if self.kind == "plane-strain":

@@ -39,7 +39,7 @@ import numpy as np
 import scipy.sparse as sp
 from skfem import CellBasis, ElementTriP1, Mesh
 
-from ..materials import ConeRows, MohrCoulomb
+from ..materials import ConeRows, MohrCoulomb, strength_factors
 from .smoothing import FULL_VOIGT, NodalIntegration, check_p1_mesh, connectivity
 
 __all__ = [
@@ -298,12 +298,17 @@ class AxisymmetricMohrCoulomb(MohrCoulomb):
         return True
 
     def cone(  # type: ignore[override]
-        self, dim: int, components: tuple[int, ...], sigma_n: np.ndarray
+        self,
+        dim: int,
+        components: tuple[int, ...],
+        sigma_n: np.ndarray,
+        strength: np.ndarray | None = None,
     ) -> list[ConeRows]:
         """Three cone rows per node, with the frozen-friction strengths."""
         sigma_n = np.atleast_2d(sigma_n)[:, :4]
         comp = list(components)
         n = sigma_n.shape[0]
+        f = 1.0 if strength is None else strength_factors(strength, n)
         out = []
         cones = zip(
             mohr_coulomb_cones(self.phi, self.c),
@@ -314,11 +319,11 @@ class AxisymmetricMohrCoulomb(MohrCoulomb):
             cut_a = cut_k = None
             if j == 0 and self.tension_cutoff and self.phi > 0.0:
                 cut_a = np.array([1.0, 1.0, 1.0, 0.0])[comp] / 3.0
-                cut_k = self.c / math.tan(math.radians(self.phi))
+                cut_k = f * self.c / math.tan(math.radians(self.phi))
             out.append(
                 ConeRows(
                     a=np.broadcast_to(a_psi[comp], (n, len(comp))).copy(),
-                    k=np.maximum(k0 - sigma_n @ (a_phi - a_psi), 0.0),
+                    k=np.maximum(f * k0 - sigma_n @ (a_phi - a_psi), 0.0),
                     M=M[:, comp],
                     cutoff_a=cut_a,
                     cutoff_k=cut_k,

@@ -27,6 +27,7 @@ from ..errors import ParameterError, RunInterrupted, SolverError
 from ..io import read_checkpoint, water_point_data, write_checkpoint
 from ..mesh.sources import MeshSource, as_mesh_source
 from ..particles import Particles
+from ..profiles import profile_point_data
 from ..step.kinematics import energies
 from ..step.model import Model
 from ..step.stages import Step, StepRecord, StepState, advance
@@ -194,20 +195,15 @@ class Simulation:
         act = np.zeros(p.n, bool)
         if active is not None:
             act[active] = True
-        data = {
-            "displacement": p.u,
-            "velocity": p.v,
-            "stress": p.stress,
-            "plastic_strain_eq": p.eps_p,
-            "mass": p.mass,
-            "active": act,
-        }
+        data = {"displacement": p.u, "velocity": p.v, "stress": p.stress}
+        data |= {"plastic_strain_eq": p.eps_p, "mass": p.mass, "active": act}
         # Mesh sources that know the free surface (AlphaShapeMesher) report it
         # for the mesh the step was solved on.
         free = getattr(self.mesh_source, "free_surface", None)
         flags = free() if callable(free) else None
         if flags is not None:
             data["free_surface"] = flags
+        data.update(profile_point_data(p))  # a soil profile's factors, if any
         if self.extra_point_data is not None:
             data.update(self.extra_point_data(p))
         return data

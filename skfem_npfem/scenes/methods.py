@@ -31,6 +31,7 @@ from ..baseline import SPFEM, TRANSFERS, FemRemap
 from ..baseline.operators import ELEMENTS
 from ..errors import ParameterError
 from ..metrics import stress_roughness
+from ..profiles import profile_point_data
 from .base import SceneRun
 from .params import POSITIVE, Param
 
@@ -216,8 +217,8 @@ def with_method(values: Mapping[str, Any], srun: SceneRun) -> SceneRun:
     ------
     ParameterError
         For a bad method or option (:func:`make_method`),
-        SPFEM in a quasi-static run, or an ``explicit_dt`` above the stable
-        step of the initial mesh.
+        SPFEM in a quasi-static run, a baseline with a soil profile, or an
+        ``explicit_dt`` above the stable step of the initial mesh.
     """
     name = values["method"]
     method = make_method(
@@ -228,6 +229,13 @@ def with_method(values: Mapping[str, Any], srun: SceneRun) -> SceneRun:
         explicit_dt=values.get("explicit_dt"),
     )
     sim = srun.simulation
+    if method is not None and profile_point_data(sim.particles):
+        raise ParameterError(
+            "method",
+            name,
+            "npfem with a soil profile (su_gradient): a baseline keeps one "
+            "strength and stiffness per material",
+        )
     if isinstance(method, SPFEM):
         if sim.model.mode != "dynamic":
             raise ParameterError(

@@ -23,6 +23,7 @@ from ..particles import Particles
 from ..step.model import Model
 from ..water import Water
 from .common import warn_unused
+from .soil_profile import UNIFORM_VALUES
 from .water import is_wet
 
 __all__ = [
@@ -123,9 +124,15 @@ def recorded_parameters(values: Mapping[str, Any]) -> dict[str, Any]:
 
     A dry run writes the records it wrote before the scene had pore water (its
     checkpoints, bit for bit; a checkpoint of then resumes now), so the water
-    parameters at their dry values are left out.
+    parameters at their dry values are left out; so are the soil profile's
+    at a uniform soil's values
+    (:data:`~skfem_npfem.scenes.soil_profile.UNIFORM_VALUES`).
     """
-    return {k: v for k, v in values.items() if DRY_VALUES.get(k, k) != v}
+    return {
+        k: v
+        for k, v in values.items()
+        if DRY_VALUES.get(k, k) != v and UNIFORM_VALUES.get(k, k) != v
+    }
 
 
 def wet_column(

@@ -47,6 +47,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import ParameterError, SolverError
+from ..profiles import check_factors
 from .families import OBJECTIVE_TERMS, ROW_FAMILIES
 from .program import Assembled, ConeInput, Program, assemble
 from .solver import ACCEPTED, SolverOptions, hint, solve_clarabel
@@ -371,6 +372,9 @@ def check_step_data(data: ConeInput) -> None:
             raise ParameterError(
                 "eigenstrain", f"array of shape {e.shape}", f"finite, {shape}"
             )
+    for name, positive in (("strength", False), ("stiffness", True)):
+        if getattr(data, name) is not None:
+            check_factors(name, getattr(data, name), len(data.sigma_n), positive)
     if data.stress_scale is not None:
         s = data.stress_scale
         if isinstance(s, bool) or not (

@@ -19,6 +19,7 @@ from ..boundary import (
 from ..constants import GRAVITY
 from ..errors import ParameterError
 from ..materials import Material
+from ..strength_laws import ClayStrength
 from ..water.model import Water
 from .solver import SolverOptions
 from .stabilisation import STABILISATION_MODES
@@ -134,6 +135,11 @@ class Model:
         the last (a recorded acceleration history).  Each step takes it at the
         step's end (backward Euler); a particle in free flight too.  0
         (default): none.  N-PFEM only.
+    strength_law : ClayStrength or None
+        Softening with the plastic shear strain and rise with its rate
+        (:class:`~skfem_npfem.strength_laws.ClayStrength`), a factor on every
+        particle's cohesion taken at the start of each step.  None
+        (default): the strength is fixed.  N-PFEM only.
     """
 
     dim: int
@@ -157,6 +163,7 @@ class Model:
     water: Water | None = None
     tied: list | None = None
     kh: float | np.ndarray = 0.0
+    strength_law: ClayStrength | None = None
 
     def __post_init__(self) -> None:
         if self.dim not in (2, 3):
@@ -192,6 +199,9 @@ class Model:
                 raise ParameterError("walls", w, f"walls must be {self.dim}D")
         self._check_bodies()
         self._check_kh()
+        law = self.strength_law
+        if law is not None and not isinstance(law, ClayStrength):
+            raise ParameterError("strength_law", law, "a ClayStrength or None")
         b = self.stabilisation
         if isinstance(b, bool) or not (
             isinstance(b, int | float) and math.isfinite(b) and b >= 0
@@ -291,6 +301,10 @@ class Model:
         if np.ndim(self.kh) or self.kh:
             raise ParameterError(
                 "kh", "pseudo-static shaking", f"0 with {method} (N-PFEM only)"
+            )
+        if self.strength_law is not None:
+            raise ParameterError(
+                "strength_law", self.strength_law, f"None with {method} (N-PFEM only)"
             )
         if self.loads is not None:
             raise ParameterError(

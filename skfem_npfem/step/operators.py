@@ -155,11 +155,27 @@ def build_operators(
         eigenstrain=eigenstrain,
         pore=pore,
         tied=tied_dofs(model, active),
+        strength=step_strength(model, p, active),
+        stiffness=None if p.stiffness is None else p.stiffness[active],
     )
     columns = nodes.lagged.shape[1]
     return StepOperators(
         active, local_t, op, wall_ids, data, strains, time, dropped, columns
     )
+
+
+def step_strength(model: Model, p: Particles, active: np.ndarray) -> np.ndarray | None:
+    """The step's strength factors: the profile's times the strength law's.
+
+    The law (:attr:`Model.strength_law`) takes each particle's plastic strain
+    and shear rate at the start of the step.  None: no factor at all.
+    """
+    law = model.strength_law
+    if law is None:
+        return None if p.strength is None else p.strength[active]
+    rate = None if p.shear_rate is None else p.shear_rate[active]
+    f = law.factors(p.eps_p[active], rate)
+    return f if p.strength is None else p.strength[active] * f
 
 
 def pore_input(

@@ -201,6 +201,12 @@ class ConeInput:
         Groups of tied free dofs (node-major indices ``d * node + axis``):
         each group's equilibrium rows are summed into one row, so its dofs
         share one displacement (:attr:`~skfem_npfem.Model.tied`).  None: none.
+    strength : ndarray (n_p,) or None
+        Per-point factor on each material's cohesive strength (``c``,
+        ``sigma_y``; :attr:`~skfem_npfem.Particles.strength`).  None: 1.
+    stiffness : ndarray (n_p,) or None
+        Per-point factor on each material's elastic moduli (the compliance
+        is divided by it; :attr:`~skfem_npfem.Particles.stiffness`).  None: 1.
     """
 
     operator: StrainOperator
@@ -224,6 +230,8 @@ class ConeInput:
     stabilisation_mode: str = "full"
     pore: PoreInput | None = None
     tied: list[np.ndarray] | None = None
+    strength: np.ndarray | None = None
+    stiffness: np.ndarray | None = None
 
 
 @dataclass
@@ -354,10 +362,17 @@ class Program:
             if points.size == 0:
                 continue
             self.compliance[points] = mat.compliance(d, self.comp)
+            if data.stiffness is not None:
+                self.compliance[points] /= data.stiffness[points, None, None]
             if mat.plastic:
                 # A material may return several cones per point (axisymmetric
                 # Mohr-Coulomb: three SOC(3), skfem_npfem.mesh.axisymmetric).
-                rows = mat.cone(d, self.comp, data.sigma_n[points])
+                if data.strength is None:
+                    rows = mat.cone(d, self.comp, data.sigma_n[points])
+                else:
+                    rows = mat.cone(
+                        d, self.comp, data.sigma_n[points], data.strength[points]
+                    )
                 for cone in rows if isinstance(rows, list | tuple) else [rows]:
                     if strength_floor > 0.0 and cone.k.size:
                         k = np.maximum(cone.k, strength_floor * cone.k.max())

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..boundary import Boundary
 from ..particles import Particles
+from ..strength_laws import SHEAR_FROM_EQUIVALENT
 from .boundary_jobs import put_back
 from .conic import ConeSolution
 from .kinematics import equivalent_strain, rotate_stress
@@ -55,7 +56,8 @@ def update_particles(
     inactive[active] = False
     stress[inactive] = 0.0
     eps_p = p.eps_p.copy()
-    eps_p[active] += equivalent_strain(sol.deps_p)
+    increment = equivalent_strain(sol.deps_p)
+    eps_p[active] += increment
     wall_force = np.zeros((p.n, ops.columns))
     if ops.contacts.size:
         nodes, w, _ = ops.contacts.weights()
@@ -68,6 +70,10 @@ def update_particles(
         p, model, dt, active, sol.du, ops.data.dynamic, boundaries, ops.time + dt
     )
     new = p.replace(**motion, stress=stress, eps_p=eps_p, wall_force=wall_force)
+    if model.strength_law is not None:  # the rate a rate-dependent strength reads
+        rate = np.zeros(p.n)
+        rate[active] = SHEAR_FROM_EQUIVALENT * increment / dt
+        new = new.replace(shear_rate=rate)
     pore = ops.data.pore
     if pore is not None:
         # Effective stress on the particles; the pore pressure beside it (a

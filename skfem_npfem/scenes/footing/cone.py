@@ -43,7 +43,6 @@ penetration, ``N_c = (q_c - sigma_0)/s_u = 1.25 + 1.84 ln I_r``.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -52,10 +51,7 @@ import numpy as np
 from ...boundary import wall_x
 from ...constants import GRAVITY
 from ...laws import teh_houlsby_nc
-from ...loads import surface_load
-from ...mesh.axisymmetric import AxisymmetricMohrCoulomb
 from ...mesh.sources import AlphaShapeMesher
-from ...particles import Particles
 from ...run.simulation import Simulation
 from ...step.model import Model
 from ..base import Scene, SceneRun
@@ -68,6 +64,7 @@ from ..common import (
 )
 from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
+from ..soil_profile import clay_law
 from ..water import is_wet, scene_water, water_params
 from .cone_dissipation import (
     DISSIPATION_METRICS,
@@ -78,6 +75,14 @@ from .cone_dissipation import (
     in_push,
 )
 from .cone_geometry import APEX, check, cone_body, sizes, soil_points
+from .cone_ground import (
+    GROUND_METRICS,
+    GROUND_PARAMS,
+    check_ground,
+    cone_soil,
+    net_curve,
+    start_state,
+)
 from .penetration_common import (
     ADHESION,
     derive_cone,
@@ -92,7 +97,6 @@ from .penetration_soil import (
     penetration_parameters,
     pore_metrics,
     soil_params,
-    with_pore_pressure,
 )
 from .scenery import saved_factor_curve
 
@@ -233,6 +237,7 @@ PARAMS = [
         lo=0.05,
         hi=100.0,
     ),
+    *GROUND_PARAMS,
     *water_params(coupled=True),
     *DISSIPATION_PARAMS,
     *fidelity_params(0.0),
@@ -257,6 +262,7 @@ METRICS = {
     "n_particles": "number of particles",
     "warnings": "what to look at (a particle deeper than half a spacing inside "
     "the cone)",
+    **GROUND_METRICS,
     **WATER_METRICS,
     "shoulder_excess_pore_pressure": "with water only: the mean excess pore "
     "pressure at the end of the particles beside the shaft (r <= R + spacing) "
@@ -271,8 +277,9 @@ def build(
 ) -> SceneRun:
     """Build the cone-penetration simulation."""
     dt = check(values)
+    check_ground(values)
     g = sizes(values)
-    D, su, s0 = g["D"], values["su"], values["sigma0"]
+    su = values["su"]
     G = values["rigidity_index"] * su
     E = 2 * G * (1 + values["nu"])
     soil = cone_soil(values, E)
@@ -284,14 +291,18 @@ def build(
         dim=2,
         axisymmetric=True,
         materials=[soil],
-        # Darcy's law needs gamma_w = rho_w g; the particles' weight is nil.
-        gravity=GRAVITY if values["drainage"] == "coupled" else 0.0,
+        # Darcy's law needs gamma_w = rho_w g; a weightless soil's particles
+        # have (next to) no mass.
+        gravity=GRAVITY
+        if values["drainage"] == "coupled" or values["rho"] > 0
+        else 0.0,
         mode="static",
         walls=[axis],
         bodies=[cone],
         loads=loads,
         water=scene_water(values),
         solver=solver_from(values),
+        strength_law=clay_law(values, g["h"]),
         **fidelity_from(values, 0.0),
     )
     mesher = AlphaShapeMesher(g["h"], values["alpha"], spacing=spacing, walls=[axis])
@@ -307,17 +318,12 @@ def build(
             "parameters": penetration_parameters(values),
         },
     )
-    area = math.pi * D**2 / 4
     sim.penetration_check.enabled = False  # penetration_warnings says it
     t_push = g["w"] / values["speed"]
     t_end = attach_piezocone(sim, values, t_push, lambda x, w: shoulder_filter(x, g, w))
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
-        curve = [
-            [-r.extra["cone_y"] / D, (r.extra["cone_force_y"] / area - s0) / su]
-            for r in in_push(sim_, t_push)
-            if "cone_force_y" in r.extra
-        ]
+        curve, net = net_curve(in_push(sim_, t_push), values)
         steady = steady_factor(curve, values["steady_window"])
         factor = None if steady is None else steady.median
         ref = teh_houlsby_nc(values["rigidity_index"])
@@ -331,6 +337,8 @@ def build(
             "cone_factor_mean": None if steady is None else steady.mean,
             "cone_factor_drops": None if steady is None else steady.drops,
             "load_drops": running_drops(curve),
+            "cone_factor_nkt": factor,
+            "q_net": net,
             "cone_factor_reference": ref,
             "relative_error": None if factor is None else factor / ref - 1.0,
             "max_body_penetration": max(pen, default=0.0),
@@ -347,34 +355,6 @@ def build(
         }
 
     return SceneRun(sim, {"t_end": t_end}, metrics)
-
-
-def start_state(
-    values: Mapping[str, Any], x: np.ndarray
-) -> tuple[Particles, np.ndarray | None]:
-    """The particles under ``sigma0`` at ``x`` and the surcharge holding it.
-
-    The base is fixed, the far side on rollers; the top carries ``sigma0``
-    as a dead load or (``surface=rollers``) is held vertically.
-    """
-    g = sizes(values)
-    s0 = values["sigma0"]
-    fixed = np.zeros_like(x, dtype=bool)
-    fixed[np.isclose(x[:, 1], 0.0)] = True
-    fixed[np.isclose(x[:, 0], g["radius"]), 0] = True
-    top = np.isclose(x[:, 1], g["top"])
-    if values["surface"] == "rollers":
-        fixed[top, 1] = True  # rollers hold sigma_0 on top
-        loads = None
-    else:  # sigma_0 on the top as a dead load: the soil is free to heave
-        loads = surface_load(x, top, s0, axisymmetric=True)
-    stress = np.zeros((x.shape[0], 4))
-    stress[:, :3] = -s0
-    # Weightless soil: tiny masses (static steps do not use them).
-    particles = Particles.create(
-        x, np.full(x.shape[0], 1e-12), fixed=fixed, stress=stress, n_walls=2
-    )
-    return with_pore_pressure(particles, values), loads
 
 
 #: Height of the u2 filter behind the shoulder, in D: a standard piezocone's
@@ -400,15 +380,6 @@ def shoulder_height(g: dict[str, float], push: float) -> float:
     """The height of the cone's shoulder after ``push`` x D (``g``: :func:`sizes`)."""
     R = g["D"] / 2
     return g["z_tip"] - push * g["D"] + R / math.tan(math.radians(APEX / 2))
-
-
-def cone_soil(values: Mapping[str, Any], E: float) -> AxisymmetricMohrCoulomb:
-    """The soil: Tresca of strength ``su``, or the effective-stress clay."""
-    if values["material"] == "tresca":
-        return AxisymmetricMohrCoulomb(E, values["nu"], 1.0, c=values["su"], phi=0.0)
-    return AxisymmetricMohrCoulomb(
-        E, values["nu"], 1.0, c=values["c"], phi=values["phi"], psi=values["psi"]
-    )
 
 
 #: The cone's pictures show r <= WINDOW_R D, from WINDOW_Z D below the end of the

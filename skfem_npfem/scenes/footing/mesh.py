@@ -19,6 +19,7 @@ from ...errors import ParameterError
 from ...mesh.smoothing import nodal_integration
 from ...particles import Particles
 from ..limits import check_size
+from ..soil_profile import with_profile
 from .penetration_common import grow_axis, grown_count
 from .strip_water import initial_state
 
@@ -98,6 +99,7 @@ def soil_particles(
         x, np.maximum(rho, 1e-12) * ni.volumes, stress=stress, fixed=fixed
     )
     particles = initial_state(values, particles.replace(v_prescribed=vp), L, K0)
+    particles = with_profile(values, particles, L - x[:, 1], values["c"])
     return particles, foot
 
 

@@ -66,6 +66,7 @@ from ..limits import check_size
 from ..methods import METHOD_METRICS_NO_SPFEM, method_params, with_method
 from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
+from ..soil_profile import CLAY_PARAMS, clay_law, profile_params, with_profile
 from ..water import is_wet, scene_water, water_params
 from .penetration_common import (
     ADHESION,
@@ -171,6 +172,8 @@ PARAMS = [
         "has no rigid-body contact); docs/validation/penetration_methods.md "
         "compares npfem and fem-remap here",
     ),
+    *profile_params("su"),
+    *CLAY_PARAMS,
     *water_params(coupled=True),
     *fidelity_params(0.0),
     *solver_params(),
@@ -304,6 +307,8 @@ def build(
     su = values["su"]
     particles, spacing, _ = soil(values)
     particles = with_pore_pressure(particles, values)
+    depth = _geometry(values)[2] - particles.x[:, 1]
+    particles = with_profile(values, particles, depth, su, name="su")
     body = footing_body(values)
     model = Model(
         dim=2,
@@ -314,6 +319,7 @@ def build(
         bodies=[body],
         water=scene_water(values),
         solver=solver_from(values),
+        strength_law=clay_law(values, values["spacing"]),
         **fidelity_from(values, 0.0),
     )
     mesher = AlphaShapeMesher(values["spacing"], values["alpha"], spacing=spacing)

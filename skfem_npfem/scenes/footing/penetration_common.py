@@ -17,6 +17,7 @@ import numpy as np
 
 from ...errors import ParameterError, warn_user
 from ..params import Param
+from ..soil_profile import check_layers
 from ..water import derive_drainage
 from .penetration_soil import derive_soil, refuse_soil
 
@@ -184,6 +185,7 @@ def derive_cone(values: dict[str, Any]) -> None:
     round an expanding cylindrical cavity, the vertical stress intermediate).
     """
     derive_drainage(values)
+    check_layers(values)
     derive_soil(values, 1.0e4, values["sigma0"], "plane-strain")
     D = values["diameter"]
     if values["spacing"] is None:
@@ -204,6 +206,7 @@ def derive_footing(values: dict[str, Any]) -> None:
     starts stress-free: ``p'_0 = 0``).
     """
     derive_drainage(values)
+    check_layers(values)
     derive_soil(values, 1.0e3, 0.0, "plane-strain")
     if values["penetration"] is None:
         values["penetration"] = values["width"]

@@ -254,8 +254,8 @@ def penetration_parameters(values: Mapping[str, Any]) -> dict[str, Any]:
     water parameters at their dry values
     (:func:`~skfem_npfem.scenes.wet_soil.recorded_parameters`) and, with
     ``material=tresca``, the Mohr-Coulomb parameters at their defaults are
-    left out; so are a cone's ``k`` when not coupled and its dissipation
-    stepping without a dissipation test.
+    left out; so are a cone's ``k`` when not coupled, its dissipation
+    stepping without a dissipation test and its ``rho`` when weightless.
     """
     out = recorded_parameters(values)
     if out.get("k", 0.0) is None:  # not coupled: no conductivity
@@ -264,4 +264,6 @@ def penetration_parameters(values: Mapping[str, Any]) -> dict[str, Any]:
         out = {k: v for k, v in out.items() if k not in DISSIPATION_NAMES}
     if values.get("material") == "tresca":
         out = {k: v for k, v in out.items() if TRESCA_VALUES.get(k, k) != v}
+    if out.get("rho") == 0.0:  # a weightless cone records as it did before
+        del out["rho"]
     return out

@@ -25,14 +25,9 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-from skfem import MeshTri
-
 from ...errors import ParameterError, warn_user
 from ...laws import prandtl_nc
-from ...limit.analysis import limit_analysis
 from ...materials import DruckerPrager, Material, MohrCoulomb, Tresca
-from ...mesh.smoothing import nodal_integration
 from ...mesh.sources import FixedMesh
 from ...particles import Particles
 from ...run.simulation import Simulation
@@ -42,19 +37,18 @@ from ..common import (
     fidelity_params,
     fill_at_rest,
     make_writer,
-    solver_from,
     solver_params,
 )
 from ..limit_mode import (
     LIMIT_METRICS,
     analysis_param,
     check_limit_method,
-    limit_metrics,
     limit_scene_run,
 )
 from ..limits import SPACING as SPACING_RANGE
 from ..methods import METHOD_METRICS_NO_SPFEM, method_params, with_method
 from ..params import ANGLE, POSITIVE, Param, Values
+from ..soil_profile import PROFILE_PARAMS, check_layers, has_profile
 from ..water import derive_drainage
 from .mesh import (
     DEFAULT_DOMAIN,
@@ -75,12 +69,11 @@ from .strip_coupled import (
     footing_parameters,
     held_load_run,
 )
+from .strip_limit import HETEROGENEITY_METRICS, footing_limit, heterogeneity_factor
 from .strip_water import (
     FOOTING_WATER_PARAMS,
     footing_gamma,
-    limit_soil,
     undrained_strength,
-    water_dead_load,
 )
 from .usage import ignored
 
@@ -233,6 +226,7 @@ PARAMS = [
         "small-strain limit analysis",
         bool,
     ),
+    *PROFILE_PARAMS,
     *FOOTING_WATER_PARAMS,
     *LOAD_PARAMS,
     analysis_param("settlement steps to the load plateau"),
@@ -268,6 +262,7 @@ METRICS = {
     "plateau; fem-remap P1 locking); the CLI prints each on stderr",
     "n_particles": "number of particles",
     **METHOD_METRICS_NO_SPFEM,
+    **HETEROGENEITY_METRICS,
     **LIMIT_METRICS,
     **LOAD_METRICS,
 }
@@ -309,6 +304,7 @@ def derive(values: dict[str, Any]) -> None:
     """
     resolve_defaults(values)
     derive_drainage(values)
+    check_layers(values)
     fill_at_rest(values)
     if values["psi"] is None:
         values["psi"] = values["phi"]
@@ -374,7 +370,7 @@ def build(
         finished.label = (reason or "").replace("_", " ")
         return reason is not None
 
-    ref = prandtl_nc(phi) if gamma == 0 and c > 0 else None
+    ref = prandtl_nc(phi) if gamma == 0 and c > 0 and not has_profile(values) else None
     if (s_u := undrained_strength(values, phi)) is not None:  # Tresca of s_u
         c, ref = s_u, prandtl_nc(0.0)
     if values["analysis"] == "limit":
@@ -395,6 +391,7 @@ def build(
             "bearing_factor": factor,
             "bearing_factor_reference": ref,
             "relative_error": None if ref is None else factor / ref - 1.0,
+            "heterogeneity_factor": heterogeneity_factor(values, q),
             "load_curve": curve,
             **plateau,
             "n_particles": int(particles.n),
@@ -424,55 +421,6 @@ def locking_note(values: Mapping[str, Any], phi: float) -> str:
     else:
         return ""
     return f"fem-remap with P1 elements under {flow}"
-
-
-def footing_limit(
-    values: Mapping[str, Any],
-    mesh: MeshTri,
-    mat: Material,
-    particles: Particles,
-    foot: np.ndarray,
-    ref: float | None,
-) -> dict[str, Any]:
-    """The footing's collapse load as one cone program (``analysis=limit``).
-
-    The footing is rigid: the vertical velocities of its nodes are one unknown
-    (and a rough footing's horizontal ones are zero), so the reference load --
-    ``c b`` (``gamma b^2`` for c = 0) on the half model -- needs no
-    distribution.  The soil's weight is the dead load.  The multiplier is then
-    the bearing factor ``q / c`` (``q / (gamma b)``).
-    """
-    b, gamma, g_ref = values["width"] / 2, unit_weight(values), footing_gamma(values)
-    mat, c = limit_soil(values, mat, particles.stress)
-    ni = nodal_integration(mesh, (0, 1, 2, 3) if mat.needs_zz(2) else (0, 1, 3))
-    n = particles.n
-    fixed = np.asarray(particles.fixed, bool).copy()
-    foot = np.flatnonzero(foot)
-    fixed[foot, 1] = False  # the footing's vertical dofs: one tied unknown
-    load = np.zeros((n, 2))
-    load[foot, 1] = -(c if c > 0 else g_ref * b) * b / foot.size
-    dead = np.zeros((n, 2))
-    dead[:, 1] = -gamma * ni.volumes
-    dead += water_dead_load(values, ni, mesh.p.T)
-    res = limit_analysis(
-        ni,
-        [mat],
-        np.zeros(n, int),
-        load,
-        dead_load=dead,
-        fixed=fixed,
-        tied=[2 * foot + 1],
-        options=solver_from(values),
-    )
-    factor = res.multiplier
-    return {
-        "q_ult": factor * (c if c > 0 else g_ref * b),
-        "bearing_factor": factor,
-        "bearing_factor_reference": ref,
-        "relative_error": None if ref is None else factor / ref - 1.0,
-        "n_particles": int(n),
-        **limit_metrics(res, ni.volumes, 1),
-    }
 
 
 def load_curve(sim: Simulation) -> list[list[float]]:

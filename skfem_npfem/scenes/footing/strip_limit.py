@@ -1,0 +1,98 @@
+"""The strip footing's collapse load as one cone program (``analysis=limit``).
+
+With a strength growing with depth (``su_gradient``) the particles carry the
+profile's factors and the program scales each point's cohesion by its own;
+the metric ``heterogeneity_factor`` is then Davis & Booker's (1973) factor
+``F = q_ult / ((2 + pi) s_u0 + k B / 4)`` of a weightless Tresca clay.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from skfem import MeshTri
+
+from ...limit.analysis import limit_analysis
+from ...materials import Material
+from ...mesh.smoothing import nodal_integration
+from ...particles import Particles
+from ..common import solver_from
+from ..limit_mode import limit_metrics
+from ..soil_profile import has_profile
+from .mesh import unit_weight
+from .strip_water import footing_gamma, limit_soil, water_dead_load
+
+__all__ = ["HETEROGENEITY_METRICS", "footing_limit", "heterogeneity_factor"]
+
+#: The metric of a footing on a soil whose strength grows with depth.
+HETEROGENEITY_METRICS = {
+    "heterogeneity_factor": "Davis & Booker's (1973) F = q_ult / ((2 + pi) c + "
+    "su_gradient B / 4) of a weightless tresca clay with su_gradient > 0 "
+    "(null otherwise): the factor on the sum of the surface strength's "
+    "Prandtl load and the gradient's",
+}
+
+
+def heterogeneity_factor(values: Mapping[str, Any], q: float) -> float | None:
+    """Davis & Booker's ``F`` of a pressure ``q`` (None where it does not apply)."""
+    if not has_profile(values) or values["layers"] is not None:
+        return None
+    if values["material"] != "tresca" or values["rho"]:
+        return None
+    k, B = values["su_gradient"], values["width"]
+    return q / ((2.0 + math.pi) * values["c"] + k * B / 4.0)
+
+
+def footing_limit(
+    values: Mapping[str, Any],
+    mesh: MeshTri,
+    mat: Material,
+    particles: Particles,
+    foot: np.ndarray,
+    ref: float | None,
+) -> dict[str, Any]:
+    """The footing's collapse load as one cone program (``analysis=limit``).
+
+    The footing is rigid: the vertical velocities of its nodes are one unknown
+    (and a rough footing's horizontal ones are zero), so the reference load --
+    ``c b`` (``gamma b^2`` for c = 0) on the half model -- needs no
+    distribution.  The soil's weight is the dead load.  The multiplier is then
+    the bearing factor ``q / c`` (``q / (gamma b)``).
+    """
+    b, gamma, g_ref = values["width"] / 2, unit_weight(values), footing_gamma(values)
+    mat, c = limit_soil(values, mat, particles.stress)
+    ni = nodal_integration(mesh, (0, 1, 2, 3) if mat.needs_zz(2) else (0, 1, 3))
+    n = particles.n
+    fixed = np.asarray(particles.fixed, bool).copy()
+    foot = np.flatnonzero(foot)
+    fixed[foot, 1] = False  # the footing's vertical dofs: one tied unknown
+    load = np.zeros((n, 2))
+    load[foot, 1] = -(c if c > 0 else g_ref * b) * b / foot.size
+    dead = np.zeros((n, 2))
+    dead[:, 1] = -gamma * ni.volumes
+    dead += water_dead_load(values, ni, mesh.p.T)
+    res = limit_analysis(
+        ni,
+        [mat],
+        np.zeros(n, int),
+        load,
+        dead_load=dead,
+        fixed=fixed,
+        tied=[2 * foot + 1],
+        options=solver_from(values),
+        strength=particles.strength,
+    )
+    factor = res.multiplier
+    q = factor * (c if c > 0 else g_ref * b)
+    return {
+        "q_ult": q,
+        "bearing_factor": factor,
+        "bearing_factor_reference": ref,
+        "relative_error": None if ref is None else factor / ref - 1.0,
+        "n_particles": int(n),
+        "heterogeneity_factor": heterogeneity_factor(values, q),
+        **limit_metrics(res, ni.volumes, 1),
+    }
