@@ -30,10 +30,12 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.spatial import cKDTree
 
 from .errors import ParameterError
 
-__all__ = ["ClayStrength", "regularised_ductility"]
+__all__ = ["ClayStrength", "nonlocal_average"]
 
 #: ``xi = SHEAR_FROM_EQUIVALENT * eps_p``: simple shear's engineering strain.
 SHEAR_FROM_EQUIVALENT = math.sqrt(3.0)
@@ -64,6 +66,11 @@ class ClayStrength:
         (0: rate independent; 0.1 is typical of clays).
     reference_rate : float
         ``g_ref > 0``, 1/s: the rate of the reference strength.
+    length : float
+        ``l >= 0``, m: the softening reads the nonlocal ``xi``, the average
+        of the particles' ``xi`` within ``l`` weighted by their masses and
+        ``(1 - r^2/l^2)^2`` (:func:`nonlocal_average`); 0: each particle's
+        own (local, and dependent on the spacing once a band forms).
 
     Examples
     --------
@@ -79,12 +86,14 @@ class ClayStrength:
     ductility: float = 10.0
     rate_parameter: float = 0.0
     reference_rate: float = 1.0
+    length: float = 0.0
 
     def __post_init__(self) -> None:
         _number("sensitivity", self.sensitivity, 1.0, True, "intact / remoulded")
         _number("ductility", self.ductility, 0.0, False, "xi_95")
         _number("rate_parameter", self.rate_parameter, 0.0, True, "mu per decade")
         _number("reference_rate", self.reference_rate, 0.0, False, "1/s")
+        _number("length", self.length, 0.0, True, "m")
 
     def softening(self, xi: np.ndarray) -> np.ndarray:
         """``1/S_t + (1 - 1/S_t) exp(-3 xi / xi_95)`` of shear strains ``xi``."""
@@ -97,29 +106,50 @@ class ClayStrength:
         g = np.maximum(np.asarray(rate, float), self.reference_rate)
         return 1.0 + self.rate_parameter * np.log10(g / self.reference_rate)
 
-    def factors(self, eps_p: np.ndarray, rate: np.ndarray | None) -> np.ndarray:
-        """The strength factor of particles with ``eps_p`` and shear rate ``rate``."""
-        f = self.softening(SHEAR_FROM_EQUIVALENT * np.asarray(eps_p, float))
+    def factors(
+        self,
+        eps_p: np.ndarray,
+        rate: np.ndarray | None,
+        x: np.ndarray | None = None,
+        weights: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """The strength factor of particles with ``eps_p`` and shear rate ``rate``.
+
+        With a ``length``, ``x`` (positions) and ``weights`` (masses) give the
+        nonlocal ``xi`` the softening reads.
+        """
+        xi = SHEAR_FROM_EQUIVALENT * np.asarray(eps_p, float)
+        if self.length > 0.0:
+            if x is None or weights is None:
+                raise ParameterError("x", None, "positions and weights with a length")
+            xi = nonlocal_average(x, xi, weights, self.length)
+        f = self.softening(xi)
         if rate is not None and self.rate_parameter > 0.0:
             f = f * self.rate_factor(rate)
         return f
 
 
-def regularised_ductility(ductility: float, band: float, spacing: float) -> float:
-    """The ductility that softens a band of width ``band`` on a lattice ``spacing``.
+def nonlocal_average(
+    x: np.ndarray, values: np.ndarray, weights: np.ndarray, length: float
+) -> np.ndarray:
+    """Average of ``values`` within ``length`` of each point, by weight.
 
-    A softening shear band localises in about one spacing, so the plastic
-    shear strain behind a slip ``delta`` is about ``delta / spacing``: the
-    same ``xi_95`` softens after a slip that shrinks with the spacing, and
-    the response depends on the lattice.  Holding the slip of 95 % loss at
-    ``xi_95 * band`` (the band width of the soil, or of the lattice the law
-    was calibrated on) gives ``xi_95 * band / spacing``.
+    ``sum_j w_j a_ij v_j / sum_j w_j a_ij`` with ``a_ij = (1 - r_ij^2 /
+    length^2)^2`` over the points ``j`` closer than ``length`` (the point
+    itself included, so every sum is positive).
 
     Examples
     --------
-    >>> regularised_ductility(10.0, 0.02, 0.01)
-    20.0
+    >>> x = np.array([[0.0, 0.0], [1.0, 0.0], [5.0, 0.0]])
+    >>> nonlocal_average(x, np.array([0.0, 3.0, 9.0]), np.ones(3), 2.0).round(4)
+    array([1.08, 1.92, 9.  ])
     """
-    _number("softening_band", band, 0.0, False, "m")
-    _number("spacing", spacing, 0.0, False, "m")
-    return ductility * band / spacing
+    _number("length", length, 0.0, False, "m")
+    x = np.asarray(x, float)
+    tree = cKDTree(x)
+    d = tree.sparse_distance_matrix(tree, length, output_type="coo_matrix")
+    n = x.shape[0]
+    # The pairs include each point with itself (r = 0, a = 1).
+    a = sp.csr_matrix(((1.0 - (d.data / length) ** 2) ** 2, (d.row, d.col)), (n, n))
+    w = np.asarray(weights, float)
+    return (a @ (w * np.asarray(values, float))) / (a @ w)

@@ -236,6 +236,8 @@ def with_method(values: Mapping[str, Any], srun: SceneRun) -> SceneRun:
             "npfem with a soil profile (su_gradient): a baseline keeps one "
             "strength and stiffness per material",
         )
+    if method is not None:  # what a baseline would refuse at its first step
+        sim.model.refuse_loads(name)
     if isinstance(method, SPFEM):
         if sim.model.mode != "dynamic":
             raise ParameterError(

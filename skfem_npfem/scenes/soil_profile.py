@@ -10,9 +10,10 @@ analysis and the factor of safety all see the same profile.
 
 ``sensitivity``, ``ductility``, ``rate_parameter`` and ``reference_rate`` are
 the clay's softening and rate law (:class:`~skfem_npfem.strength_laws.ClayStrength`),
-``softening_band`` its regularisation: the ductility is scaled by
-``softening_band / spacing`` (:func:`~skfem_npfem.strength_laws.regularised_ductility`),
-so that a band softens after the same slip on every lattice.
+``softening_length`` its regularisation: the softening reads the plastic
+shear strain averaged over that distance
+(:func:`~skfem_npfem.strength_laws.nonlocal_average`), so that a band is as
+wide on every lattice.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..particles import Particles
 from ..profiles import StrengthProfile
-from ..strength_laws import ClayStrength, regularised_ductility
+from ..strength_laws import ClayStrength
 from .params import POSITIVE, Param
 
 __all__ = [
@@ -50,7 +51,7 @@ UNIFORM_VALUES = {
     "ductility": 10.0,
     "rate_parameter": 0.0,
     "reference_rate": 3.0e-6,
-    "softening_band": None,
+    "softening_length": None,
 }
 
 #: How ``E`` follows a strength profile.
@@ -73,17 +74,18 @@ def profile_params(strength: str) -> list[Param]:
             "layers",
             None,
             "-",
-            "layered strength, a JSON list of [top, s_u] or [top, s_u, k] rows "
-            "(m below the ground, the first 0; Pa; Pa/m): s_u = s_u + k (z - top) "
-            f"down to the next top; replaces su_gradient ({strength} stays the "
-            "strength the scene's factors are over)",
+            "layered strength: a JSON list of [top, s_u] or [top, s_u, k] rows, "
+            "each layer's top (m below the ground; the first 0), its strength "
+            "there (Pa) and its increase with depth (Pa/m, default 0), down to "
+            f"the next top; replaces su_gradient ({strength} stays the strength "
+            "the scene's factors are over; default none)",
             str,
         ),
         Param(
             "stiffness_profile",
             "strength",
             "-",
-            "with su_gradient > 0: strength (E proportional to s_u(z), a "
+            "with su_gradient or layers: strength (E proportional to s_u(z), a "
             "uniform rigidity index) or uniform (E the same at every depth)",
             str,
             STIFFNESS_PROFILES,
@@ -210,23 +212,20 @@ CLAY_PARAMS = [
         **POSITIVE,
     ),
     Param(
-        "softening_band",
+        "softening_length",
         None,
         "m",
-        "regularisation: the ductility holds for a shear band this wide and is "
-        "scaled by softening_band / spacing (default none: xi_95 as given on "
-        "any lattice, so the softening depends on the spacing)",
+        "regularisation: the softening reads the plastic shear strain averaged "
+        "over this distance (nonlocal; a few spacings or more; default none: "
+        "each particle's own)",
         float,
         **POSITIVE,
     ),
 ]
 
 
-def clay_law(values: Mapping[str, Any], spacing: float) -> ClayStrength | None:
-    """The run's softening and rate law (None for an ideally plastic soil).
-
-    ``spacing`` is the lattice's near the body, where the bands form.
-    """
+def clay_law(values: Mapping[str, Any]) -> ClayStrength | None:
+    """The run's softening and rate law (None for an ideally plastic soil)."""
     if values["sensitivity"] == 1.0 and values["rate_parameter"] == 0.0:
         return None
     if values.get("material", "tresca") != "tresca":
@@ -238,12 +237,10 @@ def clay_law(values: Mapping[str, Any], spacing: float) -> ClayStrength | None:
             "left at its default unless material=tresca (the law is an "
             "undrained strength's)",
         )
-    ductility = values["ductility"]
-    if values["softening_band"] is not None:
-        ductility = regularised_ductility(ductility, values["softening_band"], spacing)
     return ClayStrength(
         sensitivity=values["sensitivity"],
-        ductility=ductility,
+        ductility=values["ductility"],
         rate_parameter=values["rate_parameter"],
         reference_rate=values["reference_rate"],
+        length=values["softening_length"] or 0.0,
     )

@@ -174,7 +174,7 @@ def step_strength(model: Model, p: Particles, active: np.ndarray) -> np.ndarray 
     if law is None:
         return None if p.strength is None else p.strength[active]
     rate = None if p.shear_rate is None else p.shear_rate[active]
-    f = law.factors(p.eps_p[active], rate)
+    f = law.factors(p.eps_p[active], rate, p.x[active], p.mass[active])
     return f if p.strength is None else p.strength[active] * f
 
 

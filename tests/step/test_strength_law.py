@@ -16,7 +16,7 @@ import pytest
 from skfem import MeshTri
 
 from skfem_npfem import Model, ParameterError, Particles, Tresca, advance
-from skfem_npfem.strength_laws import ClayStrength, regularised_ductility
+from skfem_npfem.strength_laws import ClayStrength, nonlocal_average
 
 E, NU, C = 1.0e7, 0.49, 1.0e4
 G = E / (2 * (1 + NU))
@@ -103,4 +103,21 @@ def test_law_parameters_are_checked():
             ClayStrength(**kw)
     with pytest.raises(ParameterError, match="strength_law"):
         Model(dim=2, materials=[Tresca(E, NU, c=C)], strength_law=3.0)
-    assert regularised_ductility(0.2, 0.05, 0.025) == pytest.approx(0.4)
+    with pytest.raises(ParameterError, match="length"):
+        ClayStrength(length=-1.0)
+
+
+def test_nonlocal_average_keeps_a_uniform_field_and_smooths_a_spike():
+    # A uniform field is its own average (1e-12); a spike at one point of a
+    # lattice is shared with the points within the length, the weighted sum
+    # kept where the weights are symmetric (the interior).
+    g = np.stack(np.meshgrid(np.arange(11.0), np.arange(11.0)), -1).reshape(-1, 2)
+    w = np.ones(len(g))
+    np.testing.assert_allclose(nonlocal_average(g, np.full(len(g), 3.0), w, 2.5), 3.0)
+    spike = np.zeros(len(g))
+    centre = 5 * 11 + 5
+    spike[centre] = 1.0
+    avg = nonlocal_average(g, spike, w, 2.5)
+    assert avg[centre] < 0.2
+    near = np.linalg.norm(g - g[centre], axis=1) < 2.5
+    assert np.all(avg[near] > 0) and np.all(avg[~near] == 0)

@@ -36,6 +36,13 @@ excess pore pressure at u2 dissipates: a CPTu dissipation test against Teh &
 Houlsby's (1991) ``T*_50 = 0.245``
 (:mod:`~skfem_npfem.scenes.footing.cone_dissipation`).
 
+A Tresca clay may have weight (``rho``) and a strength that grows with depth
+(``su_gradient``, ``layers``): the resistance is then read as site
+investigation reads it, ``q_net`` and ``N_kt = q_net / s_u(z)`` at the tip's
+depth (:mod:`~skfem_npfem.scenes.footing.cone_ground`); ``sensitivity`` and
+``rate_parameter`` make it soften and feel the rate
+(:mod:`~skfem_npfem.scenes.soil_profile`).
+
 Reference: Teh & Houlsby's (1991) cone factor of a smooth cone in steady
 penetration, ``N_c = (q_c - sigma_0)/s_u = 1.25 + 1.84 ln I_r``.
 """
@@ -302,7 +309,7 @@ def build(
         loads=loads,
         water=scene_water(values),
         solver=solver_from(values),
-        strength_law=clay_law(values, g["h"]),
+        strength_law=clay_law(values),
         **fidelity_from(values, 0.0),
     )
     mesher = AlphaShapeMesher(g["h"], values["alpha"], spacing=spacing, walls=[axis])

@@ -28,6 +28,12 @@ drained, the base and the rollers impermeable; the normalised velocity
 modulus) sets how far the response is from drained (small ``V``) to
 undrained (large ``V``): docs/validation/penetration_backbone.md.
 
+``su_gradient`` or ``layers`` make the strength grow with depth, and
+``sensitivity``, ``ductility``, ``rate_parameter``, ``reference_rate`` (with
+``softening_length`` as the regularisation) make it soften as the clay is
+remoulded and rise with the shear rate (:mod:`~skfem_npfem.scenes.soil_profile`;
+N-PFEM only).
+
 ``method`` runs the same scene with N-PFEM (default) or FEM-remap (P1 or P2
 elements, Gauss-point state remapped after each remesh; the footing enters
 its steps through the same stage functions); docs/validation/penetration_methods.md
@@ -319,7 +325,7 @@ def build(
         bodies=[body],
         water=scene_water(values),
         solver=solver_from(values),
-        strength_law=clay_law(values, values["spacing"]),
+        strength_law=clay_law(values),
         **fidelity_from(values, 0.0),
     )
     mesher = AlphaShapeMesher(values["spacing"], values["alpha"], spacing=spacing)

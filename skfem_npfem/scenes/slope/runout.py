@@ -21,6 +21,7 @@ from ...limit.safety import strength_reduction
 from ...limit.undrained import undrained_materials
 from ...mesh.smoothing import nodal_integration
 from ...run.simulation import Simulation
+from ...step.operators import step_strength
 from ..common import (
     solver_from,
 )
@@ -67,6 +68,8 @@ def runout_metrics(sim, state, values, h, x_toe, y_toe, x_crest, y_crest) -> dic
     x0 = p.x - p.u
     moved = np.linalg.norm(p.u, axis=1) > 0.5 * h
     above = x0[:, 1] > y_toe + 0.25 * h
+    behind = moved & (x0[:, 0] < x_crest)  # crest soil that took part
+    retro = float(x_crest - x0[behind, 0].min()) if behind.any() else 0.0
     final = p.x
     runout = float(final[above, 0].max() - x_toe) if above.any() else 0.0
     crest_now = _surface_height(final, np.array([x_crest]), h)[0]
@@ -98,6 +101,7 @@ def runout_metrics(sim, state, values, h, x_toe, y_toe, x_crest, y_crest) -> dic
         "reduction": state.get("reduction"),
         "runout": max(runout, 0.0),
         "crest_settlement": float(y_crest - crest_now),
+        "retrogression": retro,
         "mass_centre_travel": travel,
         "moved_volume": vol,
         "deposit_profile": [[float(a), float(b)] for a, b in zip(xs, ys, strict=True)],
@@ -139,7 +143,8 @@ def deposit_factor_of_safety(sim: Simulation, values: Mapping[str, Any]) -> floa
     """Factor of safety of the final deposit with the run-out's strengths.
 
     A second limit analysis, on the alpha-shape mesh of the particles at the
-    end of the run (supports as at the start); at least 1 when the deposit is
+    end of the run (supports as at the start; each particle's strength as its
+    last step had it: a profile's, softened); at least 1 when the deposit is
     statically admissible.  With water, as the slope's: the static pore
     pressure's force (drained) or the undrained strengths of the particles'
     effective stresses at the end (undrained).
@@ -164,6 +169,7 @@ def deposit_factor_of_safety(sim: Simulation, values: Mapping[str, Any]) -> floa
         load,
         fixed=fixed,
         options=solver_from(values),
+        strength=step_strength(sim.model, p, active),
     )
     return float(res.factor_of_safety)
 
@@ -200,6 +206,7 @@ def base_metrics(
         "reduction": None,
         "runout": None,
         "crest_settlement": None,
+        "retrogression": None,
         "mass_centre_travel": None,
         "moved_volume": None,
         "deposit_profile": None,

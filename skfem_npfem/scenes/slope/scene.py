@@ -30,6 +30,12 @@ Stages, in one run:
 With water (``rho`` saturated, ``c``, ``phi`` effective) the factor of safety
 adds the pore pressure's force (``drained``) or uses the undrained strengths
 of the initial effective stresses (``undrained``; :mod:`.water`).
+
+On the parametric section ``su_gradient`` or ``layers`` make ``c`` grow with
+the depth below the slope's surface (:mod:`.profile`), and ``sensitivity``,
+``ductility``, ``rate_parameter`` soften the run-out's clay as it is
+remoulded (a sensitive clay; ``retrogression`` says how far behind the crest
+the failure reached).
 """
 
 from __future__ import annotations
@@ -61,8 +67,10 @@ from ..common import (
 from ..limit_mode import LIMIT_METRICS, analysis_param
 from ..params import ANGLE, POSITIVE, Param, Values
 from ..scenery import Scenery, number, section_lines
+from ..soil_profile import CLAY_PARAMS, PROFILE_PARAMS, check_layers
 from ..water import WATER_PARAMS
 from ..wet_soil import recorded_parameters
+from .profile import check_profile
 from .runout import base_metrics, runout_metrics
 from .section import check_section, section_of, toe_and_crest
 from .seismic import KH_PARAM, SEISMIC_METRICS, check_kh
@@ -133,6 +141,8 @@ PARAMS = [
     Param("rho", 2000.0, "kg/m^3", "density (saturated with water)", float, **POSITIVE),
     KH_PARAM,
     *SURCHARGE_PARAMS,
+    *PROFILE_PARAMS,
+    *CLAY_PARAMS,
     *WATER_PARAMS,
     Param(
         "initial_stress",
@@ -207,6 +217,9 @@ METRICS = {
     "runout": "advance of the toe: farthest x of slope material above the "
     "foundation surface, minus the initial toe x, m (null without run-out)",
     "crest_settlement": "drop of the surface at the initial crest edge, m",
+    "retrogression": "how far behind the crest's edge the failure reached: "
+    "the crest edge's x less the smallest initial x of the particles that "
+    "started behind it and moved more than half a spacing, m (0: none did)",
     "mass_centre_travel": "distance travelled by the mass centre of the moved "
     "particles (displacement > spacing/2), m",
     "moved_volume": "initial volume of the moved particles, m^2 per m",
@@ -281,6 +294,8 @@ def ignored(values: dict[str, Any], given: frozenset[str]) -> None:
         )
     check_kh(values)
     check_surcharge(values)
+    check_layers(values)
+    check_profile(values)
     if not stresses:
         warn_unused(
             given,
@@ -376,6 +391,7 @@ def build(
             fixed,
             water,
             surcharge_load(pts, body.sec, values),
+            body.stiffness,
         )
         state["t_initial"] = time.perf_counter() - t0
         state["initial_stress"] = sigma
@@ -384,7 +400,7 @@ def build(
     run_out = values["runout"] and not limit_only
     particles = Particles.create(
         pts, masses, stress=sigma, fixed=fixed, material=material
-    )
+    ).replace(strength=body.strength, stiffness=body.stiffness)
     particles = wet_particles(particles, water, body.mesh.t)
     model = flow_model(values, body, state, run_out)
     source = (

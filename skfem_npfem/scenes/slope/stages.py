@@ -35,6 +35,8 @@ from ...step.program import ConeInput
 from ...water import Water, water_force
 from ..common import fidelity_from, solver_from
 from ..limit_mode import limit_metrics
+from ..soil_profile import clay_law
+from .profile import profile_factors
 from .runout import save_mechanism
 from .section import (
     _surface_height,
@@ -76,6 +78,7 @@ def initial_stress(
     fixed: np.ndarray,
     water: Water | None = None,
     loads: np.ndarray | None = None,
+    stiffness: np.ndarray | None = None,
 ) -> tuple[np.ndarray, float]:
     """Stage 1: the initial (effective) stresses and their equilibrium residual.
 
@@ -103,6 +106,8 @@ def initial_stress(
     loads : ndarray (n, 2), optional
         Dead loads beside the weight (a surcharge), N: in the gravity step
         (``k0`` ignores them).
+    stiffness : ndarray (n,), optional
+        The particles' stiffness factors in the gravity step (a profile).
 
     Returns
     -------
@@ -132,6 +137,7 @@ def initial_stress(
             fixed=fixed,
             du_prescribed=np.zeros_like(x),
             contacts=Contacts.empty(2),
+            stiffness=stiffness,
         )
         sigma = solve_step(data, solver_from(values)).sigma
     else:
@@ -160,6 +166,7 @@ def factor_of_safety(
     water: Water | None = None,
     stress: np.ndarray | None = None,
     sec: CrossSection | None = None,
+    strength: np.ndarray | None = None,
 ) -> tuple[SafetyResult, Any, list[Material]]:
     """Stage 2: strength reduction on the initial mesh (its limit analysis).
 
@@ -177,6 +184,8 @@ def factor_of_safety(
         of :func:`initial_stress`).
     sec : CrossSection, optional
         The section, whose crest carries the surcharge (default: none).
+    strength : ndarray (n,), optional
+        The particles' strength factors (a profile; default: uniform).
 
     Returns
     -------
@@ -200,7 +209,13 @@ def factor_of_safety(
         mats = undrained_materials(mats, material, stress)
     return (
         strength_reduction(
-            ni, mats, material, load, fixed=fixed, options=solver_from(values)
+            ni,
+            mats,
+            material,
+            load,
+            fixed=fixed,
+            options=solver_from(values),
+            strength=strength,
         ),
         ni,
         mats,
@@ -229,6 +244,9 @@ class SlopeBody:
         Supports: the fixed base and the side rollers.
     mats : list of Material
         The section's materials (limit analysis and initial stresses).
+    strength, stiffness : ndarray (n,) or None
+        The particles' factors of a strength growing with depth
+        (:mod:`~.profile`); None: uniform.
     """
 
     sec: CrossSection
@@ -239,6 +257,8 @@ class SlopeBody:
     mesh: MeshTri
     fixed: np.ndarray
     mats: list[Material]
+    strength: np.ndarray | None = None
+    stiffness: np.ndarray | None = None
 
 
 def slope_body(values: Mapping[str, Any]) -> SlopeBody:
@@ -261,7 +281,8 @@ def slope_body(values: Mapping[str, Any]) -> SlopeBody:
     mesh = MeshTri(np.ascontiguousarray(pts.T), np.ascontiguousarray(tri))
     fixed = supports(pts, sec)
     mats = section_materials(sec, values)
-    return SlopeBody(sec, h, pts, tri, material, mesh, fixed, mats)
+    strength, stiffness = profile_factors(values, pts)
+    return SlopeBody(sec, h, pts, tri, material, mesh, fixed, mats, strength, stiffness)
 
 
 def fos_metrics(
@@ -301,6 +322,7 @@ def fos_metrics(
             slope_water(values, body.sec),
             state.get("initial_stress"),
             body.sec,
+            body.strength,
         )
         state["t_fos"] = time.perf_counter() - t0
         state["fos"] = res
@@ -378,6 +400,7 @@ def spacing_check(
             body.fixed,
             slope_water(coarse, body.sec),
             sec=body.sec,
+            strength=body.strength,
         )
         F2: float | None = float(res.factor_of_safety)
     except (NpfemError, ValueError):
@@ -450,6 +473,7 @@ def flow_model(
         kh=model_kh(values),
         loads=surcharge_load(body.pts, body.sec, values),
         solver=solver_from(values),
+        strength_law=clay_law(values),
         **fidelity_from(values, 0.0),
     )
 

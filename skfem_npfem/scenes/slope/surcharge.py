@@ -193,6 +193,7 @@ def dead_load_multiplier(
             fixed=body.fixed,
             options=solver_from(values),
             max_multiplier=cap,
+            strength=body.strength,
         )
     except SolverError as err:
         if err.status in ("PrimalInfeasible", "AlmostPrimalInfeasible"):
