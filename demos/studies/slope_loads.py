@@ -12,7 +12,8 @@ closed form: its critical k_h at the same spacings, and the factor of safety
 at that k_h (1 if the two programs agree).  Last, a 2 m strip on the crest of
 a Tresca slope (s_u = 30 kPa, H = 5 m at 30 deg): its collapse pressure 8, 2
 and 0 m behind the crest's edge at spacings 0.5 and 0.25 m, the far one
-against Prandtl's (2 + pi) s_u.
+against Prandtl's (2 + pi) s_u; and at the edge of the same slope made next
+to weightless, at 15 and 30 deg, against the exact (2 + pi - 2 beta) s_u.
 
 Usage (from the repository root)::
 
@@ -55,6 +56,19 @@ CLAY = {
 }
 OFFSETS = (8.0, 2.0, 0.0)
 STRIP_SPACINGS = (0.5, 0.25)
+#: The strip at the crest's edge of a (next to) weightless slope at these
+#: angles: gamma H / s_u = 2e-3, against the exact (2 + pi - 2 beta) s_u.
+EDGE_ANGLES = (15.0, 30.0)
+LIGHT = {**CLAY, "rho": 1.0, "surcharge_offset": 0.0}
+
+
+def edge_factor(beta: float) -> float:
+    """The weightless Tresca collapse pressure / s_u of a strip at the edge.
+
+    Prandtl's field with its fan narrowed from pi/2 to pi/2 - beta by the
+    slope's face: ``2 + pi - 2 beta``.
+    """
+    return 2.0 + math.pi - 2.0 * math.radians(beta)
 
 
 def infinite_slope_F(kh: float) -> float:
@@ -110,7 +124,19 @@ def strip_row(h: float) -> dict:
     return {"spacing": h, "collapse_over_su": q, "wall_s": time.perf_counter() - t0}
 
 
-def page(sand: list[dict], cphi: list[dict], strips: list[dict]) -> str:
+def edge_row(h: float) -> dict:
+    """The light slope's edge strip / s_u at each angle, spacing ``h``."""
+    t0 = time.perf_counter()
+    q = [
+        metrics({**LIGHT, "spacing": h, "angle": b})["surcharge_collapse"] / CLAY["c"]
+        for b in EDGE_ANGLES
+    ]
+    return {"spacing": h, "collapse_over_su": q, "wall_s": time.perf_counter() - t0}
+
+
+def page(
+    sand: list[dict], cphi: list[dict], strips: list[dict], edges: list[dict]
+) -> str:
     """The markdown page."""
     kc = math.tan(math.radians(PHI - BETA))
     amplification = math.sin(math.radians(2 * PHI)) / math.sin(
@@ -191,6 +217,30 @@ def page(sand: list[dict], cphi: list[dict], strips: list[dict]) -> str:
             + " | ".join(f"{v:.3f}" for v in q)
             + f" | {q[0] / prandtl - 1:+.2%} | {r['wall_s']:.0f} |"
         )
+    lines += [
+        "",
+        "The same strip at the crest's edge (0 m behind) of the same slope made "
+        "next to weightless (rho = 1 kg/m^3: gamma H / s_u = 2e-3) at two "
+        "angles.  Reference: the exact collapse pressure of a weightless Tresca "
+        "soil, Prandtl's field with its fan narrowed by the face's angle beta, "
+        "(2 + pi - 2 beta) s_u (the weightless limit of the charts of footings "
+        "near slopes).",
+        "",
+        "| spacing | "
+        + " | ".join(
+            f"beta = {b:g} deg (exact {edge_factor(b):.4f})" for b in EDGE_ANGLES
+        )
+        + " | wall (s) |",
+        "|---" * (len(EDGE_ANGLES) + 2) + "|",
+    ]
+    for r in edges:
+        cells = [
+            f"{q:.4f} ({q / edge_factor(b) - 1:+.2%})"
+            for q, b in zip(r["collapse_over_su"], EDGE_ANGLES, strict=True)
+        ]
+        lines.append(
+            f"| {r['spacing']:g} m | " + " | ".join(cells) + f" | {r['wall_s']:.0f} |"
+        )
     return "\n".join(lines).replace("%", " %") + "\n"
 
 
@@ -202,10 +252,12 @@ def main() -> None:
     sand = [sand_row(h) for h in SPACINGS]
     cphi = [cphi_row(h) for h in SPACINGS]
     strips = [strip_row(h) for h in STRIP_SPACINGS]
-    text = page(sand, cphi, strips)
+    edges = [edge_row(h) for h in STRIP_SPACINGS]
+    text = page(sand, cphi, strips, edges)
     print(text)
     args.out.mkdir(parents=True, exist_ok=True)
-    report = {"sand": sand, "c_phi": cphi, "strip": strips, "beta": BETA, "phi": PHI}
+    report = {"sand": sand, "c_phi": cphi, "strip": strips, "edge": edges}
+    report |= {"beta": BETA, "phi": PHI, "edge_angles": list(EDGE_ANGLES)}
     (args.out / "slope_loads.json").write_text(json.dumps(report, indent=1) + "\n")
     (args.out / "slope_loads.md").write_text(text)
 

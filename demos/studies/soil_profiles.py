@@ -19,13 +19,19 @@ Four measurements, each against an independent reference:
    clay's beside it.
 4. **Rate.** The same footing (B/10, to w = 0.3 B) with mu = 0.1: ten times
    the speed with ten times the reference rate, and ten times the speed alone.
+5. **A heavy clay under the pushed footing** (B/10, to w = 0.3 B, gamma B /
+   s_u = 1 and 2.9): the net resistance ``(q - gamma w) / s_u`` against the
+   weightless clay's ``q / s_u`` (the weight does no other net work on an
+   isochoric mechanism).
 
 Usage (from the repository root)::
 
     python demos/studies/soil_profiles.py [--out docs/validation] [--quick]
+        [--parts davis_booker cone softening rate heavy]
 
 ``--quick`` leaves out the B/40 softening runs and the cone (minutes instead
-of about half an hour).  Writes ``<out>/soil_profiles.json`` and
+of about half an hour); ``--parts`` runs only those parts and takes the others
+from the report already in ``--out``.  Writes ``<out>/soil_profiles.json`` and
 ``<out>/soil_profiles.inc`` (the tables of docs/validation/soil_profiles.md).
 """
 
@@ -55,6 +61,9 @@ CONE_GROUND = {"rho": 1800.0, "su_gradient": 2.0e4}
 SOFT = {"E": 1.0e6, "penetration": 0.5, "sensitivity": 3.0, "ductility": 10.0}
 SOFT_LENGTH = 0.2
 RATE = {"E": 1.0e6, "penetration": 0.3, "spacing": 0.1, "rate_parameter": 0.1}
+HEAVY = {"E": 1.0e6, "penetration": 0.3, "spacing": 0.1}
+DENSITIES = (100.0, 300.0)
+PARTS = ("davis_booker", "cone", "softening", "rate", "heavy")
 
 
 def run(scene: str, over: dict) -> dict:
@@ -136,6 +145,26 @@ def rate() -> dict:
     return out
 
 
+def heavy() -> list[dict]:
+    """The heavy clay's net curve against the weightless clay's, per density."""
+    light = np.asarray(run("footing-penetration", HEAVY)["curve"])
+    late = light[:, 0] >= 0.1
+    rows = []
+    for rho in DENSITIES:
+        m = run("footing-penetration", {**HEAVY, "rho": rho})
+        net, raw = np.asarray(m["net_curve"]), np.asarray(m["curve"])
+        rows.append(
+            {
+                "rho": rho,
+                "gamma_B_over_su": rho * 9.81 * 1.0 / 1.0e3,
+                "light": float(light[late, 1].mean()),
+                "net": float(net[late, 1].mean()),
+                "raw": float(raw[late, 1].mean()),
+            }
+        )
+    return rows
+
+
 def tables(report: dict) -> str:
     """The markdown tables of the page."""
     db = report["davis_booker"]
@@ -193,6 +222,18 @@ def tables(report: dict) -> str:
         "(largest relative difference of a step) |",
         f"| 10 x speed alone vs 1 x | {lo:+.1%} to {hi:+.1%}, mean {mean:+.1%} |",
     ]
+    if "heavy" in report:
+        lines += [
+            "",
+            "| gamma B / s_u | weightless q/s_u | heavy (q - gamma w)/s_u | "
+            "heavy q/s_u |",
+            "|---|---|---|---|",
+        ]
+        for r in report["heavy"]:
+            lines.append(
+                f"| {r['gamma_B_over_su']:.2f} | {r['light']:.3f} | {r['net']:.3f} "
+                f"({r['net'] / r['light'] - 1:+.1%}) | {r['raw']:.3f} |"
+            )
     return "\n".join(lines).replace("%", " %") + "\n"
 
 
@@ -201,12 +242,23 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", type=Path, default=VALIDATION)
     parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--parts", nargs="*", choices=PARTS, default=list(PARTS))
     args = parser.parse_args()
-    report = {"davis_booker": davis_booker()}
-    if not args.quick:
-        report["cone"] = cone()
-    report["softening"] = softening((0.1, 0.05) if args.quick else (0.1, 0.05, 0.025))
-    report["rate"] = rate()
+    saved = args.out / "soil_profiles.json"
+    report = json.loads(saved.read_text()) if saved.exists() else {}
+    parts = {
+        "davis_booker": davis_booker,
+        "cone": cone,
+        "softening": lambda: softening(
+            (0.1, 0.05) if args.quick else (0.1, 0.05, 0.025)
+        ),
+        "rate": rate,
+        "heavy": heavy,
+    }
+    for name in args.parts:
+        if name == "cone" and args.quick:
+            continue
+        report[name] = parts[name]()
     text = tables(report)
     print(text)
     args.out.mkdir(parents=True, exist_ok=True)

@@ -130,7 +130,10 @@ def strength_profile(values: Mapping[str, Any], s0: float) -> StrengthProfile:
         rows = json.loads(text)
     except json.JSONDecodeError as err:
         raise ParameterError("layers", text, f"JSON rows ({err.msg})") from None
-    return StrengthProfile.from_rows(rows)
+    try:
+        return StrengthProfile.from_rows(rows)
+    except ParameterError as err:  # name the text as it was given
+        raise ParameterError("layers", text, err.allowed) from None
 
 
 def with_profile(

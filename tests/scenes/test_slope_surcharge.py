@@ -19,6 +19,7 @@ import math
 import numpy as np
 import pytest
 from slope_loads import CLAY as STRIP_SLOPE  # demos/studies (tests/conftest.py)
+from slope_loads import LIGHT, edge_factor
 
 import skfem_npfem as npfem
 from skfem_npfem import ParameterError
@@ -170,3 +171,14 @@ def test_a_deposit_without_a_factor_of_safety_keeps_the_runs_metrics(monkeypatch
     assert m["deposit_factor_of_safety"] is None
     assert any("deposit" in w for w in m["warnings"])
     assert m["runout"] > 0 and m["at_rest"]
+
+
+@pytest.mark.parametrize("beta", [15.0, 30.0])
+def test_a_strip_at_the_edge_of_a_weightless_slope(beta):
+    # The exact collapse pressure of a weightless Tresca soil under a strip
+    # at the crest's edge: Prandtl's field with its fan narrowed by the
+    # face's angle, (2 + pi - 2 beta) s_u.  gamma H / s_u = 2e-3 here.
+    # Measured at 0.5 m (B/4): +1.3 % (15 deg), +3.4 % (30 deg); at 0.25 m
+    # -1.0 % and +0.1 % (docs/validation/slope_loads.md).
+    m = npfem.run_scene("slope", {**LIGHT, "spacing": 0.5, "angle": beta})["metrics"]
+    assert m["surcharge_collapse"] / 3.0e4 == pytest.approx(edge_factor(beta), rel=0.05)

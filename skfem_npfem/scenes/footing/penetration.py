@@ -48,16 +48,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from skfem import MeshTri
 
 from ...boundary import RigidBody
 from ...constants import GRAVITY
 from ...errors import ParameterError
 from ...laws import prandtl_nc
-from ...materials import Material, MohrCoulomb, Tresca
-from ...mesh.smoothing import nodal_integration
 from ...mesh.sources import AlphaShapeMesher
-from ...particles import Particles
 from ...run.simulation import Simulation
 from ...step.model import Model
 from ..base import Scene, SceneRun
@@ -74,19 +70,27 @@ from ..params import POSITIVE, Param, Values
 from ..scenery import Scenery, box, number
 from ..soil_profile import CLAY_PARAMS, clay_law, profile_params, with_profile
 from ..water import is_wet, scene_water, water_params
+from .cone_ground import check_ground
 from .penetration_common import (
     ADHESION,
     axis_count,
     derive_footing,
-    graded_axis,
     interface_adhesion,
-    lattice_gap,
     lattice_params,
     locking_warnings,
     penetration_warnings,
     refuse_penetration,
     running_drops,
     step_dt,
+)
+from .penetration_ground import (
+    NET_METRICS,
+    WEIGHT,
+    footing_soil,
+    geometry,
+    net_curve,
+    penetration_curve,
+    soil,
 )
 from .penetration_soil import (
     WATER_METRICS,
@@ -178,6 +182,7 @@ PARAMS = [
         "has no rigid-body contact); docs/validation/penetration_methods.md "
         "compares npfem and fem-remap here",
     ),
+    WEIGHT,
     *profile_params("su"),
     *CLAY_PARAMS,
     *water_params(coupled=True),
@@ -206,6 +211,7 @@ METRICS = {
     "warnings": "what to look at: a particle deeper than half a spacing inside "
     "the footing; method=fem-remap with P1 elements (they lock)",
     "curve": "list of [w/B, q/s_u] per step",
+    **NET_METRICS,
     **WATER_METRICS,
     "consolidation_coefficient": "drainage=coupled: c_v = k M / gamma_w "
     "(M = E (1 - nu)/((1 + nu)(1 - 2 nu)), the skeleton's constrained "
@@ -231,20 +237,9 @@ def consolidation_coefficient(values: Mapping[str, Any]) -> float:
     return values["k"] * M / (values["rho_w"] * GRAVITY)
 
 
-def _geometry(values: Mapping[str, Any]) -> tuple[float, float, float, float]:
-    """``(B, half width of the soil, depth of the soil, final penetration)``."""
-    B, w = values["width"], values["penetration"]
-    return (
-        B,
-        values["domain_width"] * B / 2,
-        values["domain_depth"] * B,
-        B if w is None else w,
-    )
-
-
 def check(values: Mapping[str, Any]) -> float:
     """Refuse bad combinations before anything is built; return ``dt``."""
-    B, half, depth, w = _geometry(values)
+    B, half, depth, w = geometry(values)
     h = values["spacing"]
     if h > B / 4:
         raise ParameterError("spacing", h, f"at most B/4 = {B / 4:g} m")
@@ -268,26 +263,9 @@ def check(values: Mapping[str, Any]) -> float:
     return dt
 
 
-def soil(values: Mapping[str, Any]) -> tuple[Particles, np.ndarray, MeshTri]:
-    """The graded lattice as particles, and each particle's spacing."""
-    B, half, depth, w = _geometry(values)
-    h, ratio = values["spacing"], values["grading"]
-    xs = graded_axis(B / 2 + B, h, half, ratio)
-    ys = depth - graded_axis(w + B, h, depth, ratio)[::-1]
-    mesh = MeshTri.init_tensor(xs, ys)
-    x = mesh.p.T.copy()
-    fixed = np.zeros_like(x, dtype=bool)
-    fixed[np.isclose(x[:, 1], 0.0)] = True
-    fixed[np.isclose(x[:, 0], 0.0) | np.isclose(x[:, 0], half), 0] = True
-    volumes = nodal_integration(mesh).volumes
-    # Weightless soil: tiny masses (static steps do not use them).
-    p = Particles.create(x, 1e-12 * volumes, fixed=fixed, n_walls=1)
-    return p, lattice_gap(x, xs, ys), mesh
-
-
 def footing_body(values: Mapping[str, Any]) -> RigidBody:
     """The footing at time 0: resting on the surface, moving down at ``speed``."""
-    B, _, depth, w = _geometry(values)
+    B, _, depth, w = geometry(values)
     height = w + B
     return RigidBody(
         [
@@ -308,19 +286,23 @@ def build(
 ) -> SceneRun:
     """Build the footing-penetration simulation."""
     dt = check(values)
+    check_ground(values)
     locking = locking_warnings(values)  # before the run, and in the metrics
-    B, _, _, w = _geometry(values)
+    B, _, _, w = geometry(values)
     su = values["su"]
     particles, spacing, _ = soil(values)
     particles = with_pore_pressure(particles, values)
-    depth = _geometry(values)[2] - particles.x[:, 1]
+    depth = geometry(values)[2] - particles.x[:, 1]
     particles = with_profile(values, particles, depth, su, name="su")
     body = footing_body(values)
     model = Model(
         dim=2,
         materials=[footing_soil(values)],
-        # Darcy's law needs gamma_w = rho_w g; the particles' weight is nil.
-        gravity=GRAVITY if values["drainage"] == "coupled" else 0.0,
+        # Darcy's law needs gamma_w = rho_w g; a weightless soil's particles
+        # have (next to) no mass.
+        gravity=GRAVITY
+        if values["drainage"] == "coupled" or values["rho"] > 0
+        else 0.0,
         mode="static",
         bodies=[body],
         water=scene_water(values),
@@ -369,6 +351,7 @@ def build(
             "max_heave": heave,
             "warnings": notes,
             "curve": curve,
+            "net_curve": net_curve(curve, values),
             "n_particles": int(particles.n),
         }
         if values["drainage"] == "coupled":
@@ -378,23 +361,6 @@ def build(
         return {**out, **pore_metrics(sim_.particles, values)}
 
     return with_method(values, SceneRun(sim, {"t_end": t_end}, metrics))
-
-
-def footing_soil(values: Mapping[str, Any]) -> Material:
-    """Tresca of strength ``su``, or the effective-stress Mohr-Coulomb clay."""
-    E, nu = values["E"], values["nu"]
-    if values["material"] == "tresca":
-        return Tresca(E, nu, 0.0, c=values["su"])
-    return MohrCoulomb(E, nu, 0.0, c=values["c"], phi=values["phi"], psi=values["psi"])
-
-
-def penetration_curve(records, B: float, su: float) -> list[list[float]]:
-    """``[w/B, q/s_u]`` of every step (half model: q = force / (B/2))."""
-    return [
-        [-r.extra["footing_y"] / B, r.extra["footing_force_y"] / (B / 2) / su]
-        for r in records
-        if "footing_force_y" in r.extra
-    ]
 
 
 def _window(
