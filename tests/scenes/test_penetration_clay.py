@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from skfem_npfem import ParameterError
+from skfem_npfem.io import checkpoint_path
 from skfem_npfem.scenes import get_scene, run_scene
 
 SCENE = "footing-penetration"
@@ -80,3 +81,32 @@ def test_a_heavy_clay_adds_the_weight_of_the_displaced_soil_only():
     assert net[late, 1].mean() == pytest.approx(c0[late, 1].mean(), rel=0.03)
     assert raw[late, 1].mean() > 1.05 * c0[late, 1].mean()
     np.testing.assert_allclose(np.array(light["net_curve"]), c0, rtol=1e-12)
+
+
+def test_a_softening_rate_dependent_run_resumes_to_the_bit(tmp_path):
+    # The law reads each particle's plastic strain and last rate: both are in
+    # the checkpoint, so a run resumed after two steps repeats the
+    # uninterrupted one exactly (every record and every particle array).
+    sc = get_scene(SCENE)
+    law = {"sensitivity": 3.0, "ductility": 2.0, "rate_parameter": 0.1}
+    values = sc.resolve({**BASE, **law, "rho": 100.0, "su_gradient": 500.0})
+
+    def build(folder=None):
+        sim = sc.build(values).simulation
+        sim.progress = False
+        if folder is not None:
+            sim.checkpoint_dir, sim.checkpoint_every = folder, 2
+        return sim
+
+    first = build(tmp_path)
+    first.run(steps=2)
+    resumed = build()
+    resumed.restore(checkpoint_path(tmp_path, 2))
+    resumed.run(steps=2)
+    clean = build()
+    clean.run(steps=4)
+    assert clean.particles.shear_rate is not None
+    assert clean.particles.strength is not None
+    assert [r.extra for r in resumed.records] == [r.extra for r in clean.records]
+    for name, arr in clean.particles.arrays().items():
+        np.testing.assert_array_equal(resumed.particles.arrays()[name], arr, name)
