@@ -13,7 +13,8 @@ at that k_h (1 if the two programs agree).  Last, a 2 m strip on the crest of
 a Tresca slope (s_u = 30 kPa, H = 5 m at 30 deg): its collapse pressure 8, 2
 and 0 m behind the crest's edge at spacings 0.5 and 0.25 m, the far one
 against Prandtl's (2 + pi) s_u; and at the edge of the same slope made next
-to weightless, at 15 and 30 deg, against the exact (2 + pi - 2 beta) s_u.
+to weightless, at 15 and 30 deg, against the exact (2 + pi - 2 beta) s_u, as
+a flexible strip and (30 deg) as a rigid smooth and rough footing.
 
 Usage (from the repository root)::
 
@@ -124,6 +125,15 @@ def strip_row(h: float) -> dict:
     return {"spacing": h, "collapse_over_su": q, "wall_s": time.perf_counter() - t0}
 
 
+def rough_edge_factor(beta: float) -> float:
+    """An upper bound of a rough rigid strip at the edge / s_u (weightless).
+
+    The footing's wedge moves straight down and pushes Prandtl's fans on both
+    sides, the one toward the slope narrowed by ``beta``: ``2 + pi - beta``.
+    """
+    return 2.0 + math.pi - math.radians(beta)
+
+
 def edge_row(h: float) -> dict:
     """The light slope's edge strip / s_u at each angle, spacing ``h``."""
     t0 = time.perf_counter()
@@ -134,8 +144,30 @@ def edge_row(h: float) -> dict:
     return {"spacing": h, "collapse_over_su": q, "wall_s": time.perf_counter() - t0}
 
 
+#: The strip at the 30 deg edge as a rigid footing, against the flexible one.
+FOOTING_KINDS = ("flexible", "smooth", "rough")
+RIGID_SPACINGS = (0.5, 0.25, 0.125)
+
+
+def rigid_row(h: float) -> dict:
+    """The 30 deg edge strip / s_u as each kind of footing, spacing ``h``."""
+    t0 = time.perf_counter()
+    q = [
+        metrics({**LIGHT, "spacing": h, "angle": 30.0, "surcharge_footing": kind})[
+            "surcharge_collapse"
+        ]
+        / CLAY["c"]
+        for kind in FOOTING_KINDS
+    ]
+    return {"spacing": h, "collapse_over_su": q, "wall_s": time.perf_counter() - t0}
+
+
 def page(
-    sand: list[dict], cphi: list[dict], strips: list[dict], edges: list[dict]
+    sand: list[dict],
+    cphi: list[dict],
+    strips: list[dict],
+    edges: list[dict],
+    rigid: list[dict],
 ) -> str:
     """The markdown page."""
     kc = math.tan(math.radians(PHI - BETA))
@@ -241,6 +273,33 @@ def page(
         lines.append(
             f"| {r['spacing']:g} m | " + " | ".join(cells) + f" | {r['wall_s']:.0f} |"
         )
+    exact, rough = edge_factor(30.0), rough_edge_factor(30.0)
+    lines += [
+        "",
+        "The 30 deg edge strip as a rigid footing (`surcharge_footing`: its "
+        "particles move down as one, smooth, or also held horizontally, rough) "
+        "beside the flexible strip, over s_u.  The smooth footing has the "
+        f"flexible strip's exact load, {exact:.4f}.  A rough one cannot slide "
+        "toward the slope: its wedge moves straight down and pushes the soil "
+        "on both sides, Prandtl's two fans, one narrowed by beta, which gives "
+        f"the upper bound 2 + pi - beta = {rough:.4f}; the rough column is "
+        "against that bound.  A rigid footing's edges concentrate the shear in "
+        "the elements next to them, so both converge from above and more "
+        "slowly than the uniform pressure.",
+        "",
+        "| spacing | flexible (vs exact) | smooth (vs exact) | rough (vs bound) | "
+        "wall (s) |",
+        "|---" * (len(FOOTING_KINDS) + 2) + "|",
+    ]
+    for r in rigid:
+        refs = (exact, exact, rough)
+        cells = [
+            f"{q:.4f} ({q / ref - 1:+.2%})"
+            for q, ref in zip(r["collapse_over_su"], refs, strict=True)
+        ]
+        lines.append(
+            f"| {r['spacing']:g} m | " + " | ".join(cells) + f" | {r['wall_s']:.0f} |"
+        )
     return "\n".join(lines).replace("%", " %") + "\n"
 
 
@@ -253,10 +312,12 @@ def main() -> None:
     cphi = [cphi_row(h) for h in SPACINGS]
     strips = [strip_row(h) for h in STRIP_SPACINGS]
     edges = [edge_row(h) for h in STRIP_SPACINGS]
-    text = page(sand, cphi, strips, edges)
+    rigid = [rigid_row(h) for h in RIGID_SPACINGS]
+    text = page(sand, cphi, strips, edges, rigid)
     print(text)
     args.out.mkdir(parents=True, exist_ok=True)
     report = {"sand": sand, "c_phi": cphi, "strip": strips, "edge": edges}
+    report["rigid"] = rigid
     report |= {"beta": BETA, "phi": PHI, "edge_angles": list(EDGE_ANGLES)}
     (args.out / "slope_loads.json").write_text(json.dumps(report, indent=1) + "\n")
     (args.out / "slope_loads.md").write_text(text)

@@ -182,3 +182,31 @@ def test_a_strip_at_the_edge_of_a_weightless_slope(beta):
     # -1.0 % and +0.1 % (docs/validation/slope_loads.md).
     m = npfem.run_scene("slope", {**LIGHT, "spacing": 0.5, "angle": beta})["metrics"]
     assert m["surcharge_collapse"] / 3.0e4 == pytest.approx(edge_factor(beta), rel=0.05)
+
+
+def test_a_rigid_footing_at_the_edge_carries_at_least_the_flexible_strip():
+    # A rigid footing adds a kinematic constraint to the uniform pressure's
+    # mechanisms: at one spacing its collapse load is above the flexible
+    # strip's, and the rough one's (held sideways too) above the smooth
+    # one's.  The smooth one converges from above to the flexible strip's
+    # exact (2 + pi - 2 beta) s_u (measured at 30 deg: +13, +6.2, +3.0 % at
+    # 0.5, 0.25 and 0.125 m); the rough one to about the two-fan bound
+    # (2 + pi - beta) s_u (+9.0, +2.7, -0.2 %; docs/validation/slope_loads.md).
+    over = {**LIGHT, "spacing": 0.5, "angle": 30.0}
+    q = {
+        kind: npfem.run_scene("slope", {**over, "surcharge_footing": kind})["metrics"][
+            "surcharge_collapse"
+        ]
+        for kind in ("flexible", "smooth", "rough")
+    }
+    assert q["flexible"] <= q["smooth"] * (1 + 1e-6)
+    assert q["smooth"] <= q["rough"] * (1 + 1e-6)
+    assert q["smooth"] / 3.0e4 == pytest.approx(edge_factor(30.0), rel=0.15)
+
+
+@pytest.mark.slow
+def test_a_rigid_smooth_footing_at_the_edge_converges_to_the_exact_load():
+    # 0.125 m (B/16): measured +3.0 % (about two minutes).
+    over = {**LIGHT, "spacing": 0.125, "angle": 30.0, "surcharge_footing": "smooth"}
+    m = npfem.run_scene("slope", over)["metrics"]
+    assert m["surcharge_collapse"] / 3.0e4 == pytest.approx(edge_factor(30.0), rel=0.05)

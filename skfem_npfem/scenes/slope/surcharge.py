@@ -8,7 +8,10 @@ with the consistent nodal forces of the pressure
 stresses (``initial_stress=gravity``), in the factor of safety and the run-out;
 with ``analysis=limit`` the strip's collapse pressure
 (:func:`surcharge_collapse`) is one more limit analysis, gravity (and a
-constant ``kh``) held as the dead load.
+constant ``kh``) held as the dead load.  ``surcharge_footing`` makes the
+strip a rigid footing in that analysis: its surface particles move down as
+one (``smooth``), and do not slide (``rough``); the collapse pressure is then
+the footing's bearing capacity near the slope.
 """
 
 from __future__ import annotations
@@ -39,6 +42,9 @@ __all__ = [
     "surcharge_load",
 ]
 
+#: What the strip is in its collapse analysis.
+FOOTINGS = ("flexible", "smooth", "rough")
+
 SURCHARGE_PARAMS = [
     Param(
         "surcharge",
@@ -66,6 +72,16 @@ SURCHARGE_PARAMS = [
         float,
         lo=0,
     ),
+    Param(
+        "surcharge_footing",
+        "flexible",
+        "-",
+        "the strip in the collapse analysis: flexible (a uniform pressure), or "
+        "a rigid footing, smooth (its particles move down as one) or rough "
+        "(and do not slide)",
+        str,
+        FOOTINGS,
+    ),
 ]
 
 SURCHARGE_METRICS = {
@@ -73,7 +89,8 @@ SURCHARGE_METRICS = {
     "the strip at which the slope collapses with its strengths unreduced, Pa "
     "(one more limit analysis: gravity and a constant kh the dead load, capped "
     "at 1e3 times the largest cohesion or weight of the section's height); "
-    "null without a strip or when the slope fails without it",
+    "null without a strip or when the slope fails without it; with "
+    "surcharge_footing smooth or rough, a rigid footing's bearing capacity",
 }
 
 
@@ -164,7 +181,17 @@ def surcharge_collapse(
     weight = GRAVITY * depth * max(m.rho for m in mats)
     scale = max(max(getattr(m, "c", 0.0) for m in mats), weight)
     cap = CAP * max(scale, 1.0)
-    return dead_load_multiplier(values, body, mats, ni, unit, dead, cap)
+    kind = values["surcharge_footing"]
+    if kind == "flexible":
+        return dead_load_multiplier(values, body, mats, ni, unit, dead, cap)
+    # A rigid footing: the strip's vertical dofs one unknown (the load's sum
+    # is what acts on it), its horizontal ones held when it is rough.
+    on = np.flatnonzero(strip(body.pts, body.sec, values))
+    fixed = np.asarray(body.fixed, bool).copy()
+    if kind == "rough":
+        fixed[on, 0] = True
+    rigid = {"tied": [2 * on + 1], "fixed": fixed}
+    return dead_load_multiplier(values, body, mats, ni, unit, dead, cap, **rigid)
 
 
 def dead_load_multiplier(
@@ -175,13 +202,15 @@ def dead_load_multiplier(
     load: np.ndarray,
     dead: np.ndarray,
     cap: float,
+    tied: list[np.ndarray] | None = None,
+    fixed: np.ndarray | None = None,
 ) -> float | None:
     """The collapse multiplier of ``load`` with ``dead`` held, on the slope.
 
     One limit analysis on the body's initial mesh (``ni``: its strain
-    operator; ``cap`` bounds the
-    multiplier); None when ``dead`` alone brings the slope down (the program
-    is infeasible).
+    operator; ``cap`` bounds the multiplier; ``tied`` dofs move as one,
+    ``fixed`` replaces the body's supports); None when ``dead`` alone brings
+    the slope down (the program is infeasible).
     """
     try:
         res = limit_analysis(
@@ -190,7 +219,8 @@ def dead_load_multiplier(
             body.material,
             load,
             dead_load=dead,
-            fixed=body.fixed,
+            fixed=body.fixed if fixed is None else fixed,
+            tied=tied,
             options=solver_from(values),
             max_multiplier=cap,
             strength=body.strength,
