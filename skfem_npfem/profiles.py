@@ -63,18 +63,7 @@ def linear_strength(depth: np.ndarray, s0: float, gradient: float) -> np.ndarray
     >>> linear_strength([0.0, 1.0, 2.0, -0.5], 1e3, 2e3)
     array([1., 3., 5., 1.])
     """
-    if not (isinstance(gradient, int | float) and math.isfinite(gradient)) or (
-        gradient < 0
-    ):
-        raise ParameterError("su_gradient", gradient, "a finite increase >= 0 (Pa/m)")
-    if not s0 > 0:
-        raise ParameterError(
-            "su",
-            s0,
-            "a strength at the ground > 0 (Pa): the profile s_u0 + k z scales it",
-        )
-    z = np.maximum(np.asarray(depth, float), 0.0)
-    return 1.0 + (gradient / s0) * z
+    return StrengthProfile.linear(s0, gradient).at(depth) / s0
 
 
 def strength_factors(strength: np.ndarray, n: int) -> np.ndarray:
@@ -153,8 +142,25 @@ class StrengthProfile:
 
     @classmethod
     def linear(cls, s0: float, gradient: float) -> StrengthProfile:
-        """One layer from the ground: ``s0 + gradient z``."""
-        linear_strength(np.zeros(1), s0, gradient)  # the checks
+        """One layer from the ground: ``s0 + gradient z``.
+
+        Raises
+        ------
+        ParameterError
+            If ``s0 <= 0`` (no strength at the ground) or ``gradient`` is
+            negative or not finite.
+        """
+        finite = isinstance(gradient, int | float) and math.isfinite(gradient)
+        if not finite or gradient < 0:
+            raise ParameterError(
+                "su_gradient", gradient, "a finite increase >= 0 (Pa/m)"
+            )
+        if not s0 > 0:
+            raise ParameterError(
+                "su",
+                s0,
+                "a strength at the ground > 0 (Pa): the profile s_u0 + k z scales it",
+            )
         return cls((0.0,), (float(s0),), (float(gradient),))
 
     @classmethod

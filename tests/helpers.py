@@ -68,3 +68,28 @@ def assert_exact_geostatic_step(data: ConeInput) -> None:
     sol = solve_step(data)
     assert np.abs(sol.du).max() < 1e-8 * 2e-3
     assert np.abs(sol.sigma - data.sigma_n).max() < 1e-6 * RHO * GRAV
+
+
+def assert_resume_repeats(build, folder, steps: int = 2):
+    """A run resumed from its checkpoint after ``steps`` repeats the clean one.
+
+    ``build(folder)`` returns a fresh simulation, checkpointing every
+    ``steps`` steps into ``folder`` (``build(None)``: none).  The first run
+    stops after ``steps``; a second, restored from that checkpoint, runs
+    ``steps`` more; a third runs ``2 steps`` uninterrupted.  Every record's
+    ``extra`` and every particle array must agree to the bit.  Returns the
+    uninterrupted simulation.
+    """
+    from skfem_npfem.io import checkpoint_path
+
+    first = build(folder)
+    first.run(steps=steps)
+    resumed = build(None)
+    resumed.restore(checkpoint_path(folder, steps))
+    resumed.run(steps=steps)
+    clean = build(None)
+    clean.run(steps=2 * steps)
+    assert [r.extra for r in resumed.records] == [r.extra for r in clean.records]
+    for name, arr in clean.particles.arrays().items():
+        np.testing.assert_array_equal(resumed.particles.arrays()[name], arr, name)
+    return clean

@@ -37,6 +37,7 @@ __all__ = [
     "check_layers",
     "clay_law",
     "has_profile",
+    "profile_factors",
     "strength_profile",
     "with_profile",
 ]
@@ -136,6 +137,41 @@ def strength_profile(values: Mapping[str, Any], s0: float) -> StrengthProfile:
         raise ParameterError("layers", text, err.allowed) from None
 
 
+def profile_factors(
+    values: Mapping[str, Any], depth: np.ndarray, s0: float, name: str = "c"
+) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Strength and stiffness factors at ``depth`` (None, None: uniform).
+
+    Parameters
+    ----------
+    values : mapping
+        The run's parameters (``su_gradient``, ``layers``,
+        ``stiffness_profile``).
+    depth : ndarray (N,)
+        Depth of each particle below the ground, m.
+    s0 : float
+        The strength at the ground, Pa (the scene's ``name`` parameter): the
+        factors are ``s_u(z) / s0``.
+    name : str
+        The scene's strength parameter, for the error of ``s0 <= 0``.
+
+    Raises
+    ------
+    ParameterError
+        A profile with no strength at the ground to scale.
+    """
+    if not has_profile(values):
+        return None, None
+    if not s0 > 0:
+        raise ParameterError(
+            name,
+            s0,
+            f"> 0 with su_gradient or layers (the factors are s_u(z) / {name})",
+        )
+    f = strength_profile(values, s0).at(depth) / s0
+    return f, (f.copy() if values["stiffness_profile"] == "strength" else None)
+
+
 def with_profile(
     values: Mapping[str, Any],
     particles: Particles,
@@ -145,34 +181,12 @@ def with_profile(
 ) -> Particles:
     """The particles with the factors of the run's profile (unchanged if uniform).
 
-    Parameters
-    ----------
-    values : mapping
-        The run's parameters (``su_gradient``, ``stiffness_profile``).
-    particles : Particles
-    depth : ndarray (N,)
-        Depth of each particle below the ground, m.
-    s0 : float
-        The strength at the ground, Pa (the scene's ``name`` parameter).
-    name : str
-        The scene's strength parameter, for the error of ``s0 <= 0``.
-
-    Raises
-    ------
-    ParameterError
-        ``su_gradient > 0`` with no strength at the ground to scale.
+    As :func:`profile_factors`, whose arguments these are.
     """
-    if not has_profile(values):
+    strength, stiffness = profile_factors(values, depth, s0, name)
+    if strength is None:
         return particles
-    if not s0 > 0:
-        raise ParameterError(
-            name,
-            s0,
-            f"> 0 with su_gradient or layers (the factors are s_u(z) / {name})",
-        )
-    f = strength_profile(values, s0).at(depth) / s0
-    stiff = f.copy() if values["stiffness_profile"] == "strength" else None
-    return particles.replace(strength=f, stiffness=stiff)
+    return particles.replace(strength=strength, stiffness=stiffness)
 
 
 #: The clay's softening and rate law (``material=tresca``).

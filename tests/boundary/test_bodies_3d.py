@@ -20,12 +20,12 @@ import math
 
 import numpy as np
 import pytest
+from helpers import assert_resume_repeats
 from skfem import MeshTet, MeshTri
 
 import skfem_npfem as npfem
 from skfem_npfem import BodyOfRevolution, ParameterError, RigidPlane
 from skfem_npfem.boundary import boundary_faces, face_tributary, spanning_tetrahedra
-from skfem_npfem.io import checkpoint_path
 
 E, NU, RHO, G = 1e6, 0.3, 1800.0, 9.81
 
@@ -423,15 +423,8 @@ def test_resumed_run_with_a_3d_body_repeats_the_uninterrupted_one(tmp_path):
     # The body's position is a function of the time, which checkpoints keep
     # with the lagged contact forces (Particles.wall_force).
     args = {"delta": 0.06, "steps": 4, "mesher": True, "spacing": 0.125}
-    first, _, _ = _quarter_sphere(**args, checkpoint=tmp_path)
-    first.run(steps=2)
-    resumed, _, _ = _quarter_sphere(**args)
-    resumed.restore(checkpoint_path(tmp_path, 2))
-    resumed.run(steps=2)
-    clean, _, _ = _quarter_sphere(**args)
-    clean.run(steps=4)
-    assert [r.extra for r in resumed.records] == [r.extra for r in clean.records]
+    clean = assert_resume_repeats(
+        lambda folder: _quarter_sphere(**args, checkpoint=folder)[0], tmp_path
+    )
     assert clean.records[-1].extra["ball_force_z"] > 0.0
     assert clean.records[-1].extra["ball_z"] == pytest.approx(-0.06)
-    for name, arr in clean.particles.arrays().items():
-        np.testing.assert_array_equal(resumed.particles.arrays()[name], arr, name)

@@ -7,9 +7,9 @@ rate above ``reference_rate``; ``sensitivity`` S_t softens it towards
 
 import numpy as np
 import pytest
+from helpers import assert_resume_repeats
 
 from skfem_npfem import ParameterError
-from skfem_npfem.io import checkpoint_path
 from skfem_npfem.scenes import get_scene, run_scene
 
 SCENE = "footing-penetration"
@@ -91,22 +91,13 @@ def test_a_softening_rate_dependent_run_resumes_to_the_bit(tmp_path):
     law = {"sensitivity": 3.0, "ductility": 2.0, "rate_parameter": 0.1}
     values = sc.resolve({**BASE, **law, "rho": 100.0, "su_gradient": 500.0})
 
-    def build(folder=None):
+    def build(folder):
         sim = sc.build(values).simulation
         sim.progress = False
         if folder is not None:
             sim.checkpoint_dir, sim.checkpoint_every = folder, 2
         return sim
 
-    first = build(tmp_path)
-    first.run(steps=2)
-    resumed = build()
-    resumed.restore(checkpoint_path(tmp_path, 2))
-    resumed.run(steps=2)
-    clean = build()
-    clean.run(steps=4)
+    clean = assert_resume_repeats(build, tmp_path)
     assert clean.particles.shear_rate is not None
     assert clean.particles.strength is not None
-    assert [r.extra for r in resumed.records] == [r.extra for r in clean.records]
-    for name, arr in clean.particles.arrays().items():
-        np.testing.assert_array_equal(resumed.particles.arrays()[name], arr, name)

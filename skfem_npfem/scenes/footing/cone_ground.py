@@ -181,23 +181,19 @@ def net_curve(
     or ``layers``).
     """
     g = sizes(values)
-    D, su, s0 = g["D"], values["su"], values["sigma0"]
+    D, s0 = g["D"], values["sigma0"]
     area = math.pi * D**2 / 4
-    curve, net = [], []
-    ground = has_ground(values)
     gamma = values.get("rho", 0.0) * GRAVITY
-    profile = strength_profile(values, su)
+    # A uniform weightless soil: s_u(z) = su and gamma = 0 exactly, so N is
+    # (q_c - sigma0) / su to the last bit.
+    profile = strength_profile(values, values["su"])
+    curve, net = [], []
     for r in records:
         if "cone_force_y" not in r.extra:
             continue
         q_c, w = r.extra["cone_force_y"] / area, -r.extra["cone_y"]
-        if not ground:
-            curve.append([w / D, (q_c - s0) / su])
-            continue
         z = g["depth"] + w
         s_z, q_net = float(profile.at(z)), q_c - s0 - gamma * z
         curve.append([w / D, q_net / s_z])
         net.append([z, q_net, s_z])
-    if not ground:
-        net = [[g["depth"] + w * D, n * su, su] for w, n in curve]
     return curve, net

@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 
 from ...errors import ParameterError
-from ...particles import Particles
-from ..soil_profile import has_profile, with_profile
+from ..soil_profile import has_profile
+from ..soil_profile import profile_factors as soil_profile_factors
 
 __all__ = ["check_profile", "ground_height", "profile_factors"]
 
@@ -49,10 +49,6 @@ def profile_factors(
     values: Mapping[str, Any], pts: np.ndarray
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
     """The strength and stiffness factors of particles at ``pts`` (None: uniform)."""
-    if not has_profile(values):
-        return None, None
     check_profile(values)
-    probe = Particles.create(pts, np.ones(len(pts)))
     depth = ground_height(values, pts[:, 0]) - pts[:, 1]
-    p = with_profile(values, probe, depth, values["c"])
-    return p.strength, p.stiffness
+    return soil_profile_factors(values, depth, values["c"])
