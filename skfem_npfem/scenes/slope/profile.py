@@ -49,6 +49,8 @@ def profile_factors(
     values: Mapping[str, Any], pts: np.ndarray
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
     """The strength and stiffness factors of particles at ``pts`` (None: uniform)."""
+    if not has_profile(values):  # (a cross-section file has no ground_height)
+        return None, None
     check_profile(values)
     depth = ground_height(values, pts[:, 0]) - pts[:, 1]
     return soil_profile_factors(values, depth, values["c"])
