@@ -8,7 +8,10 @@
 * :func:`prandtl_nc` -- the exact bearing factor ``N_c`` of a smooth strip
   footing on a weightless Mohr-Coulomb soil (Prandtl 1920, Reissner 1924);
 * :func:`teh_houlsby_nc` -- the cone factor of a smooth cone in undrained
-  clay against the rigidity index (Teh & Houlsby 1991).
+  clay against the rigidity index (Teh & Houlsby 1991);
+* :func:`davis_booker_factor` -- the factor ``F`` of a strip footing on a clay
+  whose strength grows linearly with depth (Davis & Booker 1973, as the
+  offshore design code fits it).
 
 References are listed in ``docs/references.md``.
 """
@@ -20,6 +23,7 @@ import math
 from .errors import ParameterError
 
 __all__ = [
+    "davis_booker_factor",
     "lajeunesse2004_runout",
     "lube2004_runout",
     "lube2005_runout",
@@ -120,6 +124,51 @@ def teh_houlsby_nc(rigidity_index: float) -> float:
             "rigidity_index", rigidity_index, "a finite number > 0 (G/s_u)"
         )
     return 1.25 + 1.84 * math.log(rigidity_index)
+
+
+#: The coefficients ``a, b, c, d`` of the fit ``F = a + b x - sqrt((c + b x)^2
+#: + d^2)`` to Davis & Booker's chart, by footing roughness.
+_DAVIS_BOOKER_FIT = {
+    "smooth": (1.372, 0.07, -0.128, 0.342),
+    "rough": (2.56, 0.457, 0.713, 1.38),
+}
+
+
+def davis_booker_factor(kappa: float, interface: str = "smooth") -> float:
+    """Davis & Booker's ``F`` of a strip on clay with ``s_u = s_u0 + k z``.
+
+    The collapse pressure of a rigid strip of width ``B`` on a weightless
+    Tresca clay whose strength grows linearly with depth is ``q = F ((2 +
+    pi) s_u0 + k B / 4)`` (Davis & Booker 1973), ``F`` a function of ``kappa
+    = k B / s_u0`` and of the footing's roughness. This is the closed-form fit
+    to their chart that API RP 2GEO (2011, annex A) and ISO 19901-4 give for
+    ``0 <= kappa <= 25``: ``F = a + b kappa - sqrt((c + b kappa)^2 + d^2)``.
+    The fit is within about 1 % of the chart (at ``kappa = 4``, smooth:
+    1.278 against the exact 1.270; at 0 it gives 1.007 for 1).
+
+    Parameters
+    ----------
+    kappa : float
+        ``k B / s_u0``, in [0, 25].
+    interface : {"smooth", "rough"}
+        The footing's base.
+
+    Raises
+    ------
+    ParameterError
+        A ``kappa`` outside the fit's range or an unknown interface.
+
+    Examples
+    --------
+    >>> round(davis_booker_factor(4.0), 3), round(davis_booker_factor(4.0, "rough"), 3)
+    (1.278, 1.496)
+    """
+    if interface not in _DAVIS_BOOKER_FIT:
+        raise ParameterError("interface", interface, "smooth or rough")
+    if not (math.isfinite(kappa) and 0.0 <= kappa <= 25.0):
+        raise ParameterError("kappa", kappa, "a finite number in [0, 25] (k B / s_u0)")
+    a, b, c, d = _DAVIS_BOOKER_FIT[interface]
+    return a + b * kappa - math.sqrt((c + b * kappa) ** 2 + d**2)
 
 
 def prandtl_depth(phi_deg: float) -> float:

@@ -7,7 +7,9 @@ Four measurements, each against an independent reference:
    clay with ``s_u = s_u0 + k z`` by limit analysis: the smooth footing at
    ``k B / s_u0 = 4`` against their 7.80 kPa (``s_u0`` = 1 kPa, ``k`` = 2
    kPa/m) at spacings B/20, B/40, B/80; then their factor ``F = q / ((2 + pi)
-   s_u0 + k B / 4)`` for ``k B / s_u0`` = 0 to 10, smooth and rough, at B/40.
+   s_u0 + k B / 4)`` for ``k B / s_u0`` = 0 to 10, smooth and rough, at B/40
+   and B/80, against the design code's fit of their chart
+   (:func:`skfem_npfem.laws.davis_booker_factor`).
 2. **The cone's N_kt.** The cone in a heavy clay (rho = 1800 kg/m^3, s_u = 10
    kPa + 20 kPa/m z, E proportional to s_u) against the weightless uniform
    cone at the same rigidity index (D/8, half a spacing a step, 5 D, steady
@@ -48,12 +50,14 @@ import numpy as np
 from _common import VALIDATION
 
 import skfem_npfem as npfem
+from skfem_npfem.laws import davis_booker_factor
 
 #: Davis & Booker's smooth strip at k B / s_u0 = 4 (PLAXIS 2D Validation
 #: Manual, section 3.2), Pa.
 DAVIS_BOOKER_Q = 7.80e3
 FOOTING = {"analysis": "limit", "c": 1.0e3, "width": 2.0}
 DB_SPACINGS = (0.1, 0.05, 0.025)
+F_SPACINGS = (0.05, 0.025)
 KAPPAS = (0.0, 1.0, 2.0, 4.0, 10.0)
 D = 0.0357
 CONE = {"spacing": D / 8, "dt": D / 16 / 0.02, "penetration": 5 * D}
@@ -76,7 +80,7 @@ def run(scene: str, over: dict) -> dict:
 
 
 def davis_booker() -> dict:
-    """The smooth strip at k B / s_u0 = 4 by spacing; F(k B / s_u0) at B/40."""
+    """The smooth strip at k B / s_u0 = 4 by spacing; F(k B / s_u0) at B/40, B/80."""
     conv = []
     for h in DB_SPACINGS:
         m = run("strip-footing", {**FOOTING, "su_gradient": 2.0e3, "spacing": h})
@@ -85,10 +89,13 @@ def davis_booker() -> dict:
     for kappa in KAPPAS:
         row = {"kappa": kappa}
         for interface in ("smooth", "rough"):
-            over = {**FOOTING, "spacing": 0.05, "interface": interface}
-            over["su_gradient"] = kappa * 1.0e3 / 2.0
-            q = run("strip-footing", over)["q_ult"]
-            row[interface] = q / ((2 + math.pi) * 1.0e3 + kappa * 1.0e3 / 4)
+            row[f"{interface}_fit"] = davis_booker_factor(kappa, interface)
+            for h in F_SPACINGS:
+                over = {**FOOTING, "spacing": h, "interface": interface}
+                over["su_gradient"] = kappa * 1.0e3 / 2.0
+                q = run("strip-footing", over)["q_ult"]
+                key = interface if h == F_SPACINGS[0] else f"{interface}_fine"
+                row[key] = q / ((2 + math.pi) * 1.0e3 + kappa * 1.0e3 / 4)
         table.append(row)
     return {"convergence": conv, "F": table}
 
@@ -177,9 +184,19 @@ def tables(report: dict) -> str:
             f"| B/{2 / r['spacing']:g} | {r['q'] / 1e3:.3f} | "
             f"{r['q'] / DAVIS_BOOKER_Q - 1:+.2%} | {r['wall_s']:.1f} |"
         )
-    lines += ["", "| k B / s_u0 | F smooth | F rough |", "|---|---|---|"]
+    lines += [
+        "",
+        "| k B / s_u0 | F smooth B/40 | B/80 | fit | B/80 vs fit "
+        "| F rough B/40 | B/80 | fit | B/80 vs fit |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
     for r in db["F"]:
-        lines.append(f"| {r['kappa']:g} | {r['smooth']:.3f} | {r['rough']:.3f} |")
+        cells = [f"{r['kappa']:g}"]
+        for i in ("smooth", "rough"):
+            fine, fit = r[f"{i}_fine"], r[f"{i}_fit"]
+            cells += [f"{r[i]:.3f}", f"{fine:.3f}", f"{fit:.3f}"]
+            cells.append(f"{fine / fit - 1:+.1%}")
+        lines.append("| " + " | ".join(cells) + " |")
     if "cone" in report:
         c = report["cone"]
         u, g = c["uniform"], c["ground"]
