@@ -9,7 +9,11 @@ face) and -0.1 (into it) against
 ``tan(phi) (cos beta - k_h sin beta) / (sin beta + k_h cos beta)``.  Then
 Griffiths & Lane's 2:1 c-phi slope (c' = 10 kPa, phi' = 20 deg), which has no
 closed form: its critical k_h at the same spacings, and the factor of safety
-at that k_h (1 if the two programs agree).  Last, a 2 m strip on the crest of
+at that k_h (1 if the two programs agree); and Loukidis, Bandini & Salgado's
+(2003) example 1, a dry 1V:3H c-phi slope (H = 25 m, c' = 25 kPa, phi' = 30
+deg, gamma = 20 kN/m^3), whose critical k_h is published (0.432 by their
+log-spiral analysis, between their limit-analysis bounds 0.423 and 0.454).
+Last, a 2 m strip on the crest of
 a Tresca slope (s_u = 30 kPa, H = 5 m at 30 deg): its collapse pressure 8, 2
 and 0 m behind the crest's edge at spacings 0.5 and 0.25 m, the far one
 against Prandtl's (2 + pi) s_u; and at the edge of the same slope made next
@@ -42,6 +46,17 @@ SAND = {"analysis": "limit", "c": 0.0, "phi": PHI, "angle": BETA}
 #: Griffiths & Lane's 2:1 c-phi slope (the slope_fos study's).
 CPHI = SLOPE
 SPACINGS = (1.0, 0.5, 0.25)
+#: Loukidis et al.'s (2003) example 1: its published critical k_h and bounds.
+LOUKIDIS = {
+    "analysis": "limit",
+    "height": 25.0,
+    "angle": math.degrees(math.atan(1.0 / 3.0)),
+    "c": 25.0e3,
+    "phi": 30.0,
+    "rho": 20.0e3 / 9.81,
+    "foundation_depth": 25.0,
+}
+LOUKIDIS_KC, LOUKIDIS_BOUNDS = 0.432, (0.423, 0.454)
 #: A stable Tresca slope (gamma H / s_u = 3.3) with a 2 m strip on its crest.
 CLAY = {
     "analysis": "limit",
@@ -114,6 +129,18 @@ def cphi_row(h: float) -> dict:
     }
 
 
+def loukidis_row(h: float) -> dict:
+    """Loukidis et al.'s slope at spacing ``h`` (m): k_c and F."""
+    t0 = time.perf_counter()
+    m = metrics({**LOUKIDIS, "spacing": h})
+    return {
+        "spacing": h,
+        "critical_kh": m["critical_kh"],
+        "F": m["factor_of_safety"],
+        "wall_s": time.perf_counter() - t0,
+    }
+
+
 def strip_row(h: float) -> dict:
     """The strip's collapse pressure / s_u at each offset, spacing ``h``."""
     t0 = time.perf_counter()
@@ -165,6 +192,7 @@ def rigid_row(h: float) -> dict:
 def page(
     sand: list[dict],
     cphi: list[dict],
+    loukidis: list[dict],
     strips: list[dict],
     edges: list[dict],
     rigid: list[dict],
@@ -225,6 +253,24 @@ def page(
         lines.append(
             f"| H/{10 / r['spacing']:g} | {r['critical_kh']:.4f} | "
             f"{r['F_at_critical_kh']:.4f} | {r['wall_s']:.0f} |"
+        )
+    lo, hi = LOUKIDIS_BOUNDS
+    lines += [
+        "",
+        "Loukidis, Bandini & Salgado's (2003) example 1: a dry slope 25 m high "
+        "at 1V:3H (c' = 25 kPa, phi' = 30 deg, gamma = 20 kN/m^3; here on 25 m "
+        f"of the same soil). Published critical k_h: {LOUKIDIS_KC} by their "
+        f"log-spiral analysis, between their limit-analysis bounds {lo} and {hi}.",
+        "",
+        "| spacing | critical k_h | vs 0.432 | within the bounds | F(0) | wall (s) |",
+        "|---|---|---|---|---|---|",
+    ]
+    for r in loukidis:
+        kc = r["critical_kh"]
+        lines.append(
+            f"| H/{25 / r['spacing']:g} | {kc:.4f} | {kc / LOUKIDIS_KC - 1:+.2%} | "
+            f"{'yes' if lo <= kc <= hi else 'no'} | {r['F']:.4f} | "
+            f"{r['wall_s']:.0f} |"
         )
     prandtl = 2 + math.pi
     lines += [
@@ -310,13 +356,15 @@ def main() -> None:
     args = parser.parse_args()
     sand = [sand_row(h) for h in SPACINGS]
     cphi = [cphi_row(h) for h in SPACINGS]
+    loukidis = [loukidis_row(2.5 * h) for h in SPACINGS]
     strips = [strip_row(h) for h in STRIP_SPACINGS]
     edges = [edge_row(h) for h in STRIP_SPACINGS]
     rigid = [rigid_row(h) for h in RIGID_SPACINGS]
-    text = page(sand, cphi, strips, edges, rigid)
+    text = page(sand, cphi, loukidis, strips, edges, rigid)
     print(text)
     args.out.mkdir(parents=True, exist_ok=True)
-    report = {"sand": sand, "c_phi": cphi, "strip": strips, "edge": edges}
+    report = {"sand": sand, "c_phi": cphi, "loukidis": loukidis, "strip": strips}
+    report["edge"] = edges
     report["rigid"] = rigid
     report |= {"beta": BETA, "phi": PHI, "edge_angles": list(EDGE_ANGLES)}
     (args.out / "slope_loads.json").write_text(json.dumps(report, indent=1) + "\n")
