@@ -204,6 +204,9 @@ class Simulation:
         if flags is not None:
             data["free_surface"] = flags
         data.update(profile_point_data(p))  # a soil profile's factors, if any
+        if (law := self.model.strength_law) is not None:  # softening x rate
+            f = law.factors(p.eps_p, p.shear_rate, p.x, p.mass)
+            data["strength_law_factor"] = f
         if self.extra_point_data is not None:
             data.update(self.extra_point_data(p))
         return data

@@ -7,13 +7,18 @@ own factor of safety (a second limit analysis of the deposit).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 from skfem import MeshTri
 
+from ...boundary import RigidWall, floor
 from ...constants import GRAVITY
 from ...errors import NpfemError, SolverError, warn_user
 from ...limit.loads import gravity_load
@@ -22,6 +27,7 @@ from ...limit.undrained import undrained_materials
 from ...mesh.smoothing import nodal_integration
 from ...run.simulation import Simulation
 from ...step.operators import step_strength
+from ...strength_laws import SHEAR_FROM_EQUIVALENT
 from ..common import (
     solver_from,
 )
@@ -31,9 +37,12 @@ from .section import (
 from .water import static_pressure
 
 __all__ = [
+    "RUNOUT_METRICS",
     "base_metrics",
     "deposit_factor_of_safety",
     "deposit_slopes",
+    "intact_blocks",
+    "runout_floor",
     "runout_metrics",
     "save_mechanism",
 ]
@@ -58,6 +67,58 @@ def save_mechanism(folder: Path, pts, tri, res, volumes) -> None:
     )
 
 
+#: The run-out stage's metrics (null without it).
+RUNOUT_METRICS = {
+    "reduction": "strength reduction factor of the run-out (null without it)",
+    "runout": "advance of the toe: farthest x of slope material above the "
+    "foundation surface, minus the initial toe x, m (null without run-out)",
+    "crest_settlement": "drop of the surface at the initial crest edge, m",
+    "retrogression": "how far behind the crest's edge the failure reached: "
+    "the crest edge's x less the smallest initial x of the particles that "
+    "started behind it and moved more than half a spacing, m (0: none did)",
+    "blocks": "with a softening clay (sensitivity > 1): how many intact blocks "
+    "the failed mass broke into: groups of moved particles (neighbours within "
+    "1.5 spacings) whose softening has taken less than half of its loss "
+    "(xi < xi_95 ln(2) / 3), each of at least 0.05 H^2 initial area (null "
+    "without softening or run-out)",
+    "mass_centre_travel": "distance travelled by the mass centre of the moved "
+    "particles (displacement > spacing/2), m",
+    "moved_volume": "initial volume of the moved particles, m^2 per m",
+    "deposit_profile": "list of [x, surface y] of the final section, one per spacing",
+    "deposit_max_slope": "steepest surface slope of the deposit over 3 spacings, deg",
+    "mass_change": "relative change of the total mass over the run-out",
+    "volume_change": "relative change of the meshed volume over the run-out",
+    "at_rest": "the run-out ended by the at-rest rule (not t_end)",
+    "deposit_factor_of_safety": "factor of safety of the final deposit with the "
+    "run-out's strengths (a second limit analysis; >= 1: statically admissible; "
+    "null with a warning when its strength reduction finds none)",
+}
+
+
+def intact_blocks(
+    x: np.ndarray,
+    area: np.ndarray,
+    candidate: np.ndarray,
+    h: float,
+    min_area: float,
+) -> int:
+    """How many connected groups of ``candidate`` particles are at least ``min_area``.
+
+    Two candidates are neighbours when they are closer than ``1.5 h`` (one
+    lattice spacing and its diagonal); a group's area is the sum of its
+    particles' ``area`` (their initial volumes, m^2 per m).
+    """
+    idx = np.flatnonzero(candidate)
+    if idx.size == 0:
+        return 0
+    pairs = cKDTree(x[idx]).query_pairs(1.5 * h, output_type="ndarray")
+    n = idx.size
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    sizes = np.bincount(label, weights=area[idx])
+    return int(np.count_nonzero(sizes >= min_area))
+
+
 def runout_metrics(sim, state, values, h, x_toe, y_toe, x_crest, y_crest) -> dict:
     """The run-out stage's metrics from the particles at the end of the run.
 
@@ -80,6 +141,13 @@ def runout_metrics(sim, state, values, h, x_toe, y_toe, x_crest, y_crest) -> dic
         travel = float(np.linalg.norm((w[:, None] * p.u[moved]).sum(0) / w.sum()))
         rho = np.array([m.rho for m in sim.model.materials])[p.material[moved]]
         vol = float(np.sum(w / rho))
+    blocks = None
+    law = sim.model.strength_law
+    if law is not None and law.sensitivity > 1.0:
+        rho = np.array([m.rho for m in sim.model.materials])[p.material]
+        intact = SHEAR_FROM_EQUIVALENT * p.eps_p < law.ductility * math.log(2) / 3
+        H = y_crest - y_toe
+        blocks = intact_blocks(x0, p.mass / rho, moved & intact, h, 0.05 * H**2)
     xs = np.arange(final[:, 0].min(), final[:, 0].max() + 1e-9, h)
     ys = _surface_height(final, xs, 0.75 * h)
     slope = deposit_slopes(xs, ys, final[moved, 0], h)
@@ -102,6 +170,7 @@ def runout_metrics(sim, state, values, h, x_toe, y_toe, x_crest, y_crest) -> dic
         "runout": max(runout, 0.0),
         "crest_settlement": float(y_crest - crest_now),
         "retrogression": retro,
+        "blocks": blocks,
         "mass_centre_travel": travel,
         "moved_volume": vol,
         "deposit_profile": [[float(a), float(b)] for a, b in zip(xs, ys, strict=True)],
@@ -207,6 +276,7 @@ def base_metrics(
         "runout": None,
         "crest_settlement": None,
         "retrogression": None,
+        "blocks": None,
         "mass_centre_travel": None,
         "moved_volume": None,
         "deposit_profile": None,
@@ -224,3 +294,16 @@ def base_metrics(
             "runout": float(sum(sum(r.timings.values()) for r in sim.records)),
         },
     }
+
+
+def runout_floor(values: Mapping[str, Any], run_out: bool) -> list[RigidWall]:
+    """The rigid base as a floor beyond the toe of a slope on no foundation layer.
+
+    The parametric slope with ``foundation_depth = 0`` stands on its fixed
+    base (``y = 0``); the run-out spreads beyond the toe on that base, a rigid
+    wall with ``floor_friction`` (none otherwise: the foundation layer's
+    particles carry the run-out).
+    """
+    if not run_out or values["geometry"] or values["foundation_depth"] > 0.0:
+        return []
+    return [floor(2, values["floor_friction"])]

@@ -71,7 +71,7 @@ from ..soil_profile import CLAY_PARAMS, PROFILE_PARAMS, check_layers
 from ..water import WATER_PARAMS
 from ..wet_soil import recorded_parameters
 from .profile import check_profile
-from .runout import base_metrics, runout_metrics
+from .runout import RUNOUT_METRICS, base_metrics, runout_metrics
 from .section import check_section, section_of, toe_and_crest
 from .seismic import KH_PARAM, SEISMIC_METRICS, check_kh
 from .stages import (
@@ -94,6 +94,14 @@ from .water import (
 
 MATERIALS = ("mohr-coulomb", "tresca")
 
+FOUNDATION_NOTE = (
+    "foundation layer below the toe (0: the slope stands on the rigid base, "
+    "which carries the run-out beyond the toe as a floor)"
+)
+FLOOR_NOTE = (
+    "friction angle of the rigid floor that carries the run-out when "
+    "foundation_depth = 0 (lagged Coulomb friction)"
+)
 PARAMS = [
     Param("height", 10.0, "m", "slope height H", float, **POSITIVE),
     Param(
@@ -106,9 +114,10 @@ PARAMS = [
         hi=90,
         lo_open=True,
     ),
-    Param("foundation_depth", 5.0, "m", "foundation layer below the toe", float, lo=0),
+    Param("foundation_depth", 5.0, "m", FOUNDATION_NOTE, float, lo=0),
     Param("crest_length", None, "m", "crest plateau (default 1.5 H)", float, lo=0),
     Param("toe_length", None, "m", "toe plain (default 2.5 H)", float, lo=0),
+    Param("floor_friction", 30.0, "deg", FLOOR_NOTE, float, lo=0, hi=89),
     Param(
         "geometry",
         None,
@@ -213,24 +222,7 @@ METRICS = {
     "spacing, a deposit whose factor of safety was not found",
     "initial_equilibrium_residual": "|G s - f| / |f| on the free dofs of the "
     "initial stresses (null with analysis=limit)",
-    "reduction": "strength reduction factor of the run-out (null without it)",
-    "runout": "advance of the toe: farthest x of slope material above the "
-    "foundation surface, minus the initial toe x, m (null without run-out)",
-    "crest_settlement": "drop of the surface at the initial crest edge, m",
-    "retrogression": "how far behind the crest's edge the failure reached: "
-    "the crest edge's x less the smallest initial x of the particles that "
-    "started behind it and moved more than half a spacing, m (0: none did)",
-    "mass_centre_travel": "distance travelled by the mass centre of the moved "
-    "particles (displacement > spacing/2), m",
-    "moved_volume": "initial volume of the moved particles, m^2 per m",
-    "deposit_profile": "list of [x, surface y] of the final section, one per spacing",
-    "deposit_max_slope": "steepest surface slope of the deposit over 3 spacings, deg",
-    "mass_change": "relative change of the total mass over the run-out",
-    "volume_change": "relative change of the meshed volume over the run-out",
-    "at_rest": "the run-out ended by the at-rest rule (not t_end)",
-    "deposit_factor_of_safety": "factor of safety of the final deposit with the "
-    "run-out's strengths (a second limit analysis; >= 1: statically admissible; "
-    "null with a warning when its strength reduction finds none)",
+    **RUNOUT_METRICS,
     "n_particles": "number of particles",
     "stage_wall_time": "seconds per stage: initial_stress, factor_of_safety (all "
     "its cone programs), factor_of_safety_check (at twice the spacing), "
@@ -398,11 +390,16 @@ def build(
     ni = nodal_integration(body.mesh, (0, 1, 3))
     masses = np.array([m.rho for m in body.mats])[material] * ni.volumes
     run_out = values["runout"] and not limit_only
+    model = flow_model(values, body, state, run_out)
     particles = Particles.create(
-        pts, masses, stress=sigma, fixed=fixed, material=material
+        pts,
+        masses,
+        stress=sigma,
+        fixed=fixed,
+        material=material,
+        n_walls=len(model.walls),
     ).replace(strength=body.strength, stiffness=body.stiffness)
     particles = wet_particles(particles, water, body.mesh.t)
-    model = flow_model(values, body, state, run_out)
     source = (
         AlphaShapeMesher(body.h, values["alpha"]) if run_out else FixedMesh(body.mesh.t)
     )

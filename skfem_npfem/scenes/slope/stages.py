@@ -37,7 +37,7 @@ from ..common import fidelity_from, solver_from
 from ..limit_mode import limit_metrics
 from ..soil_profile import clay_law
 from .profile import profile_factors
-from .runout import save_mechanism
+from .runout import runout_floor, save_mechanism
 from .section import (
     _surface_height,
     section_materials,
@@ -471,6 +471,7 @@ def flow_model(
         gravity=GRAVITY,
         mode="dynamic",
         kh=model_kh(values),
+        walls=runout_floor(values, run_out),
         loads=surcharge_load(body.pts, body.sec, values),
         solver=solver_from(values),
         strength_law=clay_law(values),
