@@ -171,8 +171,8 @@ def replace_rows(
 def write_results(path: Path, text: str | None, page: str) -> None:
     """The JSON ``text`` at ``path`` (None: keep it), ``page`` beside it as .inc.
 
-    The ``.inc`` fragment is included by ``docs/validation/stabilisation.md``
-    (not a page of its own).
+    The ``.inc`` fragment is included by the study's page under
+    ``docs/validation`` (not a page of its own).
 
     The page is printed too.
     """

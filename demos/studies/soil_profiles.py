@@ -47,7 +47,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-from _common import VALIDATION
+from _common import VALIDATION, write_results
 
 import skfem_npfem as npfem
 from skfem_npfem.laws import davis_booker_factor
@@ -277,10 +277,9 @@ def main() -> None:
             continue
         report[name] = parts[name]()
     text = tables(report)
-    print(text)
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "soil_profiles.json").write_text(json.dumps(report, indent=1) + "\n")
-    (args.out / "soil_profiles.inc").write_text(text)
+    write_results(
+        args.out / "soil_profiles.json", json.dumps(report, indent=1) + "\n", text
+    )
 
 
 if __name__ == "__main__":

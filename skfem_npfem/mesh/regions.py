@@ -32,6 +32,7 @@ __all__ = [
     "Region",
     "check_regions",
     "fill_regions",
+    "mesh_regions",
     "point_in_polygon",
     "region_thickness",
 ]
@@ -337,7 +338,30 @@ def fill_regions(
             grid = grid[_segment_distance(grid, edges_a, edges_b) >= 0.5 * hr]
         inner.append(grid)
     inner = np.concatenate(inner) if inner else np.zeros((0, 2))
-    pts = np.concatenate([bnd, inner])
+    return mesh_regions(np.concatenate([bnd, inner]), regions, h)
+
+
+def mesh_regions(
+    pts: np.ndarray, regions: list[Region], h: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Triangulate points of the regions: Delaunay, kept where a region is.
+
+    A triangle is kept when its centroid lies in a region and its area is
+    above ``1e-10 h^2``; points no kept triangle uses are dropped.
+
+    Parameters
+    ----------
+    pts : ndarray (n, 2)
+        Points in (or on the boundaries of) the regions.
+    regions : list of Region
+    h : float
+        The spacing that scales the area threshold, m.
+
+    Returns
+    -------
+    points, triangles, region
+        As :func:`fill_regions`.
+    """
     tri = Delaunay(pts).simplices
     cen = pts[tri].mean(axis=1)
     owner = np.full(len(tri), -1)

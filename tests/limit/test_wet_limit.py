@@ -20,7 +20,7 @@ import skfem_npfem as npfem
 from skfem_npfem.limit import gravity_load
 from skfem_npfem.mesh.smoothing import nodal_integration
 from skfem_npfem.scenes import get_scene
-from skfem_npfem.scenes.slope.stages import slope_body
+from skfem_npfem.scenes.slope.body import slope_body
 
 G = 9.81
 #: |F / F_ref - 1| of the seepage slope at spacing 0.4 m (measured +6.3 %;

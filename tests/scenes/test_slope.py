@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from adaptive_limit import CUT  # demos/studies (tests/conftest.py)
 from helpers import check_cli_error, run_cli
 
 import skfem_npfem as npfem
@@ -137,21 +138,7 @@ VERTICAL_CUT = 3.7764
 
 def test_vertical_cut_stability_number():
     """Tresca cut: gamma H F / c within 7 % of 3.776 at H/10 (+5.5 %, H/20 +2.2 %)."""
-    m = npfem.run_scene(
-        "slope",
-        {
-            "analysis": "limit",
-            "material": "tresca",
-            "angle": 90.0,
-            "height": 10.0,
-            "foundation_depth": 10.0,
-            "crest_length": 15.0,
-            "toe_length": 15.0,
-            "c": 1.0e4,
-            "rho": 2.0e4 / 9.81,
-            "spacing": 1.0,
-        },
-    )["metrics"]
+    m = npfem.run_scene("slope", {**CUT, "spacing": 1.0})["metrics"]
     number = m["factor_of_safety"] * 2.0e4 * 10.0 / 1.0e4
     assert abs(number / VERTICAL_CUT - 1) < 0.07
     assert m["cone_programs"] == 2  # cohesive: lambda(F) = lambda(1) / F

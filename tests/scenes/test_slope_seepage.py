@@ -25,7 +25,7 @@ import skfem_npfem as npfem
 from skfem_npfem.errors import ParameterError
 from skfem_npfem.mesh.section_file import read_cross_section
 from skfem_npfem.scenes import get_scene
-from skfem_npfem.scenes.slope.stages import slope_body
+from skfem_npfem.scenes.slope.body import slope_body
 from skfem_npfem.scenes.slope.water import section_seepage, slope_water, static_pressure
 
 pytestmark = [

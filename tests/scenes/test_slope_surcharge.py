@@ -139,7 +139,7 @@ def test_bad_strips_are_refused(over, name):
 
 def test_the_strip_holds_the_crest_particles_under_it():
     from skfem_npfem.scenes import get_scene
-    from skfem_npfem.scenes.slope.stages import slope_body
+    from skfem_npfem.scenes.slope.body import slope_body
     from skfem_npfem.scenes.slope.surcharge import surcharge_load
 
     values = get_scene("slope").resolve({**CLAY, "surcharge": 1.0e4})

@@ -48,6 +48,7 @@ from ..limit_mode import (
 from ..limits import SPACING as SPACING_RANGE
 from ..methods import METHOD_METRICS_NO_SPFEM, method_params, with_method
 from ..params import ANGLE, POSITIVE, Param, Values
+from ..refinement import REFINE_METRICS, REFINE_PARAMS, check_refine
 from ..soil_profile import PROFILE_PARAMS, check_layers, has_profile
 from ..water import derive_drainage
 from .mesh import (
@@ -227,6 +228,7 @@ PARAMS = [
         bool,
     ),
     *PROFILE_PARAMS,
+    *REFINE_PARAMS,
     *FOOTING_WATER_PARAMS,
     *LOAD_PARAMS,
     analysis_param("settlement steps to the load plateau"),
@@ -263,6 +265,7 @@ METRICS = {
     "n_particles": "number of particles",
     **METHOD_METRICS_NO_SPFEM,
     **HETEROGENEITY_METRICS,
+    **REFINE_METRICS,
     **LIMIT_METRICS,
     **LOAD_METRICS,
 }
@@ -305,6 +308,7 @@ def derive(values: dict[str, Any]) -> None:
     resolve_defaults(values)
     derive_drainage(values)
     check_layers(values)
+    check_refine(values)
     fill_at_rest(values)
     if values["psi"] is None:
         values["psi"] = values["phi"]
@@ -375,7 +379,7 @@ def build(
         c, ref = s_u, prandtl_nc(0.0)
     if values["analysis"] == "limit":
         return limit_scene_run(
-            sim, lambda: footing_limit(values, mesh, mat, particles, foot, ref)
+            sim, lambda: footing_limit(values, mesh, mat, particles, foot, ref, phi)
         )
     sim.callbacks.append(record)
 

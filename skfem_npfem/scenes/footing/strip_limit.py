@@ -17,12 +17,14 @@ from skfem import MeshTri
 
 from ...limit.analysis import limit_analysis
 from ...materials import Material
+from ...mesh.regions import Region, mesh_regions
 from ...mesh.smoothing import nodal_integration
 from ...particles import Particles
 from ..common import solver_from
 from ..limit_mode import limit_metrics
+from ..refinement import adapt
 from ..soil_profile import has_profile
-from .mesh import unit_weight
+from .mesh import soil_particles, unit_weight
 from .strip_water import footing_gamma, limit_soil, water_dead_load
 
 __all__ = ["HETEROGENEITY_METRICS", "footing_limit", "heterogeneity_factor"]
@@ -53,6 +55,7 @@ def footing_limit(
     particles: Particles,
     foot: np.ndarray,
     ref: float | None,
+    phi: float = 0.0,
 ) -> dict[str, Any]:
     """The footing's collapse load as one cone program (``analysis=limit``).
 
@@ -60,8 +63,58 @@ def footing_limit(
     (and a rough footing's horizontal ones are zero), so the reference load --
     ``c b`` (``gamma b^2`` for c = 0) on the half model -- needs no
     distribution.  The soil's weight is the dead load.  The multiplier is then
-    the bearing factor ``q / c`` (``q / (gamma b)``).
+    the bearing factor ``q / c`` (``q / (gamma b)``).  With ``refine=strain``
+    the program is solved again on lattices refined where its mechanism
+    dissipates (:func:`~skfem_npfem.scenes.refinement.adapt`; ``phi`` makes the
+    particles of each lattice).
     """
+    history = None
+    if values.get("refine", "none") != "none":
+        run = adapt(
+            values,
+            (mesh, particles, foot),
+            lambda body: _program(values, mat, *body),
+            lambda body: (body[0].p.T, body[0].t),
+            lambda pts: _lattice(values, pts, phi),
+        )
+        (res, ni, c), (mesh, particles, foot) = run.result, run.body
+        history = run.history
+    else:
+        res, ni, c = _program(values, mat, mesh, particles, foot)[0]
+    factor = res.multiplier
+    q = factor * (c if c > 0 else footing_gamma(values) * values["width"] / 2)
+    return {
+        "q_ult": q,
+        "bearing_factor": factor,
+        "bearing_factor_reference": ref,
+        "relative_error": None if ref is None else factor / ref - 1.0,
+        "n_particles": int(particles.n),
+        "heterogeneity_factor": heterogeneity_factor(values, q),
+        **limit_metrics(res, ni.volumes, 1),
+        "refine_history": history,
+    }
+
+
+def _lattice(
+    values: Mapping[str, Any], pts: np.ndarray, phi: float
+) -> tuple[MeshTri, Particles, np.ndarray]:
+    """The footing's soil on the points ``pts`` (the square block, re-triangulated)."""
+    L = values["domain_width"] * values["width"] / 2
+    square = [Region("soil", np.array([[0.0, 0.0], [L, 0.0], [L, L], [0.0, L]]))]
+    x, t, _ = mesh_regions(pts, square, values["spacing"])
+    mesh = MeshTri(np.ascontiguousarray(x.T), np.ascontiguousarray(t))
+    particles, foot = soil_particles(values, mesh, phi)
+    return mesh, particles, foot
+
+
+def _program(
+    values: Mapping[str, Any],
+    mat: Material,
+    mesh: MeshTri,
+    particles: Particles,
+    foot: np.ndarray,
+) -> tuple[tuple[Any, Any, float], float, np.ndarray]:
+    """One limit program: (result, strain operator, c), the multiplier, the power."""
     b, gamma, g_ref = values["width"] / 2, unit_weight(values), footing_gamma(values)
     mat, c = limit_soil(values, mat, particles.stress)
     ni = nodal_integration(mesh, (0, 1, 2, 3) if mat.needs_zz(2) else (0, 1, 3))
@@ -85,14 +138,4 @@ def footing_limit(
         options=solver_from(values),
         strength=particles.strength,
     )
-    factor = res.multiplier
-    q = factor * (c if c > 0 else g_ref * b)
-    return {
-        "q_ult": q,
-        "bearing_factor": factor,
-        "bearing_factor_reference": ref,
-        "relative_error": None if ref is None else factor / ref - 1.0,
-        "n_particles": int(n),
-        "heterogeneity_factor": heterogeneity_factor(values, q),
-        **limit_metrics(res, ni.volumes, 1),
-    }
+    return (res, ni, c), res.multiplier, res.dissipation

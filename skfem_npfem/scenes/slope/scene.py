@@ -66,10 +66,12 @@ from ..common import (
 )
 from ..limit_mode import LIMIT_METRICS, analysis_param
 from ..params import ANGLE, POSITIVE, Param, Values
+from ..refinement import REFINE_METRICS, REFINE_PARAMS, check_refine
 from ..scenery import Scenery, number, section_lines
 from ..soil_profile import CLAY_PARAMS, PROFILE_PARAMS, check_layers
 from ..water import WATER_PARAMS
 from ..wet_soil import recorded_parameters
+from .body import slope_body
 from .profile import check_profile
 from .runout import RUNOUT_METRICS, base_metrics, runout_metrics
 from .section import check_section, section_of, toe_and_crest
@@ -78,7 +80,6 @@ from .stages import (
     flow_model,
     fos_metrics,
     initial_stress,
-    slope_body,
 )
 from .surcharge import (
     SURCHARGE_METRICS,
@@ -204,6 +205,7 @@ PARAMS = [
         float,
         **POSITIVE,
     ),
+    *REFINE_PARAMS,
     *fidelity_params(0.0),
     *solver_params(),
 ]
@@ -213,7 +215,8 @@ METRICS = {
     "carries its weight (limit analysis)",
     "fos_iterates": "list of [F, gravity multiplier] of every cone program",
     "factor_of_safety_coarse": "the factor of safety again at twice the spacing "
-    "(a convergence hint; null when the section cannot be filled there)",
+    "(a convergence hint; null when the section cannot be filled there, and with "
+    "refine=strain: see refine_history)",
     "fos_spacing_change": "(F - F at twice the spacing) / F: above 0.05 in size a "
     "warning says F is not converged (refine the spacing)",
     "warnings": "list of one-line warnings: implausible material values of a "
@@ -233,6 +236,7 @@ METRICS = {
     "any multiple of its weight)",
     **SEISMIC_METRICS,
     **SURCHARGE_METRICS,
+    **REFINE_METRICS,
     "undrained_strength_min": "drainage=undrained: the smallest strength s_u = "
     "c' cos phi' + s'_0 sin phi' (initial effective stress) used for F, Pa",
     "undrained_strength_max": "drainage=undrained only: the largest one, Pa",
@@ -287,6 +291,7 @@ def ignored(values: dict[str, Any], given: frozenset[str]) -> None:
     check_kh(values)
     check_surcharge(values)
     check_layers(values)
+    check_refine(values)
     check_profile(values)
     if not stresses:
         warn_unused(
@@ -418,7 +423,8 @@ def build(
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
         fos = fos_metrics(values, body, state, out)
-        m = base_metrics(fos, resid, len(pts), state, sim_)
+        n = len(state["fos_body"].pts)  # the last lattice of refine=strain
+        m = base_metrics(fos, resid, n, state, sim_)
         if run_out:
             late = runout_metrics(sim_, state, values, body.h, *toe_crest)
             m["warnings"] = [*m.get("warnings", []), *late.pop("notes")]

@@ -14,7 +14,6 @@ from __future__ import annotations
 import time
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -27,7 +26,7 @@ from ...errors import NpfemError
 from ...limit.safety import SafetyResult, reduced_strength, strength_reduction
 from ...limit.undrained import undrained_materials
 from ...materials import LinearElastic, Material
-from ...mesh.regions import CrossSection, check_regions, fill_regions
+from ...mesh.regions import CrossSection, check_regions, mesh_regions
 from ...mesh.smoothing import nodal_integration
 from ...step.conic import solve_step
 from ...step.model import Model
@@ -35,15 +34,15 @@ from ...step.program import ConeInput
 from ...water import Water, water_force
 from ..common import fidelity_from, solver_from
 from ..limit_mode import limit_metrics
+from ..refinement import adapt
 from ..soil_profile import clay_law
-from .profile import profile_factors
+from .body import SlopeBody, body_from, slope_body
 from .runout import runout_floor, save_mechanism
 from .section import (
     _surface_height,
     section_materials,
     section_of,
     section_warnings,
-    supports,
 )
 from .seismic import loaded_limits, model_kh, slope_loads, static_kh
 from .surcharge import surcharge_load
@@ -55,13 +54,11 @@ from .water import (
 )
 
 __all__ = [
-    "SlopeBody",
     "factor_of_safety",
     "flow_model",
     "fos_metrics",
     "initial_stress",
     "reduced_strength_flow",
-    "slope_body",
     "spacing_check",
 ]
 
@@ -222,69 +219,6 @@ def factor_of_safety(
     )
 
 
-@dataclass
-class SlopeBody:
-    """The slope's section filled with particles, and their mesh.
-
-    Attributes
-    ----------
-    sec : CrossSection
-        Regions and materials of the section.
-    h : float
-        Particle spacing, m.
-    pts : ndarray (n, 2)
-        Particle positions, m.
-    tri : ndarray (n_t, 3)
-        Triangles of the particles' mesh.
-    material : ndarray (n,) int
-        Material index per particle (into ``mats``).
-    mesh : MeshTri
-        The particles' mesh.
-    fixed : ndarray (n, 2) bool
-        Supports: the fixed base and the side rollers.
-    mats : list of Material
-        The section's materials (limit analysis and initial stresses).
-    strength, stiffness : ndarray (n,) or None
-        The particles' factors of a strength growing with depth
-        (:mod:`~.profile`); None: uniform.
-    """
-
-    sec: CrossSection
-    h: float
-    pts: np.ndarray
-    tri: np.ndarray
-    material: np.ndarray
-    mesh: MeshTri
-    fixed: np.ndarray
-    mats: list[Material]
-    strength: np.ndarray | None = None
-    stiffness: np.ndarray | None = None
-
-
-def slope_body(values: Mapping[str, Any]) -> SlopeBody:
-    """The section of ``values`` (parametric or a file) filled at the spacing.
-
-    Parameters
-    ----------
-    values : mapping
-        The scene's parameter values.
-
-    Returns
-    -------
-    SlopeBody
-    """
-    sec, _ = section_of(values)
-    h = values["spacing"]
-    pts, tri, region = fill_regions(sec.regions, h)
-    names = list(sec.materials)
-    material = np.array([names.index(sec.regions[r].material) for r in region])
-    mesh = MeshTri(np.ascontiguousarray(pts.T), np.ascontiguousarray(tri))
-    fixed = supports(pts, sec)
-    mats = section_materials(sec, values)
-    strength, stiffness = profile_factors(values, pts)
-    return SlopeBody(sec, h, pts, tri, material, mesh, fixed, mats, strength, stiffness)
-
-
 def fos_metrics(
     values: Mapping[str, Any], body: SlopeBody, state: dict[str, Any], out: Path | None
 ) -> dict[str, Any]:
@@ -313,17 +247,34 @@ def fos_metrics(
     """
     if "fos" not in state:
         t0 = time.perf_counter()
-        res, ni_, mats = factor_of_safety(
-            values,
-            body.mesh,
-            body.mats,
-            body.material,
-            body.fixed,
-            slope_water(values, body.sec),
-            state.get("initial_stress"),
-            body.sec,
-            body.strength,
-        )
+
+        def solve(b: SlopeBody) -> tuple[Any, float, np.ndarray]:
+            out = factor_of_safety(
+                values,
+                b.mesh,
+                b.mats,
+                b.material,
+                b.fixed,
+                slope_water(values, b.sec),
+                state.get("initial_stress"),
+                b.sec,
+                b.strength,
+            )
+            return out, out[0].factor_of_safety, out[0].limit.dissipation
+
+        history, sec = None, body.sec
+        if values["refine"] == "none":
+            res, ni_, mats = solve(body)[0]
+        else:
+            run = adapt(
+                values,
+                body,
+                solve,
+                lambda b: (b.pts, b.tri),
+                lambda p: body_from(values, sec, *mesh_regions(p, sec.regions, body.h)),
+            )
+            (res, ni_, mats), body, history = run.result, run.body, run.history
+        state["fos_body"] = body
         state["t_fos"] = time.perf_counter() - t0
         state["fos"] = res
         state["fos_metrics"] = {
@@ -344,12 +295,17 @@ def fos_metrics(
             **undrained_metrics(mats),
             "critical_kh": None,
             "surcharge_collapse": None,
+            "refine_history": history,
         }
         if values["analysis"] == "limit":
             t0 = time.perf_counter()
-            state["fos_metrics"].update(loaded_limits(values, body, mats))
+            loaded = loaded_limits(values, body, mats)
+            fm = state["fos_metrics"]
+            fm["warnings"] = [*fm.get("warnings", []), *loaded.pop("notes")]
+            fm.update(loaded)
             state["t_critical_kh"] = time.perf_counter() - t0
         state["fos_volumes"] = ni_.volumes
+    body = state["fos_body"]
     if out is not None and not state.get("mechanism_saved"):
         # Written once the run owns its folder (never while the scene is built).
         Path(out).mkdir(parents=True, exist_ok=True)
@@ -369,7 +325,8 @@ def spacing_check(
     a quarter of the factor of safety.  When F changes by more than
     :data:`FOS_CHANGE_TOLERANCE` of itself, a warning says so (F is not
     converged at this spacing: refine it).  A section that cannot be filled
-    at twice the spacing, or whose program fails there, gives no hint.
+    at twice the spacing, or whose program fails there, gives no hint; nor
+    does an adaptive run (``refine``: its ``refine_history`` is the check).
 
     Parameters
     ----------
@@ -388,8 +345,10 @@ def spacing_check(
         ``warnings``.
     """
     t0 = time.perf_counter()
-    coarse = {**values, "spacing": 2 * values["spacing"]}
+    coarse = {**values, "spacing": 2 * values["spacing"], "refine": "none"}
     try:
+        if values["refine"] != "none":  # its cycles are the convergence check
+            raise ValueError("refined")
         check_regions(section_of(coarse)[0].regions, coarse["spacing"])
         body = slope_body(coarse)
         res, _, _ = factor_of_safety(

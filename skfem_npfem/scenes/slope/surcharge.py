@@ -170,7 +170,7 @@ def surcharge_collapse(
     One limit analysis on ``ni`` (the body's strain operator): ``dead``
     (gravity, the water's force, a constant ``kh``) held, the load of a unit
     pressure on the strip the reference.  ``body`` is the slope's
-    :class:`~.stages.SlopeBody`; None without a strip or when the dead load
+    :class:`~.body.SlopeBody`; None without a strip or when the dead load
     alone brings the slope down.
     """
     if values["surcharge_width"] is None:

@@ -1,0 +1,171 @@
+#!/usr/bin/env python
+"""Adaptive limit analysis against uniform lattices: accuracy for the wall time.
+
+Three collapse problems by limit analysis, each on uniform lattices of halving
+spacing and adaptively (``refine=strain``: the spacing halved where the
+mechanism's plastic power concentrates, until the result changes by less
+than ``refine_tol``), from the coarsest lattice:
+
+1. **The Tresca vertical cut** (``slope``, angle 90 deg, H = 10 m, 10 m of
+   foundation): ``gamma H F / c`` against 3.7764, the middle of Kammoun et al.'s
+   (2010) bounds 3.7752-3.7776.
+2. **Griffiths & Lane's 2:1 c-phi slope** (c' = 10 kPa, phi' = 20 deg): its
+   factor of safety against the value extrapolated from the uniform lattices
+   (Richardson's extrapolation from the three finest, with the order they
+   show).
+3. **N_c at phi = 40 deg** (``strip-footing``, smooth, weightless): against
+   Prandtl's exact 75.31.
+
+Every run is one process, one after another, on the same machine: the wall
+times compare.
+
+Usage (from the repository root)::
+
+    python demos/studies/adaptive_limit.py [--out docs/validation] [--quick]
+
+``--quick`` leaves out the finest uniform lattice of each.  Writes
+``<out>/adaptive_limit.json`` and ``<out>/adaptive_limit.inc`` (the tables of
+docs/validation/adaptive_limit.md).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+from _common import VALIDATION, write_results
+from slope_fos import SLOPE
+from soil_profiles import run
+
+from skfem_npfem.laws import prandtl_nc
+
+#: The Tresca vertical cut (the test's): gamma H / c = 2 at F = 1.
+CUT = {
+    "analysis": "limit",
+    "material": "tresca",
+    "angle": 90.0,
+    "height": 10.0,
+    "foundation_depth": 10.0,
+    "crest_length": 15.0,
+    "toe_length": 15.0,
+    "c": 1.0e4,
+    "rho": 2.0e4 / 9.81,
+}
+CUT_REF = 3.7764
+FOOTING = {"analysis": "limit", "material": "mohr-coulomb", "phi": 40.0, "c": 1.0e3}
+#: Adaptive settings measured: the defaults, then a tighter tolerance.
+ADAPTIVE = (
+    {"refine": "strain"},
+    {"refine": "strain", "refine_tol": 0.001, "refine_cycles": 6},
+)
+
+
+def row(label: str, value: float, n: int, wall: float, history=None) -> dict:
+    """One table row."""
+    return {
+        "label": label,
+        "value": value,
+        "particles": n,
+        "wall_s": wall,
+        "history": history,
+    }
+
+
+def series(scene, base, spacings, value, count, labels) -> list[dict]:
+    """Uniform lattices at ``spacings``, then the adaptive runs from the first."""
+    rows = []
+    for h, lab in zip(spacings, labels, strict=True):
+        m = run(scene, {**base, "spacing": h})
+        rows.append(row(lab, value(m), count(m), m["wall_s"]))
+    for over in ADAPTIVE:
+        m = run(scene, {**base, "spacing": spacings[0], **over})
+        hist = m["refine_history"]
+        tag = "adaptive" if len(over) == 1 else "adaptive, tol 1e-3"
+        rows.append(row(tag, value(m), int(hist[-1][0]), m["wall_s"], hist))
+    return rows
+
+
+def richardson(values: list[float]) -> tuple[float, float]:
+    """The limit of three values at halving spacings, and the order they show."""
+    a, b, c = values[-3:]
+    ratio = (a - b) / (b - c)
+    p = math.log2(ratio)
+    return c - (b - c) / (ratio - 1.0), p
+
+
+def table(rows: list[dict], ref: float, what: str) -> str:
+    """A markdown table of a series against ``ref``."""
+    lines = [
+        f"| lattice | particles | {what} | error | wall (s) |",
+        "|---|---|---|---|---|",
+    ]
+    for r in rows:
+        lines.append(
+            f"| {r['label']} | {r['particles']} | {r['value']:.4f} | "
+            f"{r['value'] / ref - 1:+.2%} | {r['wall_s']:.1f} |"
+        )
+    return "\n".join(lines).replace("%", " %")
+
+
+def main() -> None:
+    """Run the three series; write the JSON and the tables."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--out", type=Path, default=VALIDATION)
+    parser.add_argument("--quick", action="store_true")
+    args = parser.parse_args()
+    n = 3 if args.quick else 4
+    slope_h = (1.0, 0.5, 0.25, 0.125)[:n]
+    slope_lab = ("H/10", "H/20", "H/40", "H/80")[:n]
+    foot_h = (0.04, 0.02, 0.01, 0.005)[: n - 1]
+    foot_lab = ("B/25", "B/50", "B/100", "B/200")[: n - 1]
+    count = lambda m: m["n_particles"]  # noqa: E731
+    cut = series(
+        "slope",
+        CUT,
+        slope_h,
+        lambda m: m["factor_of_safety"] * 20.0,  # gamma H / c = 20
+        count,
+        slope_lab,
+    )
+    gl = series(
+        "slope",
+        SLOPE,
+        slope_h,
+        lambda m: m["factor_of_safety"],
+        count,
+        slope_lab,
+    )
+    nc = series(
+        "strip-footing",
+        FOOTING,
+        foot_h,
+        lambda m: m["bearing_factor"],
+        count,
+        foot_lab,
+    )
+    gl_ref, gl_order = richardson([r["value"] for r in gl[:n]])
+    report = {
+        "vertical_cut": {"reference": CUT_REF, "rows": cut},
+        "griffiths_lane": {"reference": gl_ref, "order": gl_order, "rows": gl},
+        "nc_phi40": {"reference": prandtl_nc(40.0), "rows": nc},
+    }
+    text = "\n\n".join(
+        [
+            table(cut, CUT_REF, "gamma H F / c"),
+            table(gl, gl_ref, "F"),
+            table(nc, prandtl_nc(40.0), "N_c"),
+        ]
+    )
+    text += (
+        f"\n\nGriffiths & Lane's reference: {gl_ref:.4f}, extrapolated from the "
+        f"three finest uniform lattices (observed order {gl_order:.2f}).\n"
+    )
+    write_results(
+        args.out / "adaptive_limit.json", json.dumps(report, indent=1) + "\n", text
+    )
+
+
+if __name__ == "__main__":
+    main()

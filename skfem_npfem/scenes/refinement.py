@@ -1,0 +1,167 @@
+"""Adaptive limit analysis: particles added where the collapse mechanism dissipates.
+
+``refine=strain`` with ``analysis=limit`` solves the limit analysis (or the
+factor of safety) on the scene's lattice, marks the fewest nodes whose cells
+carry ``refine_share`` of the mechanism's plastic power
+(:func:`~skfem_npfem.mesh.refine.mark_share`), halves the spacing round them
+(:func:`~skfem_npfem.mesh.refine.split_around`), triangulates again and
+solves again: at most ``refine_cycles`` times, stopping when the multiplier
+changes by less than ``refine_tol`` (relative) from one cycle to the next.  A
+limit analysis carries no history, so nothing is mapped between the lattices:
+each cycle is a fresh program on more particles.  docs/theory.md ("Adaptive
+limit analysis") says why the plastic power is the indicator.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, Generic, TypeVar
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..mesh.refine import mark_share, split_around
+from .params import POSITIVE, Param
+
+__all__ = [
+    "REFINE_METRICS",
+    "REFINE_PARAMS",
+    "Adapted",
+    "adapt",
+    "check_refine",
+]
+
+#: The refinement strategies (``none``: the uniform lattice).
+REFINE_CHOICES = ("none", "strain")
+
+REFINE_PARAMS = [
+    Param(
+        "refine",
+        "none",
+        "-",
+        "analysis=limit: none (the uniform lattice) or strain (adaptive: the "
+        "spacing is halved where the collapse mechanism's plastic power "
+        "concentrates and the program solved again, until the result changes "
+        "by less than refine_tol)",
+        str,
+        REFINE_CHOICES,
+    ),
+    Param(
+        "refine_tol",
+        0.005,
+        "-",
+        "refine=strain: stop when the result changes by less than this "
+        "(relative) from one cycle to the next",
+        float,
+        **POSITIVE,
+    ),
+    Param(
+        "refine_cycles",
+        4,
+        "-",
+        "refine=strain: largest number of refinements",
+        int,
+        lo=1,
+        hi=12,
+    ),
+    Param(
+        "refine_share",
+        0.6,
+        "-",
+        "refine=strain: share of the mechanism's plastic power whose cells are "
+        "refined each cycle (the fewest nodes that carry it)",
+        float,
+        lo=0.0,
+        hi=1.0,
+        lo_open=True,
+    ),
+]
+
+REFINE_METRICS = {
+    "refine_history": "refine=strain: one row [particles, result, seconds] per "
+    "cycle (the first on the uniform lattice; seconds of that cycle's programs); "
+    "null without refinement",
+}
+
+B = TypeVar("B")
+
+
+@dataclass
+class Adapted(Generic[B]):
+    """The last cycle of an adaptive analysis.
+
+    Attributes
+    ----------
+    body : object
+        The last lattice (what ``rebuild`` returned).
+    result : object
+        What ``solve`` returned for it.
+    history : list of [int, float, float]
+        Particles, result and seconds of every cycle.
+    converged : bool
+        The last change was below the tolerance.
+    """
+
+    body: B
+    result: Any
+    history: list[list[float]] = field(default_factory=list)
+    converged: bool = False
+
+
+def check_refine(values: Mapping[str, Any]) -> None:
+    """Refuse ``refine`` on a run that is not a limit analysis."""
+    if values.get("refine", "none") != "none" and values.get("analysis") != "limit":
+        raise ParameterError(
+            "refine",
+            values["refine"],
+            "none unless analysis=limit (the particles of an incremental run "
+            "are not refined yet)",
+        )
+
+
+def adapt(
+    values: Mapping[str, Any],
+    body: B,
+    solve: Callable[[B], tuple[Any, float, np.ndarray]],
+    points: Callable[[B], tuple[np.ndarray, np.ndarray]],
+    rebuild: Callable[[np.ndarray], B],
+) -> Adapted[B]:
+    """Solve, refine where the mechanism dissipates, solve again.
+
+    Parameters
+    ----------
+    values : mapping
+        ``refine_tol``, ``refine_cycles`` and ``refine_share``.
+    body : object
+        The first (uniform) lattice.
+    solve : callable
+        ``solve(body) -> (result, number, dissipation)``: the analysis, the
+        number whose change stops the cycles, the plastic power per node.
+    points : callable
+        ``points(body) -> (pts, t)``: the lattice's points (n, 2) and
+        triangles (3, m).
+    rebuild : callable
+        ``rebuild(pts) -> body``: a lattice on new points.
+
+    Returns
+    -------
+    Adapted
+    """
+    history: list[list[float]] = []
+    t0 = time.perf_counter()
+    result, number, power = solve(body)
+    history.append([len(points(body)[0]), number, time.perf_counter() - t0])
+    for _ in range(values["refine_cycles"]):
+        pts, t = points(body)
+        marked = mark_share(power, values["refine_share"])
+        t0 = time.perf_counter()
+        new_body = rebuild(split_around(pts, t, marked))
+        new_result, new_number, new_power = solve(new_body)
+        history.append([len(points(new_body)[0]), new_number, time.perf_counter() - t0])
+        change = abs(new_number - number) / max(abs(new_number), 1e-300)
+        body, result, number, power = new_body, new_result, new_number, new_power
+        if change < values["refine_tol"]:
+            return Adapted(body, result, history, True)
+    return Adapted(body, result, history, False)
