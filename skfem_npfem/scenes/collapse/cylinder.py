@@ -46,6 +46,7 @@ from ...mesh.sources import AlphaShapeMesher
 from ...particles import Particles
 from ...step.model import Model
 from ...step.solver import SolverOptions
+from ..shaking import model_kh
 
 __all__ = [
     "GEOMETRIES",
@@ -391,6 +392,7 @@ def column_model(
         theta1=v["theta1"],
         theta2=v["theta2"],
         walls=walls,
+        kh=model_kh(v) if "kh" in v else 0.0,
         solver=solver or SolverOptions(),
         axisymmetric=axisymmetric,
     )

@@ -38,6 +38,7 @@ from ..base import Scene
 from ..common import check_soil, fill_at_rest
 from ..limits import LENGTH, check_size
 from ..params import POSITIVE, Param, Values
+from ..shaking import kh_history
 from ..water import derive_drainage
 from ..wet_soil import warn_dry_water
 from .box_column import DEPTH_SPACINGS
@@ -204,7 +205,7 @@ def used_parameters(
     if geometry == "box":
         return common | {
             "aspect", "half_width", "symmetric", "depth", "max_displacement",
-            "buried_slivers",
+            "buried_slivers", "kh",
         }  # fmt: skip
     used = common | {"radius", "height"}
     if not {"radius", "height"} <= given:
@@ -270,6 +271,7 @@ def fill_column_defaults(values: dict[str, Any]) -> None:
     """
     derive_drainage(values)
     fill_at_rest(values)
+    kh_history(values)  # a file of t, k_h rows is read and checked now
     if values["floor_friction"] is None:
         values["floor_friction"] = values["phi"]
     if values["min_time"] is None and values["rest_fraction"] > 0:
@@ -287,6 +289,11 @@ def _unused_reason(geometry: str, name: str) -> str:
         return "not in axisymmetry (its spacing would come from ring volumes)"
     if name == "buried_slivers":
         return "3D geometries only (quarter-cylinder, box): 2D meshes have no slivers"
+    if name == "kh":
+        return (
+            "plane-strain or box only: a horizontal acceleration would break "
+            f"the symmetry of geometry={geometry}'s axis or planes"
+        )
     if name == "method":
         return f"npfem: the other methods are not available for geometry={geometry}"
     if geometry == "plane-strain":

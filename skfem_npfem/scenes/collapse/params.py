@@ -16,6 +16,7 @@ from ..common import (
 from ..limits import SPACING
 from ..methods import METHOD_METRICS, METHOD_PARAMS
 from ..params import ANGLE, POSITIVE, Param
+from ..shaking import kh_param
 from ..water import WATER_PARAMS
 from .runout import (
     DETACHED_WARNING,
@@ -114,6 +115,12 @@ PARAMS = [
         "floor friction angle (default: phi)",
         float,
         **ANGLE,
+    ),
+    kh_param(
+        "along +x, away from the wall x = 0 (negative: toward it)",
+        "a number for the whole run, or a file of rows t, k_h, a recorded "
+        "history from the release (plane strain and box only: it would break "
+        "an axis's or a symmetry plane's symmetry)",
     ),
     Param(
         "K0",

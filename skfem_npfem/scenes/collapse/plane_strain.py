@@ -70,6 +70,7 @@ from ..limits import check_size
 from ..methods import with_method
 from ..params import Values
 from ..scenery import Scenery, box, number, time_label
+from ..shaking import model_kh
 from ..water import scene_water
 from ..wet_soil import recorded_parameters, wet_column
 from .geometry import fill_column_defaults
@@ -224,6 +225,7 @@ def _model(values: Mapping[str, Any]) -> Model:
         theta1=values["theta1"],
         theta2=values["theta2"],
         walls=walls,
+        kh=model_kh(values),
         solver=solver_from(values),
         water=scene_water(values),
         **fidelity_from(values, COLLAPSE_STABILISATION, _volume_correction(values)),

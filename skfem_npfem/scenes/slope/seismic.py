@@ -6,16 +6,16 @@ slope's face) loads every particle with ``k_h`` times its weight along
 critical ``k_h`` (:func:`loaded_limits`) is one limit analysis with gravity as
 the dead load and ``k_h`` as the multiplier; the run-out is shaken by the
 constant or by a recorded history (a file of ``t, k_h`` rows,
-:func:`kh_history`) through :attr:`~skfem_npfem.Model.kh`.  The pore
-pressure stays the static field (its force is gravity's).  docs/theory.md
-("Limit analysis") derives the program.
+:func:`~skfem_npfem.scenes.shaking.kh_history`) through
+:attr:`~skfem_npfem.Model.kh`.  The pore pressure stays the static field
+(its force is gravity's).  docs/theory.md ("Limit analysis") derives the
+program.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from functools import partial
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -28,7 +28,7 @@ from ...limit.safety import CAP
 from ...materials import Material
 from ...mesh.smoothing import nodal_integration
 from ...water import Water
-from ..params import Param
+from ..shaking import kh_history, kh_param, static_kh
 from .surcharge import dead_load_multiplier, surcharge_collapse, surcharge_load
 from .water import slope_water, static_pressure
 
@@ -36,27 +36,15 @@ __all__ = [
     "KH_PARAM",
     "SEISMIC_METRICS",
     "check_kh",
-    "kh_history",
     "loaded_limits",
-    "model_kh",
     "slope_loads",
-    "static_kh",
 ]
 
-KH_PARAM = Param(
-    "kh",
-    0.0,
-    "-",
-    "pseudo-static horizontal acceleration k_h g toward +x (out of the "
-    "slope's face; negative: into it), a body force k_h times the weight: a "
-    "number acts in the factor of safety and shakes the run-out; a file of "
-    "rows t, k_h (s, -; commas or spaces, # comments) is a recorded history "
-    "that shakes the run-out from its start, with the static factor of "
-    "safety (0: none)",
-    float,
-    lo=-10,
-    hi=10,
-    or_file=True,
+KH_PARAM = kh_param(
+    "toward +x (out of the slope's face; negative: into it)",
+    "a number acts in the factor of safety and shakes the run-out; a file "
+    "of rows t, k_h is a recorded history that shakes the run-out from its "
+    "start, with the static factor of safety",
 )
 
 SEISMIC_METRICS = {
@@ -66,50 +54,6 @@ SEISMIC_METRICS = {
     "1e3); null without analysis=limit or when gravity alone brings the slope "
     "down",
 }
-
-
-def kh_history(values: Mapping[str, Any]) -> np.ndarray | None:
-    """The rows ``[t, k_h]`` of ``kh``'s file, checked; None for a number."""
-    kh = values["kh"]
-    if not isinstance(kh, str):
-        return None
-    path = Path(kh)
-    if not path.is_file():
-        raise ParameterError("kh", kh, "a number, or the path of an existing file")
-    try:
-        rows = np.loadtxt(path, delimiter="," if "," in path.read_text() else None)
-    except ValueError as err:
-        raise ParameterError(
-            "kh", kh, f"a file of rows t, k_h (two numbers a row): {err}"
-        ) from None
-    rows = np.atleast_2d(rows)
-    if rows.ndim != 2 or rows.shape[1] != 2 or not np.all(np.isfinite(rows)):
-        raise ParameterError(
-            "kh", kh, f"rows of two finite numbers t, k_h (read {rows.shape})"
-        )
-    if np.any(np.diff(rows[:, 0]) <= 0):
-        i = int(np.flatnonzero(np.diff(rows[:, 0]) <= 0)[0])
-        raise ParameterError(
-            "kh",
-            kh,
-            f"rows with increasing t (row {i + 2}: t = {rows[i + 1, 0]:g} after "
-            f"{rows[i, 0]:g})",
-        )
-    if np.any(np.abs(rows[:, 1]) > 10):
-        raise ParameterError("kh", kh, "k_h within [-10, 10] in every row")
-    return rows
-
-
-def static_kh(values: Mapping[str, Any]) -> float:
-    """The ``k_h`` of the factor of safety: the number, or 0 with a history."""
-    kh = values["kh"]
-    return 0.0 if isinstance(kh, str) else float(kh)
-
-
-def model_kh(values: Mapping[str, Any]) -> float | np.ndarray:
-    """What the run-out's :class:`~skfem_npfem.Model` takes as ``kh``."""
-    rows = kh_history(values)
-    return static_kh(values) if rows is None else rows
 
 
 def check_kh(values: Mapping[str, Any]) -> None:

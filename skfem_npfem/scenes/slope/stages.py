@@ -35,6 +35,7 @@ from ...water import Water, water_force
 from ..common import fidelity_from, solver_from
 from ..limit_mode import limit_metrics
 from ..refinement import adapt
+from ..shaking import model_kh, static_kh
 from ..soil_profile import clay_law
 from .body import SlopeBody, body_from, slope_body
 from .runout import runout_floor, save_mechanism
@@ -44,7 +45,7 @@ from .section import (
     section_of,
     section_warnings,
 )
-from .seismic import loaded_limits, model_kh, slope_loads, static_kh
+from .seismic import loaded_limits, slope_loads
 from .surcharge import surcharge_load
 from .water import (
     slope_water,
