@@ -298,7 +298,12 @@ def fos_metrics(
             "surcharge_collapse": None,
             "refine_history": history,
         }
-        if values["analysis"] == "limit":
+        # Gravity alone (no k_h, no surcharge) brings the slope down: neither
+        # limit exists, and its program is infeasible (which a fine lattice's
+        # solver may report as a numerical error rather than as infeasible).
+        alone = not static_kh(values) and not values["surcharge"]
+        falls = alone and res.multiplier_unreduced < 1.0
+        if values["analysis"] == "limit" and not falls:
             t0 = time.perf_counter()
             loaded = loaded_limits(values, body, mats)
             fm = state["fos_metrics"]
