@@ -13,9 +13,10 @@ the slide triggered by dividing the strength by 1.65.  Their undrained SPH
 run: run-out 21.6 m, retrogression 14.0 m, three slides.
 
 Runs at spacings 0.5 m and 0.25 m (and, with ``--variants``, the residual
-strength left unreduced, and a slower softening, ``xi_95`` = 3), each to rest
-or 30 s; and the independent check of what a fully remoulded mass must do: at
-rest on a rough floor a Tresca layer of strength ``c`` needs
+strength left unreduced, a slower softening, ``xi_95`` = 3, and the nonlocal
+strain over 1 m at both spacings), each to rest or 30 s; and the
+independent check of what a fully remoulded mass must do: at rest on a rough
+floor a Tresca layer of strength ``c`` needs
 ``gamma h |dh/dx| <= c``, so the area ``A`` of the slope, remoulded, spreads
 over at least ``L = (3 A / (2 sqrt(2 c / gamma)))^(2/3)`` from the back wall.
 
@@ -64,6 +65,7 @@ SLOPE = {
 }
 #: Their undrained SPH run (section 5.1).
 PUBLISHED = {"runout": 21.6, "retrogression": 14.0, "slides": 3}
+NONLOCAL = {"softening_length": 1.0}
 VARIANTS = {
     "residual unreduced": {"sensitivity": PEAK / TRIGGER / RESIDUAL},
     "slower softening (xi_95 = 3)": {"ductility": 3.0},
@@ -99,6 +101,8 @@ def main() -> None:
     if args.variants:
         for label, over in VARIANTS.items():
             rows.append(run(label, {"spacing": 0.5, **over}))
+        for h in (0.5, 0.25):
+            rows.append(run("nonlocal strain (1 m)", {"spacing": h, **NONLOCAL}))
     area = 0.5 * SLOPE["height"] * (2 * SLOPE["crest_length"] + SLOPE["height"])
     gamma = SLOPE["rho"] * GRAVITY
     toe = SLOPE["crest_length"] + SLOPE["height"]
