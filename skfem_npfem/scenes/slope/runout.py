@@ -136,18 +136,18 @@ def runout_metrics(sim, state, values, h, x_toe, y_toe, x_crest, y_crest) -> dic
     crest_now = _surface_height(final, np.array([x_crest]), h)[0]
     travel = 0.0
     vol = 0.0
+    # Each particle's initial volume (mass over its material's density).
+    volume = p.mass / np.array([m.rho for m in sim.model.materials])[p.material]
     if moved.any():
         w = p.mass[moved]
         travel = float(np.linalg.norm((w[:, None] * p.u[moved]).sum(0) / w.sum()))
-        rho = np.array([m.rho for m in sim.model.materials])[p.material[moved]]
-        vol = float(np.sum(w / rho))
+        vol = float(np.sum(volume[moved]))
     blocks = None
     law = sim.model.strength_law
     if law is not None and law.sensitivity > 1.0:
-        rho = np.array([m.rho for m in sim.model.materials])[p.material]
         intact = SHEAR_FROM_EQUIVALENT * p.eps_p < law.ductility * math.log(2) / 3
         H = y_crest - y_toe
-        blocks = intact_blocks(x0, p.mass / rho, moved & intact, h, 0.05 * H**2)
+        blocks = intact_blocks(x0, volume, moved & intact, h, 0.05 * H**2)
     xs = np.arange(final[:, 0].min(), final[:, 0].max() + 1e-9, h)
     ys = _surface_height(final, xs, 0.75 * h)
     slope = deposit_slopes(xs, ys, final[moved, 0], h)
