@@ -75,6 +75,13 @@ class Particles:
         the increment of ``eps_p`` over ``dt``): what a rate-dependent
         strength (:attr:`~skfem_npfem.Model.strength_law`) reads.  None
         without one.
+    ids : ndarray (N,) int or None
+        Stable particle ids (a particle keeps its id when particles are
+        added, so ParaView can follow it; written as ``particle_id``).  None:
+        the row index (no particle was ever added).
+    spacing : ndarray (N,) or None
+        Target spacing of each particle, m, where particles are added as the
+        soil stretches (:mod:`skfem_npfem.run.refining`).  None: not refined.
     """
 
     x: np.ndarray
@@ -93,6 +100,8 @@ class Particles:
     strength: np.ndarray | None = field(default=None, kw_only=True)
     stiffness: np.ndarray | None = field(default=None, kw_only=True)
     shear_rate: np.ndarray | None = field(default=None, kw_only=True)
+    ids: np.ndarray | None = field(default=None, kw_only=True)
+    spacing: np.ndarray | None = field(default=None, kw_only=True)
 
     @classmethod
     def create(
@@ -334,6 +343,10 @@ class Particles:
             if arr.shape != (n,):
                 raise ParameterError(name, arr.shape, f"expected shape ({n},) or None")
             _check_finite(name, arr)
+        if self.ids is not None and self.ids.dtype.kind not in "iu":
+            raise ParameterError("ids", self.ids.dtype, "integer particle ids")
+        if self.spacing is not None and np.any(self.spacing <= 0.0):
+            raise ParameterError("spacing", float(self.spacing.min()), "spacings > 0")
         if self.strength is not None and np.any(self.strength < 0.0):
             raise ParameterError(
                 "strength",
@@ -389,6 +402,8 @@ _OPTIONAL = (
     "strength",
     "stiffness",
     "shear_rate",
+    "ids",
+    "spacing",
 )
 
 

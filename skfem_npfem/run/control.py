@@ -23,6 +23,8 @@ import threading
 import time
 from typing import Any
 
+import numpy as np
+
 __all__ = ["INTERVAL", "AbandonStep", "Progress", "SignalGuard", "end_line"]
 
 #: Seconds between progress lines when stderr is not a terminal.
@@ -207,3 +209,24 @@ class SignalGuard:
             # back from here; the default is the closest.
             signal.signal(sig, signal.SIG_DFL if old is None else old)
         self._previous.clear()
+
+
+def next_dt(
+    x_before: np.ndarray, new: Any, rec: Any, dt: float, limit_h: float, sim: Any
+) -> tuple[float, float]:
+    """The next step of displacement control and this step's displacement ratio.
+
+    The largest displacement of the particles that started the step
+    (particles added at its start are last and have no earlier position)
+    against ``limit_h`` times the mean spacing of the step's mesh.
+    """
+    h = (rec.mesh_volume / max(rec.n_active, 1)) ** (1.0 / new.dim)
+    n = x_before.shape[0]
+    du = float(np.max(np.linalg.norm(new.x[:n] - x_before, axis=1)))
+    limit = limit_h * h
+    nxt = sim.dt
+    if du > limit:
+        nxt = max(0.9 * dt * limit / du, sim.dt_min)
+    elif du > 0:
+        nxt = min(sim.dt_max, 2 * dt, 0.9 * dt * limit / du)
+    return nxt, du / limit

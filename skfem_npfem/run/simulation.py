@@ -31,8 +31,9 @@ from ..profiles import profile_point_data
 from ..step.kinematics import energies
 from ..step.model import Model
 from ..step.stages import Step, StepRecord, StepState, advance
-from .control import INTERVAL, AbandonStep, Progress, SignalGuard
+from .control import INTERVAL, AbandonStep, Progress, SignalGuard, next_dt
 from .penetration import PenetrationCheck
+from .refining import Refiner, refined_point_data
 from .rest import AtRest
 from .statistics import peak_memory_mb, run_statistics
 
@@ -94,6 +95,10 @@ class Simulation:
         :func:`~skfem_npfem.step.stages.advance`.  Another method (FEM with remapping,
         explicit SPFEM: :mod:`skfem_npfem.baseline`) plugs in here and may keep
         more state in a subclass of :class:`Particles`; checkpoints keep it.
+    refiner : Refiner or None
+        Adds particles where the soil stretches before each step
+        (:class:`~skfem_npfem.run.refining.Refiner`); None: the particles
+        stay as they are.
 
     Raises
     ------
@@ -125,6 +130,7 @@ class Simulation:
         meta: dict | None = None,
         extra_point_data: Callable[[Particles], dict[str, np.ndarray]] | None = None,
         stepper: Callable[..., tuple[Particles, Step]] | None = None,
+        refiner: Refiner | None = None,
     ) -> None:
         if not (isinstance(dt, int | float) and math.isfinite(dt) and dt > 0):
             raise ParameterError("dt", dt, "a finite time step > 0 (s)")
@@ -159,7 +165,7 @@ class Simulation:
         self._peak_memory_before = 0.0
         self.meta = dict(meta or {})
         self.extra_point_data = extra_point_data
-        self.stepper = stepper
+        self.stepper, self.refiner = stepper, refiner
         self.penetration_check = PenetrationCheck()  # a body's half a spacing
         #: What the next step starts from besides the particles (time, filter).
         self.state = StepState()
@@ -203,7 +209,7 @@ class Simulation:
         flags = free() if callable(free) else None
         if flags is not None:
             data["free_surface"] = flags
-        data.update(profile_point_data(p))  # a soil profile's factors, if any
+        data |= profile_point_data(p) | refined_point_data(p)  # if any
         if (law := self.model.strength_law) is not None:  # softening x rate
             f = law.factors(p.eps_p, p.shear_rate, p.x, p.mass)
             data["strength_law_factor"] = f
@@ -443,7 +449,9 @@ class Simulation:
                     self.dt = min(2 * self.dt, self.dt_max)
                     self._successes = 0
             if self.max_displacement is not None:
-                self._displacement_control(new, rec, dt)
+                self.dt, rec.extra["max_displacement_ratio"] = next_dt(
+                    self.particles.x, new, rec, dt, self.max_displacement, self
+                )
                 if retries:  # do not grow straight after a failure
                     self.dt = min(self.dt, dt)
             return new, result
@@ -452,35 +460,28 @@ class Simulation:
         """Write the last finished step if the output schedule skipped it.
 
         A run a solver failure or a signal stops is left with its final state
-        in ParaView too, on the mesh the next step would be built on (for a
-        failure: the failed one); a remesh that fails as well leaves the
-        written steps as they are.
+        in ParaView too, on the mesh the next step would be built on; a
+        remesh that fails as well leaves the written steps as they are.
         """
         if self.writer is None or any(
             s == self.step for s, _, _ in self.writer.entries
         ):
             return
+        if self.particles.spacing is not None:  # a refined run's alpha test
+            self.mesh_source.spacing = self.particles.spacing
         try:
             active, local_t = self.mesh_source(self.particles.x)
         except ParameterError:
             return
         self.write_output(active[local_t].T, active)
 
-    def _displacement_control(self, new: Particles, rec: StepRecord, dt: float):
-        """Set the next step from the largest displacement of this one."""
-        h = (rec.mesh_volume / max(rec.n_active, 1)) ** (1.0 / new.dim)
-        du = float(np.max(np.linalg.norm(new.x - self.particles.x, axis=1)))
-        limit = self.max_displacement * h
-        rec.extra["max_displacement_ratio"] = du / limit
-        if du > limit:
-            self.dt = max(0.9 * dt * limit / du, self.dt_min)
-        elif du > 0:
-            self.dt = min(self.dt_max, 2 * dt, 0.9 * dt * limit / du)
-
     def _advance(self, dt: float) -> tuple[Particles, Step]:
-        method = advance if self.stepper is None else self.stepper
-        args = (self.particles, self.model, dt, self.mesh_source)
-        return method(*args, step=self.step + 1, start=self.state)
+        method, p, src = self.stepper or advance, self.particles, self.mesh_source
+        if (refine := self.refiner) is not None:  # new particles come last
+            p = refine(p, src, self.model.bodies, self.state.time)
+        new, out = method(p, self.model, dt, src, step=self.step + 1, start=self.state)
+        out.record.extra.update(refine.record() if refine is not None else {})
+        return new, out
 
     def summary(self) -> dict[str, Any]:
         """Solver statistics of the run (steps, iterations, time per phase).

@@ -217,7 +217,8 @@ def with_method(values: Mapping[str, Any], srun: SceneRun) -> SceneRun:
     ------
     ParameterError
         For a bad method or option (:func:`make_method`),
-        SPFEM in a quasi-static run, a baseline with a soil profile, or an
+        SPFEM in a quasi-static run, a baseline with a soil profile or with
+        particle insertion (``refine``), or an
         ``explicit_dt`` above the stable step of the initial mesh.
     """
     name = values["method"]
@@ -235,6 +236,13 @@ def with_method(values: Mapping[str, Any], srun: SceneRun) -> SceneRun:
             name,
             "npfem with a soil profile (su_gradient): a baseline keeps one "
             "strength and stiffness per material",
+        )
+    if method is not None and sim.refiner is not None:
+        raise ParameterError(
+            "method",
+            name,
+            "npfem with refine (a baseline keeps its own state per element or "
+            "node and takes no added particles)",
         )
     if method is not None:  # what a baseline would refuse at its first step
         sim.model.refuse_loads(name)

@@ -14,6 +14,7 @@ limit analysis") says why the plastic power is the indicator.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -23,14 +24,19 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..mesh.refine import mark_share, split_around
+from ..run.refining import Refiner
 from .params import POSITIVE, Param
 
 __all__ = [
+    "INSERT_METRICS",
+    "INSERT_PARAMS",
     "REFINE_METRICS",
     "REFINE_PARAMS",
     "Adapted",
     "adapt",
     "check_refine",
+    "insert_metrics",
+    "refiner_from",
 ]
 
 #: The refinement strategies (``none``: the uniform lattice).
@@ -84,6 +90,59 @@ REFINE_METRICS = {
     "cycle (the first on the uniform lattice; seconds of that cycle's programs); "
     "null without refinement",
 }
+
+#: Particle insertion in an incremental run (the penetration scenes).
+INSERT_PARAMS = [
+    Param(
+        "refine",
+        "none",
+        "-",
+        "none (the particles stay as made) or bodies (before each step a "
+        "particle is added at the middle of every edge stretched beyond "
+        "refine_ratio times the lattice's spacing there: where the soil thins "
+        "round the pushed body; mass and momentum kept)",
+        str,
+        ("none", "bodies"),
+    ),
+    Param(
+        "refine_ratio",
+        1.6,
+        "-",
+        "refine=bodies: an edge longer than this times the smaller spacing of "
+        "its two particles is split (> 1.414, the diagonal of the lattice)",
+        float,
+        lo=math.sqrt(2.0),
+        lo_open=True,
+        hi=4.0,
+    ),
+]
+
+INSERT_METRICS = {
+    "inserted": "refine=bodies: particles added during the run (0 without refinement)",
+    "n_particles_final": "particles at the end of the run (n_particles plus the "
+    "inserted ones)",
+}
+
+
+def refiner_from(values: Mapping[str, Any]) -> Refiner | None:
+    """The run's :class:`~skfem_npfem.run.refining.Refiner` (None: ``refine=none``)."""
+    if values.get("refine", "none") == "none":
+        return None
+    return Refiner(values["refine_ratio"])
+
+
+def insert_metrics(sim: Any) -> dict[str, int]:
+    """``inserted`` and ``n_particles_final`` of a run (from its records).
+
+    The records survive a checkpoint, so a resumed run counts the particles
+    added before it too.
+    """
+    added = sum(r.extra.get("inserted", 0.0) for r in sim.records)
+    return {
+        "inserted": int(added),
+        "n_particles_final": int(sim.particles.n),
+    }
+
 
 B = TypeVar("B")
 

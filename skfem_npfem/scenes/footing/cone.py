@@ -70,6 +70,7 @@ from ..common import (
     solver_params,
 )
 from ..params import POSITIVE, Param, Values
+from ..refinement import INSERT_METRICS, INSERT_PARAMS, insert_metrics, refiner_from
 from ..scenery import Scenery, box, number
 from ..soil_profile import clay_law
 from ..water import is_wet, scene_water, water_params
@@ -245,6 +246,7 @@ PARAMS = [
         hi=100.0,
     ),
     *GROUND_PARAMS,
+    *INSERT_PARAMS,
     *water_params(coupled=True),
     *DISSIPATION_PARAMS,
     *fidelity_params(0.0),
@@ -270,6 +272,7 @@ METRICS = {
     "warnings": "what to look at (a particle deeper than half a spacing inside "
     "the cone)",
     **GROUND_METRICS,
+    **INSERT_METRICS,
     **WATER_METRICS,
     "shoulder_excess_pore_pressure": "with water only: the mean excess pore "
     "pressure at the end of the particles beside the shaft (r <= R + spacing) "
@@ -324,6 +327,7 @@ def build(
             "scene": "cone-penetration",
             "parameters": penetration_parameters(values),
         },
+        refiner=refiner_from(values),
     )
     sim.penetration_check.enabled = False  # penetration_warnings says it
     t_push = g["w"] / values["speed"]
@@ -351,6 +355,7 @@ def build(
             "max_body_penetration": max(pen, default=0.0),
             "curve": curve,
             "n_particles": int(particles.n),
+            **insert_metrics(sim_),
             "warnings": notes,
             **pore_metrics(
                 sim_.particles,

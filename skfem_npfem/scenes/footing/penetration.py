@@ -67,6 +67,7 @@ from ..common import (
 from ..limits import check_size
 from ..methods import METHOD_METRICS_NO_SPFEM, method_params, with_method
 from ..params import POSITIVE, Param, Values
+from ..refinement import INSERT_METRICS, INSERT_PARAMS, insert_metrics, refiner_from
 from ..scenery import Scenery, box, number
 from ..soil_profile import CLAY_PARAMS, clay_law, profile_params, with_profile
 from ..water import is_wet, scene_water, water_params
@@ -185,6 +186,7 @@ PARAMS = [
     WEIGHT,
     *profile_params("su"),
     *CLAY_PARAMS,
+    *INSERT_PARAMS,
     *water_params(coupled=True),
     *fidelity_params(0.0),
     *solver_params(),
@@ -212,6 +214,7 @@ METRICS = {
     "the footing; method=fem-remap with P1 elements (they lock)",
     "curve": "list of [w/B, q/s_u] per step",
     **NET_METRICS,
+    **INSERT_METRICS,
     **WATER_METRICS,
     "consolidation_coefficient": "drainage=coupled: c_v = k M / gamma_w "
     "(M = E (1 - nu)/((1 + nu)(1 - 2 nu)), the skeleton's constrained "
@@ -322,6 +325,7 @@ def build(
             "scene": "footing-penetration",
             "parameters": penetration_parameters(values),
         },
+        refiner=refiner_from(values),
     )
     t_end = w / values["speed"]
     sim.penetration_check.enabled = False  # penetration_warnings says it
@@ -333,7 +337,7 @@ def build(
         ref = prandtl_nc(0.0)
         compared = factor is not None and values["E"] >= RIGID_ENOUGH * su
         pen = [r.extra.get("footing_penetration", 0.0) for r in sim_.records]
-        heave = float(sim_.particles.u[surface, 1].max()) / B
+        heave = float(sim_.particles.u[: surface.size][surface, 1].max()) / B
         notes = (
             penetration_warnings(
                 "footing-penetration", max(pen, default=0.0), values["spacing"], dt
@@ -353,6 +357,7 @@ def build(
             "curve": curve,
             "net_curve": net_curve(curve, values),
             "n_particles": int(particles.n),
+            **insert_metrics(sim_),
         }
         if values["drainage"] == "coupled":
             cv = consolidation_coefficient(values)

@@ -1,0 +1,142 @@
+"""Particle insertion on stretched edges: conservation, exactness, ids, refusals."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skfem_npfem import Particles
+from skfem_npfem.errors import ParameterError
+from skfem_npfem.mesh.insertion import edge_shares, long_edges
+from skfem_npfem.mesh.sources import AlphaShapeMesher
+from skfem_npfem.run.refining import Refiner, refined_point_data
+
+
+def stretched(dim: int = 2, n: int = 9) -> Particles:
+    """A lattice of spacing 1/(n-1) stretched 2x sideways at its top, moving."""
+    g = np.linspace(0.0, 1.0, n)
+    x = np.stack(np.meshgrid(*[g] * dim, indexing="ij"), -1).reshape(-1, dim)
+    x[:, 0] *= 1.0 + x[:, -1]
+    rng = np.random.default_rng(3)
+    nf = 4 if dim == 2 else 6
+    stress = np.zeros((x.shape[0], nf))
+    stress[:, 0] = 3.0 + 2.0 * x[:, 0] - x[:, -1]  # linear fields
+    stress[:, nf - 1] = 0.5 * x[:, 0]
+    p = Particles.create(x, rng.uniform(0.5, 2.0, x.shape[0]), stress=stress)
+    return p.replace(v=rng.normal(size=x.shape), eps_p=0.1 * x[:, 0] + 0.2 * x[:, -1])
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_insertion_conserves_mass_and_momentum(dim):
+    p = stretched(dim, 9 if dim == 2 else 5)
+    h = 1.0 / (8 if dim == 2 else 4)
+    refiner = Refiner(1.6)
+    q = refiner(p, AlphaShapeMesher(h, 1.5))
+    assert q.n > p.n and refiner.inserted == q.n - p.n
+    # Conservation laws, to round-off (relative).
+    assert abs(q.mass.sum() - p.mass.sum()) <= 1e-14 * p.mass.sum()
+    mom0 = (p.mass[:, None] * p.v).sum(0)
+    mom1 = (q.mass[:, None] * q.v).sum(0)
+    scale = np.abs(p.mass[:, None] * p.v).sum()
+    assert np.abs(mom1 - mom0).max() <= 1e-12 * scale
+    assert refiner.last.momentum_error <= 1e-12
+    assert np.all(q.mass > 0)
+    # The particles that were there keep their positions, velocities, stresses.
+    np.testing.assert_array_equal(q.x[: p.n], p.x)
+    np.testing.assert_array_equal(q.v[: p.n], p.v)
+    np.testing.assert_array_equal(q.stress[: p.n], p.stress)
+
+
+def test_new_particles_sit_on_the_midpoints_with_the_linear_fields_exact():
+    p = stretched()
+    q = Refiner(1.6)(p, AlphaShapeMesher(0.125, 1.5))
+    new = q.x[p.n :]
+    # A field linear in x is exact at the midpoint of any edge.
+    np.testing.assert_allclose(
+        q.stress[p.n :, 0], 3.0 + 2.0 * new[:, 0] - new[:, 1], atol=1e-13
+    )
+    np.testing.assert_allclose(q.stress[p.n :, 3], 0.5 * new[:, 0], atol=1e-14)
+    np.testing.assert_allclose(
+        q.eps_p[p.n :], 0.1 * new[:, 0] + 0.2 * new[:, 1], atol=1e-14
+    )
+    # Only stretched edges were split: every new particle is at least half the
+    # threshold away from its nearest old particle.
+    d = np.linalg.norm(new[:, None, :] - p.x[None, :, :], axis=2).min(axis=1)
+    assert d.min() >= 0.5 * 1.6 * 0.125 - 1e-12
+
+
+def test_ids_are_stable_and_new_ones_come_after_the_largest():
+    p = stretched()
+    mesher = AlphaShapeMesher(0.125, 1.5)
+    refiner = Refiner(1.6)
+    q = refiner(p, mesher)
+    np.testing.assert_array_equal(q.ids[: p.n], np.arange(p.n))
+    np.testing.assert_array_equal(q.ids[p.n :], np.arange(p.n, q.n))
+    r = refiner(q.replace(x=q.x * [1.3, 1.0]), mesher)  # stretch again
+    assert r.n > q.n
+    np.testing.assert_array_equal(r.ids[: q.n], q.ids)
+    assert np.unique(r.ids).size == r.n
+    assert mesher.spacing.shape == (r.n,)  # the alpha test follows the count
+    data = refined_point_data(r)
+    np.testing.assert_array_equal(data["particle_id"], r.ids)
+    assert refined_point_data(p) == {}
+
+
+def test_an_undeformed_lattice_gets_no_particle():
+    g = np.linspace(0.0, 1.0, 6)
+    x = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
+    p = Particles.create(x, np.ones(x.shape[0]))
+    q = Refiner(1.6)(p, AlphaShapeMesher(0.2, 1.3))
+    assert q.n == p.n
+
+
+def donor_pairs(p: Particles, q: Particles) -> list[np.ndarray]:
+    """For each new particle, the old pairs whose midpoint it is (one or more:
+    the diagonals of a parallelogram share theirs)."""
+    mid = 0.5 * (p.x[:, None, :] + p.x[None, :, :])
+    out = []
+    for y in q.x[p.n :]:
+        i, j = np.nonzero(np.linalg.norm(mid - y, axis=2) < 1e-12)
+        assert i.size, "a new particle off every midpoint"
+        out.append(np.stack([i, j], axis=1))
+    return out
+
+
+def test_edges_across_materials_or_with_a_fixed_end_are_not_split():
+    p = stretched()
+    free = Refiner(1.6)(p, AlphaShapeMesher(0.125, 1.5))
+    top = p.x[:, 1] > 0.7
+    fixed = np.repeat(top[:, None], 2, axis=1)  # the stretched top: a support
+    q = Refiner(1.6)(p.replace(fixed=fixed), AlphaShapeMesher(0.125, 1.5))
+    assert q.n < free.n  # some edges were split there before
+    assert all(np.any(~top[c].any(axis=1)) for c in donor_pairs(p, q))
+    # Columns of alternating materials: every stretched edge crosses two.
+    column = np.rint(p.x[:, 0] / (1.0 + p.x[:, 1]) * 8).astype(np.int64)
+    r = Refiner(1.6)(p.replace(material=column % 2), AlphaShapeMesher(0.125, 1.5))
+    assert r.n == p.n
+
+
+def test_long_edges_take_one_edge_per_particle():
+    x = np.array([[0.0, 0.0], [3.0, 0.0], [6.5, 0.0], [3.0, 4.0]])
+    edges = np.array([[0, 1], [1, 2], [1, 3], [0, 3]])
+    chosen = long_edges(x, edges, np.ones(4), 1.6)
+    ends = edges[chosen].ravel()
+    assert np.unique(ends).size == ends.size  # disjoint
+    assert 3 in chosen  # the longest (5.0) first
+
+
+def test_edge_shares_split_the_volume_in_halves():
+    x = np.array([[0.0, 0.0], [2.0, 0.0], [0.0, 1.0], [2.0, 1.0]])
+    t = np.array([[0, 1, 2], [1, 3, 2]])
+    edges, share, volume = edge_shares(x, t)
+    # Each triangle has area 1: a node's share 1/3 per triangle; an edge's
+    # split frees 1/6 per triangle at each end.
+    np.testing.assert_allclose(volume, [1 / 3, 2 / 3, 2 / 3, 1 / 3])
+    diag = np.flatnonzero((edges == [1, 2]).all(axis=1))[0]
+    assert share[diag] == pytest.approx(2 / 6)
+    assert volume.sum() == pytest.approx(2.0)
+
+
+def test_refiner_refuses_a_ratio_below_the_lattice_diagonal():
+    with pytest.raises(ParameterError, match="ratio"):
+        Refiner(1.2)

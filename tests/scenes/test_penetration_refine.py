@@ -1,0 +1,76 @@
+"""A footing pushed with particles added where the soil stretches (refine=bodies)."""
+
+from __future__ import annotations
+
+import shutil
+
+import numpy as np
+import pytest
+
+from skfem_npfem.errors import ParameterError
+from skfem_npfem.io import load_checkpoint, read_pvd, read_step
+from skfem_npfem.scenes import run_scene
+
+COARSE = {"spacing": 0.1, "refine": "bodies"}  # 957 particles, 40 steps
+
+
+@pytest.fixture(scope="module")
+def refined(tmp_path_factory):
+    out = tmp_path_factory.mktemp("refined") / "run"
+    return out, run_scene("footing-penetration", COARSE, out=out)
+
+
+def test_particles_are_added_with_mass_kept_and_ids_stable(refined):
+    out, summary = refined
+    m = summary["metrics"]
+    assert m["inserted"] > 0
+    assert m["n_particles_final"] == m["n_particles"] + m["inserted"]
+    series = read_pvd(out / "result.pvd")
+    a, b = read_step(series[0][1]), read_step(series[-1][1])
+    # Conservation: the total mass of the run is the initial one (round-off).
+    assert b.point_data["mass"].sum() == pytest.approx(
+        a.point_data["mass"].sum(), rel=1e-12
+    )
+    ids = b.point_data["particle_id"]
+    assert np.unique(ids).size == ids.size == m["n_particles_final"]
+    # A particle keeps its id and its row: the first rows are the initial ones.
+    np.testing.assert_array_equal(ids[: m["n_particles"]], np.arange(m["n_particles"]))
+    # Every step's insertion conserved momentum to round-off.
+    arrays, meta = load_checkpoint(sorted(out.glob("checkpoint_*.npz"))[-1])
+    errors = [r["insertion_momentum_error"] for r in meta["records"]]
+    assert max(errors) < 1e-12
+    assert arrays["ids"].size == m["n_particles_final"]
+
+
+def test_a_run_resumed_across_insertions_repeats_the_uninterrupted_one(
+    refined, tmp_path
+):
+    out, summary = refined
+    cut = tmp_path / "cut"
+    shutil.copytree(out, cut)  # the folder a kill -9 after step 25 leaves
+    (cut / "checkpoint_000040.npz").unlink()
+    _, meta20 = load_checkpoint(cut / "checkpoint_000020.npz")
+    added_after = sum(r["inserted"] for r in summary_records(out)[20:])
+    assert added_after > 0  # the resumed part inserts particles
+    resumed = run_scene("footing-penetration", COARSE, out=cut, resume=True)
+    assert resumed["metrics"]["inserted"] == summary["metrics"]["inserted"]
+    a, _ = load_checkpoint(out / "checkpoint_000040.npz")
+    b, _ = load_checkpoint(cut / "checkpoint_000040.npz")
+    assert sorted(a) == sorted(b)
+    for name in a:
+        np.testing.assert_array_equal(a[name], b[name], err_msg=name)
+    assert meta20["step"] == 20
+
+
+def summary_records(out) -> list[dict]:
+    """The step records of the last checkpoint of ``out``."""
+    return load_checkpoint(sorted(out.glob("checkpoint_*.npz"))[-1])[1]["records"]
+
+
+@pytest.mark.filterwarnings("ignore:footing-penetration")  # P1 FEM's locking note
+def test_a_baseline_method_refuses_refinement():
+    with pytest.raises(ParameterError, match="refine"):
+        run_scene(
+            "footing-penetration",
+            {**COARSE, "method": "fem-remap", "penetration": 0.1},
+        )
