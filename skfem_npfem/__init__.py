@@ -71,6 +71,7 @@ from .mesh.smoothing import NodalIntegration, nodal_integration, p1_gradients
 from .mesh.sources import AlphaShapeMesher, FixedMesh, main_body
 from .metrics import stress_roughness
 from .particles import Particles
+from .run.refining import Refiner
 from .run.rest import AtRest
 from .run.simulation import Simulation
 from .scenes import SCENES, get_scene, run_scene
@@ -84,7 +85,15 @@ from .sweeps import sweep
 from .water import Water, WaterTable
 
 #: Run a scene.
-__all__ = ["SCENES", "AtRest", "Simulation", "__version__", "get_scene", "run_scene"]
+__all__ = [
+    "SCENES",
+    "AtRest",
+    "Refiner",
+    "Simulation",
+    "__version__",
+    "get_scene",
+    "run_scene",
+]
 #: Output: the VTU series of a run (``Simulation(..., writer=ResultWriter(dir))``).
 __all__ += ["ResultWriter"]
 #: Build particles and meshes.

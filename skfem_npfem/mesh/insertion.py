@@ -35,7 +35,14 @@ import numpy as np
 
 from ..particles import Particles
 
-__all__ = ["Insertion", "edge_shares", "insert_midpoints", "long_edges"]
+__all__ = [
+    "Insertion",
+    "conservation_errors",
+    "disjoint_edges",
+    "edge_shares",
+    "insert_midpoints",
+    "long_edges",
+]
 
 
 @dataclass(frozen=True)
@@ -136,13 +143,30 @@ def long_edges(
     candidate = stretch > ratio
     if allowed is not None:
         candidate &= allowed
+    return disjoint_edges(edges, stretch, candidate, x.shape[0])
+
+
+def disjoint_edges(
+    edges: np.ndarray, score: np.ndarray, candidate: np.ndarray, n: int
+) -> np.ndarray:
+    """Candidate edges that score highest at both their ends (a disjoint set).
+
+    Ties go to the lower index.  Returns indices into ``edges``, increasing.
+
+    Examples
+    --------
+    >>> e = np.array([[0, 1], [1, 2], [2, 3]])
+    >>> disjoint_edges(e, np.array([1.0, 3.0, 2.0]), np.ones(3, bool), 4).tolist()
+    [1]
+    """
+    a, b = edges[:, 0], edges[:, 1]
     idx = np.flatnonzero(candidate)
     if idx.size == 0:
         return idx
-    order = idx[np.argsort(-stretch[idx], kind="stable")]
+    order = idx[np.argsort(-score[idx], kind="stable")]
     rank = np.empty(edges.shape[0], np.intp)
     rank[order] = np.arange(order.size)
-    first = np.full(x.shape[0], order.size, np.intp)
+    first = np.full(n, order.size, np.intp)
     np.minimum.at(first, a[order], rank[order])
     np.minimum.at(first, b[order], rank[order])
     keep = (first[a[order]] == rank[order]) & (first[b[order]] == rank[order])
@@ -214,13 +238,19 @@ def insert_midpoints(
     changes["ids"] = np.concatenate([ids, np.arange(start, start + k, dtype=ids.dtype)])
     changes["spacing"] = np.concatenate([spacing, np.minimum(spacing[a], spacing[b])])
     out = p.replace(**changes)
-    m0 = float(p.mass.sum())
-    mom0 = (p.mass[:, None] * p.v).sum(axis=0)
-    mom1 = (out.mass[:, None] * out.v).sum(axis=0)
-    scale = float(np.abs(p.mass[:, None] * p.v).sum())
-    report = Insertion(
-        k,
-        abs(float(out.mass.sum()) - m0) / m0,
+    return out, Insertion(k, *conservation_errors(p, out))
+
+
+def conservation_errors(before: Particles, after: Particles) -> tuple[float, float]:
+    """Relative changes of the total mass and momentum (0 at rest).
+
+    ``|sum m - sum m0| / sum m0`` and ``max |sum m v - sum m0 v0| / sum |m0 v0|``.
+    """
+    m0 = float(before.mass.sum())
+    mom0 = (before.mass[:, None] * before.v).sum(axis=0)
+    mom1 = (after.mass[:, None] * after.v).sum(axis=0)
+    scale = float(np.abs(before.mass[:, None] * before.v).sum())
+    return (
+        abs(float(after.mass.sum()) - m0) / m0,
         float(np.abs(mom1 - mom0).max()) / scale if scale > 0 else 0.0,
     )
-    return out, report

@@ -216,13 +216,12 @@ def next_dt(
 ) -> tuple[float, float]:
     """The next step of displacement control and this step's displacement ratio.
 
-    The largest displacement of the particles that started the step
-    (particles added at its start are last and have no earlier position)
-    against ``limit_h`` times the mean spacing of the step's mesh.
+    The largest displacement from ``x_before`` (where the step's particles
+    started, after any refinement) against ``limit_h`` times the mean
+    spacing of the step's mesh.
     """
     h = (rec.mesh_volume / max(rec.n_active, 1)) ** (1.0 / new.dim)
-    n = x_before.shape[0]
-    du = float(np.max(np.linalg.norm(new.x[:n] - x_before, axis=1)))
+    du = float(np.max(np.linalg.norm(new.x - x_before, axis=1)))
     limit = limit_h * h
     nxt = sim.dt
     if du > limit:

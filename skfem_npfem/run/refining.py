@@ -26,9 +26,10 @@ import numpy as np
 from ..boundary import RigidBody
 from ..errors import ParameterError
 from ..mesh.insertion import Insertion, edge_shares, insert_midpoints, long_edges
+from ..mesh.merging import Merging, merge_pairs, short_edges
 from ..particles import Particles
 
-__all__ = ["Refiner", "refined_point_data"]
+__all__ = ["Refiner", "initial_rows", "refined_point_data"]
 
 
 class Refiner:
@@ -36,10 +37,16 @@ class Refiner:
 
     Parameters
     ----------
-    ratio : float, default 1.6
+    ratio : float or None, default 1.6
         An edge is split when longer than ``ratio`` times its ends' smaller
         target spacing (> sqrt(2): the diagonal of an undeformed square
-        lattice is never split).
+        lattice is never split).  None: no particle is added (a graded
+        lattice's spacing carried, merging only if ``merge``).
+    merge : float, default 0.0
+        Two particles closer than ``merge`` times the larger target spacing
+        of the two are merged into one (:mod:`skfem_npfem.mesh.merging`);
+        0: never.  Below ``ratio / 2``, so that a merged pair is not split
+        again.
     max_spacing_ratio : float, default 4.0
         A particle whose nodal volume exceeds this many times its spacing^d is
         no donor (a lone particle at a free surface).
@@ -49,34 +56,65 @@ class Refiner:
     inserted : int
         Particles added so far by this refiner.
     last : Insertion
-        The last pass.
+        The last pass's insertions (``last_merge``: its merges).
+    particles : Particles
+        What the last call returned: the particles the step starts from.
 
     Raises
     ------
     ParameterError
-        If ``ratio`` is not a number > sqrt(2).
+        If ``ratio`` is not a number > sqrt(2), or ``merge`` not in
+        ``[0, ratio / 2)``.
     """
 
-    def __init__(self, ratio: float = 1.6, max_spacing_ratio: float = 4.0) -> None:
-        if not (isinstance(ratio, int | float) and math.isfinite(ratio)) or not (
-            ratio > math.sqrt(2.0)
+    def __init__(
+        self,
+        ratio: float | None = 1.6,
+        merge: float = 0.0,
+        max_spacing_ratio: float = 4.0,
+    ) -> None:
+        if ratio is not None and (
+            not (isinstance(ratio, int | float) and math.isfinite(ratio))
+            or not ratio > math.sqrt(2.0)
         ):
             raise ParameterError(
-                "ratio", ratio, "a number > sqrt(2) = 1.414 (edge over spacing)"
+                "ratio",
+                ratio,
+                "a number > sqrt(2) = 1.414 (edge over spacing), or None (no "
+                "insertion)",
             )
-        self.ratio = float(ratio)
+        half = math.inf if ratio is None else 0.5 * ratio
+        if not (isinstance(merge, int | float) and 0.0 <= merge < half):
+            raise ParameterError(
+                "merge",
+                merge,
+                f"a number in [0, ratio / 2 = {half:g}) (0: never merge; a merged "
+                "pair must not be split again at once)",
+            )
+        self.ratio = math.inf if ratio is None else float(ratio)
+        self.merge = float(merge)
         self.max_spacing_ratio = float(max_spacing_ratio)
         self.inserted = 0
         self.last = Insertion()
+        self.last_merge = Merging()
+        self._loads0: np.ndarray | None = None  # the model's dead loads at start
 
     def __call__(
         self,
         p: Particles,
         mesh_source: Any,
-        bodies: Sequence[RigidBody] = (),
+        model: Any = None,
         time: float = 0.0,
     ) -> Particles:
-        """The particles ``p`` with the stretched edges split; syncs the spacing."""
+        """The particles ``p`` refined; syncs the spacing and the model's loads.
+
+        ``model`` (a :class:`~skfem_npfem.Model`, optional): its bodies get
+        no particle inside them, and its dead loads (``loads``, one row per
+        particle) follow the particles: an initial particle keeps its load,
+        an added one has none.  A model with tied groups of particles
+        (``tied``) is refused, and so is merging with dead loads.
+        """
+        bodies = self._check_model(model)
         if not hasattr(mesh_source, "triangulate"):
             raise ParameterError(
                 "mesh_source",
@@ -97,18 +135,53 @@ class Refiner:
         donor = free & (volume > 0) & (volume < self.max_spacing_ratio * spacing**d)
         allowed = donor[a] & donor[b] & (p.material[a] == p.material[b])
         chosen = long_edges(p.x, edges, spacing, self.ratio, allowed)
-        if chosen.size and bodies:
-            mid = 0.5 * (p.x[a[chosen]] + p.x[b[chosen]])
-            inside = np.zeros(chosen.size, bool)
-            for body in bodies:
-                inside |= body.contains(mid, time)
-            chosen = chosen[~inside]
+        chosen = chosen[_clear(bodies, 0.5 * (p.x[a[chosen]] + p.x[b[chosen]]), time)]
+        pairs = edges[:0]
+        if self.merge > 0.0:  # never a particle of a split edge
+            busy = np.zeros(p.n, bool)
+            busy[edges[chosen].ravel()] = True
+            same = free[a] & free[b] & (p.material[a] == p.material[b])
+            short = short_edges(
+                p.x, edges, spacing, self.merge, same & ~busy[a] & ~busy[b]
+            )
+            m = p.mass[a[short], None], p.mass[b[short], None]
+            centre = (m[0] * p.x[a[short]] + m[1] * p.x[b[short]]) / (m[0] + m[1])
+            pairs = edges[short[_clear(bodies, centre, time)]]
         out, self.last = insert_midpoints(
             p, edges[chosen], share[chosen], volume, ids, spacing
         )
+        # The merged rows are below p.n: the added particles (last) keep theirs.
+        out, self.last_merge = merge_pairs(out, pairs, out.ids, out.spacing)
         self.inserted += self.last.count
         mesh_source.spacing = out.spacing
+        if self._loads0 is not None:  # a function of the ids: retries repeat it
+            loads = np.zeros((out.n, out.dim))
+            rows, first = initial_rows(out, self._loads0.shape[0])
+            loads[rows] = self._loads0[first]
+            model.loads = loads
+        self.particles = out
         return out
+
+    def _check_model(self, model: Any) -> Sequence[RigidBody]:
+        """The model's bodies; keeps its initial dead loads; refuses ties."""
+        if model is None:
+            return ()
+        if getattr(model, "tied", None):
+            raise ParameterError(
+                "tied",
+                f"{len(model.tied)} tied group(s)",
+                "None with particle refinement (a tied group names particles by row)",
+            )
+        if model.loads is not None and self._loads0 is None:
+            if self.merge > 0.0:
+                raise ParameterError(
+                    "merge",
+                    self.merge,
+                    "0 with dead loads (Model.loads): a merged pair's load "
+                    "would have to move",
+                )
+            self._loads0 = np.array(model.loads)
+        return model.bodies
 
     def record(self) -> dict[str, float]:
         """The last pass for a step record's ``extra``."""
@@ -116,7 +189,17 @@ class Refiner:
             "inserted": float(self.last.count),
             "insertion_mass_error": self.last.mass_error,
             "insertion_momentum_error": self.last.momentum_error,
+            "merged": float(self.last_merge.count),
+            "merging_momentum_error": self.last_merge.momentum_error,
         }
+
+
+def _clear(bodies: Sequence[RigidBody], x: np.ndarray, time: float) -> np.ndarray:
+    """Points ``x`` outside every body at ``time`` (n,) bool."""
+    inside = np.zeros(x.shape[0], bool)
+    for body in bodies if x.shape[0] else ():
+        inside |= body.contains(x, time)
+    return ~inside
 
 
 def refined_point_data(p: Particles) -> dict[str, np.ndarray]:
@@ -131,3 +214,24 @@ def refined_point_data(p: Particles) -> dict[str, np.ndarray]:
     if p.spacing is not None:
         out["target_spacing"] = p.spacing
     return out
+
+
+def initial_rows(p: Particles, n0: int) -> tuple[np.ndarray, np.ndarray]:
+    """The rows of ``p`` that hold particles of the initial ``n0``, and their ids.
+
+    Without refinement (``p.ids`` None) every row is its own initial
+    particle.  A scene that marked initial particles (a boolean mask of
+    ``n0``) reads ``values[rows]`` against ``mask[ids]``.
+
+    Examples
+    --------
+    >>> q = Particles.create([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]], 1.0)
+    >>> rows, ids = initial_rows(q.replace(ids=np.array([0, 2, 3])), 3)
+    >>> rows.tolist(), ids.tolist()
+    ([0, 1], [0, 2])
+    """
+    if p.ids is None:
+        rows = np.arange(min(p.n, n0))
+        return rows, rows
+    rows = np.flatnonzero(p.ids < n0)
+    return rows, p.ids[rows]

@@ -96,9 +96,8 @@ class Simulation:
         explicit SPFEM: :mod:`skfem_npfem.baseline`) plugs in here and may keep
         more state in a subclass of :class:`Particles`; checkpoints keep it.
     refiner : Refiner or None
-        Adds particles where the soil stretches before each step
-        (:class:`~skfem_npfem.run.refining.Refiner`); None: the particles
-        stay as they are.
+        Adds (and merges) particles before each step, where the soil
+        stretches (:class:`~skfem_npfem.run.refining.Refiner`); None: off.
 
     Raises
     ------
@@ -449,8 +448,9 @@ class Simulation:
                     self.dt = min(2 * self.dt, self.dt_max)
                     self._successes = 0
             if self.max_displacement is not None:
+                start = (self.refiner or self).particles  # what the step moved
                 self.dt, rec.extra["max_displacement_ratio"] = next_dt(
-                    self.particles.x, new, rec, dt, self.max_displacement, self
+                    start.x, new, rec, dt, self.max_displacement, self
                 )
                 if retries:  # do not grow straight after a failure
                     self.dt = min(self.dt, dt)
@@ -478,7 +478,7 @@ class Simulation:
     def _advance(self, dt: float) -> tuple[Particles, Step]:
         method, p, src = self.stepper or advance, self.particles, self.mesh_source
         if (refine := self.refiner) is not None:  # new particles come last
-            p = refine(p, src, self.model.bodies, self.state.time)
+            p = refine(p, src, self.model, self.state.time)
         new, out = method(p, self.model, dt, src, step=self.step + 1, start=self.state)
         out.record.extra.update(refine.record() if refine is not None else {})
         return new, out

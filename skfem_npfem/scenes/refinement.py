@@ -36,6 +36,7 @@ __all__ = [
     "adapt",
     "check_refine",
     "insert_metrics",
+    "insert_params",
     "refiner_from",
 ]
 
@@ -91,55 +92,102 @@ REFINE_METRICS = {
     "null without refinement",
 }
 
-#: Particle insertion in an incremental run (the penetration scenes).
-INSERT_PARAMS = [
-    Param(
-        "refine",
-        "none",
-        "-",
-        "none (the particles stay as made) or bodies (before each step a "
-        "particle is added at the middle of every edge stretched beyond "
-        "refine_ratio times the lattice's spacing there: where the soil thins "
-        "round the pushed body; mass and momentum kept)",
-        str,
-        ("none", "bodies"),
-    ),
-    Param(
-        "refine_ratio",
-        1.6,
-        "-",
-        "refine=bodies: an edge longer than this times the smaller spacing of "
-        "its two particles is split (> 1.414, the diagonal of the lattice)",
-        float,
-        lo=math.sqrt(2.0),
-        lo_open=True,
-        hi=4.0,
-    ),
-]
+
+def insert_params(strategy: str, what: str, ratio: float = 1.6) -> list[Param]:
+    """``refine`` (``none`` or ``strategy``), ``refine_ratio``, ``refine_merge``.
+
+    ``what`` says what ``refine=strategy`` does besides the insertion;
+    ``ratio`` is the default ``refine_ratio`` (0: no insertion by default).
+    """
+    return [
+        Param(
+            "refine",
+            "none",
+            "-",
+            f"none (the particles stay as made) or {strategy} ({what}with "
+            "refine_ratio > 0, before each step a particle is added at the middle "
+            "of every edge stretched beyond refine_ratio times its particles' "
+            "spacing: where the soil thins; mass and momentum kept)",
+            str,
+            ("none", strategy),
+        ),
+        Param(
+            "refine_ratio",
+            ratio,
+            "-",
+            f"refine={strategy}: an edge longer than this times the smaller "
+            "spacing of its two particles is split (> 1.414, the diagonal of "
+            "the lattice; 0: no particle is added)",
+            float,
+            lo=0.0,
+            hi=4.0,
+        ),
+        Param(
+            "refine_merge",
+            0.0,
+            "-",
+            f"refine={strategy}: two particles closer than this times the larger "
+            "spacing of the two are merged into one (mass and momentum kept; "
+            "0: never; below refine_ratio / 2)",
+            float,
+            lo=0.0,
+            hi=0.7,
+            hi_open=True,
+        ),
+    ]
+
+
+#: Particle insertion in the penetration scenes (round the pushed body).
+INSERT_PARAMS = insert_params(
+    "bodies", "the lattice is graded round the body's path, as without; "
+)
 
 INSERT_METRICS = {
-    "inserted": "refine=bodies: particles added during the run (0 without refinement)",
+    "inserted": "refine: particles added during the run (0 without refinement)",
+    "merged": "refine with refine_merge > 0: pairs of particles merged into one "
+    "during the run",
     "n_particles_final": "particles at the end of the run (n_particles plus the "
-    "inserted ones)",
+    "inserted ones, less the merged pairs)",
 }
 
 
 def refiner_from(values: Mapping[str, Any]) -> Refiner | None:
-    """The run's :class:`~skfem_npfem.run.refining.Refiner` (None: ``refine=none``)."""
+    """The run's :class:`~skfem_npfem.run.refining.Refiner`.
+
+    None with ``refine=none``, or when it would neither add (``refine_ratio``
+    0) nor merge (``refine_merge`` 0) particles.
+
+    Raises
+    ------
+    ParameterError
+        For a ``refine_ratio`` in (0, sqrt(2)].
+    """
     if values.get("refine", "none") == "none":
         return None
-    return Refiner(values["refine_ratio"])
+    ratio = values["refine_ratio"]
+    if 0.0 < ratio <= math.sqrt(2.0):
+        raise ParameterError(
+            "refine_ratio",
+            ratio,
+            "0 (no insertion) or a number > 1.414 (the lattice's diagonal over "
+            "its spacing: an undeformed lattice would be split everywhere)",
+        )
+    if ratio == 0.0 and values["refine_merge"] == 0.0:
+        return None  # a graded lattice only: its mesher carries the spacing
+    return Refiner(ratio or None, values["refine_merge"])
 
 
 def insert_metrics(sim: Any) -> dict[str, int]:
-    """``inserted`` and ``n_particles_final`` of a run (from its records).
+    """``inserted``, ``merged`` and ``n_particles_final`` of a run (its records).
 
     The records survive a checkpoint, so a resumed run counts the particles
     added before it too.
     """
     added = sum(r.extra.get("inserted", 0.0) for r in sim.records)
+    merged = sum(r.extra.get("merged", 0.0) for r in sim.records)
     return {
         "inserted": int(added),
+        "merged": int(merged),
         "n_particles_final": int(sim.particles.n),
     }
 

@@ -140,3 +140,78 @@ def test_edge_shares_split_the_volume_in_halves():
 def test_refiner_refuses_a_ratio_below_the_lattice_diagonal():
     with pytest.raises(ParameterError, match="ratio"):
         Refiner(1.2)
+
+
+def crowded(dim: int = 2) -> Particles:
+    """A lattice of spacing 0.125 squeezed to a third of it at the top."""
+    g = np.linspace(0.0, 1.0, 9 if dim == 2 else 5)
+    x = np.stack(np.meshgrid(*[g] * dim, indexing="ij"), -1).reshape(-1, dim)
+    x[:, -1] = np.where(x[:, -1] > 0.7, 0.7 + (x[:, -1] - 0.7) / 3.0, x[:, -1])
+    rng = np.random.default_rng(5)
+    stress = np.zeros((x.shape[0], 4 if dim == 2 else 6))
+    stress[:, 0] = 3.0 + 2.0 * x[:, 0]
+    p = Particles.create(x, rng.uniform(0.5, 2.0, x.shape[0]), stress=stress)
+    return p.replace(v=rng.normal(size=x.shape), eps_p=rng.uniform(size=x.shape[0]))
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_merging_conserves_mass_momentum_and_the_centre_of_mass(dim):
+    p = crowded(dim)
+    h = 0.125 if dim == 2 else 0.25
+    refiner = Refiner(3.0, merge=0.4)  # merges only (an insertion moves mass)
+    q = refiner(p, AlphaShapeMesher(h, 1.5))
+    k = refiner.last_merge.count
+    assert k > 0 and refiner.last.count == 0 and q.n == p.n - k
+    assert abs(q.mass.sum() - p.mass.sum()) <= 1e-14 * p.mass.sum()
+    for field in ("x", "v"):  # centre of mass and momentum
+        before = (p.mass[:, None] * getattr(p, field)).sum(0)
+        after = (q.mass[:, None] * getattr(q, field)).sum(0)
+        scale = np.abs(p.mass[:, None] * getattr(p, field)).sum()
+        assert np.abs(after - before).max() <= 1e-13 * scale, field
+    # Ids stay unique; the largest id survives, so an added one never reuses one.
+    assert np.unique(q.ids).size == q.n
+    assert q.ids.max() == p.n - 1
+
+    # The crowding went down: fewer particles have a neighbour closer than
+    # the merge threshold.
+    def closest(z):
+        d = np.linalg.norm(z[:, None] - z[None], axis=2)
+        return np.sort(d + np.eye(len(z)) * 9, axis=1)[:, 0]
+
+    assert np.sum(closest(q.x) < 0.4 * h) < np.sum(closest(p.x) < 0.4 * h)
+    # The stress of a merged particle is a mean of two: within their range.
+    assert q.stress[:, 0].min() >= p.stress[:, 0].min() - 1e-12
+    assert q.stress[:, 0].max() <= p.stress[:, 0].max() + 1e-12
+
+
+def test_merge_threshold_must_stay_below_half_the_split_ratio():
+    with pytest.raises(ParameterError, match="merge"):
+        Refiner(1.6, merge=0.9)
+
+
+def test_dead_loads_follow_the_particles_and_ties_are_refused():
+    from skfem_npfem import LinearElastic, Model
+
+    p = stretched()
+    loads = np.zeros((p.n, 2))
+    top = p.x[:, 1] > 0.99
+    loads[top, 1] = -np.arange(1.0, top.sum() + 1.0)
+    model = Model(dim=2, materials=[LinearElastic(1e6, 0.3)], loads=loads)
+    refiner = Refiner(1.6)
+    q = refiner(p, AlphaShapeMesher(0.125, 1.5), model)
+    assert q.n > p.n and model.loads.shape == (q.n, 2)
+    np.testing.assert_array_equal(model.loads[: p.n], loads)  # kept, by row
+    assert not np.any(model.loads[p.n :])  # an added particle carries none
+    # A retry of the step from the same particles gives the same loads.
+    again = refiner(p, AlphaShapeMesher(0.125, 1.5), model)
+    assert again.n == q.n and model.loads.shape == (q.n, 2)
+    with pytest.raises(ParameterError, match="merge"):
+        Refiner(1.6, merge=0.3)(p, AlphaShapeMesher(0.125, 1.5), model)
+    tied = Model(
+        dim=2,
+        materials=[LinearElastic(1e6, 0.3)],
+        mode="static",
+        tied=[(np.array([0, 1, 2]), 1)],
+    )
+    with pytest.raises(ParameterError, match="tied"):
+        Refiner(1.6)(p, AlphaShapeMesher(0.125, 1.5), tied)

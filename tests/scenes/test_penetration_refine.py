@@ -25,14 +25,7 @@ def test_particles_are_added_with_mass_kept_and_ids_stable(refined):
     m = summary["metrics"]
     assert m["inserted"] > 0
     assert m["n_particles_final"] == m["n_particles"] + m["inserted"]
-    series = read_pvd(out / "result.pvd")
-    a, b = read_step(series[0][1]), read_step(series[-1][1])
-    # Conservation: the total mass of the run is the initial one (round-off).
-    assert b.point_data["mass"].sum() == pytest.approx(
-        a.point_data["mass"].sum(), rel=1e-12
-    )
-    ids = b.point_data["particle_id"]
-    assert np.unique(ids).size == ids.size == m["n_particles_final"]
+    ids = mass_kept_and_ids(out, m["n_particles_final"])
     # A particle keeps its id and its row: the first rows are the initial ones.
     np.testing.assert_array_equal(ids[: m["n_particles"]], np.arange(m["n_particles"]))
     # Every step's insertion conserved momentum to round-off.
@@ -62,6 +55,22 @@ def test_a_run_resumed_across_insertions_repeats_the_uninterrupted_one(
     assert meta20["step"] == 20
 
 
+def mass_kept_and_ids(out, n_final: int) -> np.ndarray:
+    """The last step's ids, after checking the total mass and the ids' count.
+
+    Conservation: the total mass of the run's last step is the initial one
+    (to round-off); every particle has its own id.
+    """
+    series = read_pvd(out / "result.pvd")
+    a, b = read_step(series[0][1]), read_step(series[-1][1])
+    assert b.point_data["mass"].sum() == pytest.approx(
+        a.point_data["mass"].sum(), rel=1e-12
+    )
+    ids = b.point_data["particle_id"]
+    assert np.unique(ids).size == ids.size == n_final
+    return ids
+
+
 def summary_records(out) -> list[dict]:
     """The step records of the last checkpoint of ``out``."""
     return load_checkpoint(sorted(out.glob("checkpoint_*.npz"))[-1])[1]["records"]
@@ -74,3 +83,35 @@ def test_a_baseline_method_refuses_refinement():
             "footing-penetration",
             {**COARSE, "method": "fem-remap", "penetration": 0.1},
         )
+
+
+def test_the_cone_with_its_surcharge_refines_and_keeps_its_dead_load(tmp_path):
+    from skfem_npfem.scenes import get_scene
+
+    D = 0.0357
+    scene = get_scene("cone-penetration")
+    values = scene.resolve(
+        {"spacing": D / 6, "penetration": 2 * D, "dt": D / 6 / 0.02, "refine": "bodies"}
+    )
+    srun = scene.build(values)
+    sim = srun.simulation
+    total = sim.model.loads.sum(axis=0)
+    n0, mass = sim.particles.n, sim.particles.mass.sum()
+    sim.progress = False
+    sim.run(**srun.run_kwargs)
+    assert sim.particles.n > n0  # particles were added
+    # The surcharge's dead load stays on the particles it was put on.
+    np.testing.assert_allclose(sim.model.loads.sum(axis=0), total, rtol=1e-12)
+    assert sim.model.loads.shape[0] == sim.particles.n
+    assert sim.particles.mass.sum() == pytest.approx(mass, rel=1e-12)
+
+
+def test_merging_crowded_particles_keeps_the_mass_and_the_ids_unique(tmp_path):
+    out = tmp_path / "merge"
+    summary = run_scene("footing-penetration", {**COARSE, "refine_merge": 0.3}, out=out)
+    m = summary["metrics"]
+    assert m["merged"] > 0 and m["inserted"] > 0
+    assert m["n_particles_final"] == m["n_particles"] + m["inserted"] - m["merged"]
+    mass_kept_and_ids(out, m["n_particles_final"])
+    records = summary_records(out)
+    assert max(r["merging_momentum_error"] for r in records) < 1e-12

@@ -54,6 +54,7 @@ from ...constants import GRAVITY
 from ...errors import ParameterError
 from ...laws import prandtl_nc
 from ...mesh.sources import AlphaShapeMesher
+from ...run.refining import initial_rows
 from ...run.simulation import Simulation
 from ...step.model import Model
 from ..base import Scene, SceneRun
@@ -337,7 +338,8 @@ def build(
         ref = prandtl_nc(0.0)
         compared = factor is not None and values["E"] >= RIGID_ENOUGH * su
         pen = [r.extra.get("footing_penetration", 0.0) for r in sim_.records]
-        heave = float(sim_.particles.u[: surface.size][surface, 1].max()) / B
+        rows, ids = initial_rows(sim_.particles, surface.size)  # refined: by id
+        heave = float(sim_.particles.u[rows[surface[ids]], 1].max()) / B
         notes = (
             penetration_warnings(
                 "footing-penetration", max(pen, default=0.0), values["spacing"], dt
