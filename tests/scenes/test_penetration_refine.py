@@ -115,3 +115,16 @@ def test_merging_crowded_particles_keeps_the_mass_and_the_ids_unique(tmp_path):
     mass_kept_and_ids(out, m["n_particles_final"])
     records = summary_records(out)
     assert max(r["merging_momentum_error"] for r in records) < 1e-12
+
+
+def test_a_footing_pushed_ten_times_faster_a_spacing_a_step_refines_stably(refined):
+    # The extreme: ten times the default speed with the footing moving a whole
+    # spacing a step (four times the default), particles added every few steps.
+    _, slow = refined
+    fast = run_scene(
+        "footing-penetration", {**COARSE, "speed": 10.0, "dt": 0.1 / 10.0}
+    )["metrics"]
+    assert fast["inserted"] > 0
+    assert fast["bearing_factor"] == pytest.approx(
+        slow["metrics"]["bearing_factor"], rel=0.05
+    )

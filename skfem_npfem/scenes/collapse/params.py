@@ -16,6 +16,7 @@ from ..common import (
 from ..limits import SPACING
 from ..methods import METHOD_METRICS, METHOD_PARAMS
 from ..params import ANGLE, POSITIVE, Param
+from ..refinement import INSERT_METRICS, insert_params
 from ..shaking import kh_param
 from ..water import WATER_PARAMS
 from .runout import (
@@ -199,6 +200,22 @@ PARAMS = [
         int,
         lo=1,
     ),
+    *insert_params(
+        "surface",
+        "a graded lattice: the spacing in a band of refine_band spacings along "
+        "the free surfaces and the floor, twice it in the column's core; ",
+        ratio=0.0,
+    ),
+    Param(
+        "refine_band",
+        4.0,
+        "-",
+        "refine=surface: width of the fine band along the free surfaces and the "
+        "floor, in spacings",
+        float,
+        lo=1.0,
+        hi=100.0,
+    ),
     *WATER_PARAMS,
     *METHOD_PARAMS,
     *fidelity_params(
@@ -243,6 +260,8 @@ METRICS = {
     "max_kinetic_energy": "largest kinetic energy, J (per metre of depth)",
     "final_kinetic_energy": "kinetic energy at the end, J",
     "n_inactive_final": "particles outside every element at the end (ballistic)",
-    "n_particles": "number of particles",
+    "n_particles": "number of particles (at the end)",
+    "inserted": INSERT_METRICS["inserted"],
+    "merged": INSERT_METRICS["merged"],
     **METHOD_METRICS,
 }

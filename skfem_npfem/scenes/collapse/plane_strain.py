@@ -69,6 +69,7 @@ from ..common import (
 from ..limits import check_size
 from ..methods import with_method
 from ..params import Values
+from ..refinement import insert_metrics, refiner_from
 from ..scenery import Scenery, box, number, time_label
 from ..shaking import model_kh
 from ..water import scene_water
@@ -102,6 +103,26 @@ def lattice(x0: float, x1: float, height: float, spacing: float) -> np.ndarray:
         np.linspace(x0, x1, nx + 1), np.linspace(0.0, height, ny + 1), indexing="ij"
     )
     return np.column_stack([X.ravel(), Y.ravel()])
+
+
+def graded_lattice(
+    x0: float, x1: float, height: float, h: float, band: float, symmetric: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """The lattice of :func:`lattice`, every other point kept in the core.
+
+    Points within ``band`` of the top, the free side(s) (``x1``; ``x0`` too
+    unless ``symmetric``) and the floor keep the spacing ``h``; the others
+    only where both lattice indices are even (spacing ``2 h``).  Returns the
+    points and the spacing of each.
+    """
+    x = lattice(x0, x1, height, h)
+    i = np.rint((x[:, 0] - x0) / h).astype(int)
+    j = np.rint(x[:, 1] / h).astype(int)
+    fine = (x[:, 1] > height - band) | (x[:, 1] < band) | (x[:, 0] > x1 - band)
+    if not symmetric:
+        fine |= x[:, 0] < x0 + band
+    keep = fine | ((i % 2 == 0) & (j % 2 == 0))
+    return x[keep], np.where(fine[keep], h, 2.0 * h)
 
 
 def initial_particles(
@@ -294,6 +315,11 @@ def _metrics(values: Mapping[str, Any], h: float, stop: AtRest | None):
             "final_kinetic_energy": float(recs[-1].kinetic_energy) if recs else 0.0,
             "n_inactive_final": int(recs[-1].n_inactive) if recs else 0,
             "n_particles": int(sim_.particles.n),
+            **{
+                k: v
+                for k, v in insert_metrics(sim_).items()
+                if k != "n_particles_final"
+            },
         }
 
     return metrics
@@ -307,8 +333,12 @@ def build(
     L0, H0 = values["half_width"], values["aspect"] * values["half_width"]
     symmetric = values["symmetric"]
     model = _model(values)
-    mesher = AlphaShapeMesher(h, values["alpha"], walls=model.walls)
-    x = lattice(0.0 if symmetric else -L0, L0, H0, h)
+    x0 = 0.0 if symmetric else -L0
+    x, graded = lattice(x0, L0, H0, h), None
+    if values["refine"] == "surface":
+        band = values["refine_band"] * h
+        x, graded = graded_lattice(x0, L0, H0, h, band, symmetric)
+    mesher = AlphaShapeMesher(h, values["alpha"], walls=model.walls, spacing=graded)
     particles = initial_particles(
         x,
         mesher,
@@ -320,6 +350,7 @@ def build(
     )
     particles = wet_column(particles, model, values, H0)
     sim = collapse_simulation(particles, model, mesher, values, out, progress, resume)
+    sim.refiner = refiner_from(values)
     sim.callbacks.append(_front_recorder(h, symmetric))
     run_kwargs, stop = run_control(values, H0)
     srun = SceneRun(sim, run_kwargs, _metrics(values, h, stop), derived={"spacing": h})

@@ -1,0 +1,231 @@
+#!/usr/bin/env python
+"""A footing pushed to w = B with and without particles added where the soil stretches.
+
+``footing-penetration`` (weightless Tresca clay, E/s_u = 1000) at its default
+spacing (B/20), smooth and rough, with ``refine=none`` and ``refine=bodies``
+(a particle at the middle of every edge stretched beyond 1.6 times its
+particles' lattice spacing, before each step).  For each run: the bearing
+factor at w = 0.1 B, the load drops (``load_drops``: a step under 80 % of the
+running median), the largest one-step fall of q/s_u in the second half of the
+push (relative to the median load there), the particles added, the largest
+stress roughness and the wall time.  The runs are one process, one after
+another: the wall times compare.
+
+The cone part runs ``cone-penetration`` at its defaults (D/12, a 6 D push)
+with ``refine=none`` and ``refine=bodies``: the steady N_c (the median over
+the last diameter), the mean and median of N_c over the last two diameters,
+the largest one-step fall there over that mean, the particles added and the
+wall time (about 15 minutes each).
+
+The collapse part runs the plane-strain ``column-collapse`` (a = 2) at
+L0/22 (the default) and L0/44, each on the uniform lattice and on the graded
+one (``refine=surface``: the spacing in a band of four spacings along the
+free surfaces and the floor, twice it in the core), to rest: the run-out,
+the main body's edge, the height, the largest stress roughness, the volume
+change, the particle count and the wall time (about 15 minutes in all).
+
+Usage (from the repository root)::
+
+    python demos/studies/particle_insertion.py [--out docs/validation]
+        [--spacing H] [--parts footing,cone,collapse]
+
+Writes ``<out>/particle_insertion.json`` and ``<out>/particle_insertion.inc``
+(the tables of docs/validation/particle_insertion.md); a part not run keeps
+its rows from the JSON.  The footing part takes about 5 minutes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+from _common import VALIDATION, write_results
+from _reporting import markdown_table
+from soil_profiles import run
+
+#: The insertion settings compared (the scene's default ratio).
+REFINES = ("none", "bodies")
+INTERFACES = ("smooth", "rough")
+
+
+def largest_fall(curve: list[list[float]]) -> float:
+    """The largest one-step fall of the load over w > B/2, over its median there."""
+    c = np.asarray(curve)
+    tail = c[:, 0] > 0.5
+    q = c[:, 1]
+    falls = -np.diff(q)[tail[1:]]
+    return float(falls.max(initial=0.0) / np.median(q[tail]))
+
+
+def cone_case(refine: str) -> dict:
+    """The default cone pushed 6 D with ``refine``; its last two diameters."""
+    m = run("cone-penetration", {"refine": refine})
+    c = np.asarray(m["curve"])
+    q = c[c[:, 0] >= c[-1, 0] - 2.0, 1]
+    mean, median = float(q.mean()), float(np.median(q))
+    return {
+        "refine": refine,
+        "cone_factor": m["cone_factor"],
+        "mean_2D": mean,
+        "median_2D": median,
+        "largest_fall_2D": float((-np.diff(q)).max(initial=0.0) / mean),
+        "cone_factor_drops": m["cone_factor_drops"],
+        "inserted": m["inserted"],
+        "n_particles": m["n_particles"],
+        "wall_s": m["wall_s"],
+    }
+
+
+def cone_table(cases: list[dict]) -> str:
+    """The cone part's table."""
+    rows = [
+        [
+            c["refine"],
+            f"{c['cone_factor']:.3f}",
+            f"{c['mean_2D']:.3f} / {c['median_2D']:.3f}",
+            f"{100 * (c['mean_2D'] / c['median_2D'] - 1):+.1f} %",
+            f"{100 * c['largest_fall_2D']:.1f} %",
+            c["cone_factor_drops"],
+            f"{c['n_particles']} + {c['inserted']}",
+            f"{c['wall_s']:.0f} s",
+        ]
+        for c in cases
+    ]
+    head = ["refine", "N_c (median, last D)", "mean / median (last 2 D)"]
+    head += ["mean vs median", "largest fall (last 2 D)", "drops", "particles"]
+    return markdown_table([*head, "wall"], rows)
+
+
+#: The collapse part's lattices: L0 / spacing.
+COLLAPSE_RESOLUTIONS = (22, 44)
+
+
+def collapse_case(n: int, refine: str) -> dict:
+    """The plane-strain column at L0/n with ``refine`` (none or surface), to rest."""
+    m = run("column-collapse", {"spacing": 0.2 / n, "refine": refine})
+    keys = ("runout", "runout_main_body", "final_height", "at_rest", "n_particles")
+    keys += ("stress_roughness_max", "volume_change", "wall_s")
+    return {"resolution": n, "refine": refine, **{k: m[k] for k in keys}}
+
+
+def collapse_table(cases: list[dict]) -> str:
+    """The collapse part's table, each run-out against the uniform L0/44 run."""
+    ref = {c["resolution"]: c for c in cases if c["refine"] == "none"}
+    fine = ref.get(max(COLLAPSE_RESOLUTIONS), {}).get("runout")
+    rows = []
+    for c in cases:
+        err = "" if fine is None else f" ({100 * (c['runout'] / fine - 1):+.2f} %)"
+        rows.append(
+            [
+                f"L0/{c['resolution']}",
+                c["refine"],
+                c["n_particles"],
+                f"{c['runout']:.4f}{err}",
+                f"{c['runout_main_body']:.4f}",
+                f"{c['final_height']:.3f}",
+                f"{c['stress_roughness_max']:.3f}",
+                f"{100 * c['volume_change']:+.2f} %",
+                f"{c['wall_s']:.0f} s",
+            ]
+        )
+    head = ["spacing", "refine", "particles", "run-out, m (vs uniform L0/44)"]
+    head += ["main body, m", "H/L0", "R max", "volume", "wall"]
+    return markdown_table(head, rows)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--out", type=Path, default=VALIDATION)
+    ap.add_argument("--spacing", type=float, default=0.05)
+    ap.add_argument("--parts", default="footing,cone,collapse")
+    ap.add_argument(
+        "--cone-refine",
+        default="none,bodies",
+        help="the cone's cases to run (the others kept from the JSON)",
+    )
+    args = ap.parse_args()
+    parts = args.parts.split(",")
+    path = args.out / "particle_insertion.json"
+    old = json.loads(path.read_text()) if path.exists() else {}
+    cone = {c["refine"]: c for c in old.get("cone", [])}
+    for refine in args.cone_refine.split(",") if "cone" in parts else ():
+        cone[refine] = cone_case(refine)
+        print(cone[refine], flush=True)
+        if path.exists():  # another process may have run the other case
+            cone = {
+                c["refine"]: c for c in json.loads(path.read_text()).get("cone", [])
+            } | {refine: cone[refine]}
+    cone = [cone[r] for r in REFINES if r in cone]
+    collapse = old.get("collapse", [])
+    if "collapse" in parts:
+        collapse = []
+        for n in COLLAPSE_RESOLUTIONS:
+            for refine in ("none", "surface"):
+                collapse.append(collapse_case(n, refine))
+                print(collapse[-1], flush=True)
+    rows, cases = [], [] if "footing" in parts else old.get("cases", [])
+    for interface in INTERFACES if "footing" in parts else ():
+        for refine in REFINES:
+            over = {"spacing": args.spacing, "interface": interface, "refine": refine}
+            m = run("footing-penetration", over)
+            case = {
+                **over,
+                "bearing_factor": m["bearing_factor"],
+                "final_bearing_factor": m["final_bearing_factor"],
+                "load_drops": m["load_drops"],
+                "largest_fall": largest_fall(m["curve"]),
+                "inserted": m["inserted"],
+                "n_particles": m["n_particles"],
+                "stress_roughness_max": m["stress_roughness_max"],
+                "wall_s": m["wall_s"],
+            }
+            cases.append(case)
+            print(case, flush=True)
+    for case in cases:
+        rows.append(
+            [
+                case["interface"],
+                case["refine"],
+                f"{case['bearing_factor']:.3f}",
+                f"{case['final_bearing_factor']:.3f}",
+                case["load_drops"],
+                f"{100 * case['largest_fall']:.1f} %",
+                f"{case['n_particles']} + {case['inserted']}",
+                f"{case['stress_roughness_max']:.3f}",
+                f"{case['wall_s']:.0f} s",
+            ]
+        )
+    table = markdown_table(
+        [
+            "interface",
+            "refine",
+            "q/s_u at w = 0.1 B",
+            "q/s_u at w = B",
+            "load drops",
+            "largest fall (w > B/2)",
+            "particles (+ added)",
+            "R max",
+            "wall",
+        ],
+        rows,
+    )
+    result = {"spacing": args.spacing, "cases": cases, "cone": cone}
+    text = json.dumps({**result, "collapse": collapse}, indent=1)
+    page = table + "\n"
+    if cone:
+        page += (
+            "\n**The cone** (defaults: D/12, pushed 6 D)\n\n" + cone_table(cone) + "\n"
+        )
+    if collapse:
+        page += (
+            "\n**The column** (plane strain, a = 2, to rest)\n\n"
+            + collapse_table(collapse)
+            + "\n"
+        )
+    write_results(path, text, page)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,92 @@
+"""A column on a graded lattice (refine=surface): fewer particles, same column."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skfem_npfem.errors import ParameterError
+from skfem_npfem.scenes import get_scene, run_scene
+from skfem_npfem.scenes.collapse.plane_strain import graded_lattice, lattice
+
+
+def test_graded_lattice_keeps_the_fine_band_and_every_other_core_point():
+    h, band = 0.01, 0.04
+    x, spacing = graded_lattice(0.0, 0.2, 0.4, h, band, symmetric=True)
+    full = lattice(0.0, 0.2, 0.4, h)
+    fine = spacing == h
+    # The band along the top, the free side and the floor is the full lattice.
+    in_band = (
+        (full[:, 1] > 0.4 - band) | (full[:, 1] < band) | (full[:, 0] > 0.2 - band)
+    )
+    assert fine.sum() == in_band.sum()
+    # The core has a quarter of the points: every other one in each direction.
+    core = (~in_band).sum()
+    assert (~fine).sum() == pytest.approx(core / 4, rel=0.1)
+    assert np.all(spacing[~fine] == 2 * h)
+    # The symmetry wall x = 0 is not a free surface: no fine band there.
+    assert not np.any(
+        fine & (x[:, 0] < band) & (x[:, 1] > band) & (x[:, 1] < 0.4 - band)
+    )
+    free_standing, _ = graded_lattice(-0.2, 0.2, 0.4, h, band, symmetric=False)
+    assert np.sum(free_standing[:, 0] < -0.2 + band) > 0
+
+
+def test_the_graded_column_has_the_mass_and_weight_of_the_uniform_one():
+    scene = get_scene("column-collapse")
+    runs = {}
+    for refine in ("none", "surface"):
+        values = scene.resolve({"spacing": 0.01, "refine": refine})
+        runs[refine] = scene.build(values).simulation.particles
+    uniform, graded = runs["none"], runs["surface"]
+    assert graded.n < 0.6 * uniform.n
+    # Masses from the graded lattice's own cells: the same total, rho L0 H0.
+    assert graded.mass.sum() == pytest.approx(1800.0 * 0.2 * 0.4, rel=1e-12)
+    assert uniform.mass.sum() == pytest.approx(graded.mass.sum(), rel=1e-12)
+    # The floor carries the column's weight in both.
+    assert graded.wall_force[:, 0].sum() == pytest.approx(
+        uniform.wall_force[:, 0].sum(), rel=1e-9
+    )
+
+
+def test_a_graded_column_runs_and_refuses_another_geometry(tmp_path):
+    summary = run_scene(
+        "column-collapse",
+        {"spacing": 0.02, "refine": "surface", "t_end": 0.1, "rest_fraction": 0.0},
+        out=tmp_path / "g",
+    )
+    m = summary["metrics"]
+    assert m["mass_change"] == pytest.approx(0.0, abs=1e-12)
+    assert m["inserted"] == 0 and m["merged"] == 0  # the graded lattice only
+    with pytest.raises(ParameterError, match="refine"):
+        run_scene("column-collapse", {"geometry": "axisymmetric", "refine": "surface"})
+    with pytest.raises(ParameterError, match="refine_ratio"):
+        run_scene("column-collapse", {"refine": "surface", "refine_ratio": 1.2})
+
+
+def test_a_graded_column_with_insertion_adds_particles_and_keeps_its_mass():
+    m = run_scene(
+        "column-collapse",
+        {
+            "spacing": 0.02,
+            "refine": "surface",
+            "refine_ratio": 1.6,
+            "t_end": 0.15,
+            "rest_fraction": 0.0,
+        },
+    )["metrics"]
+    assert m["inserted"] > 0
+    assert m["mass_change"] == pytest.approx(0.0, abs=1e-12)
+
+
+@pytest.mark.filterwarnings("ignore:column-collapse")  # detached grains, not at rest
+def test_a_deposit_merging_its_crowded_particles_keeps_its_mass():
+    # The extreme: a coarse graded column whose deposit compacts under its own
+    # weight, pairs closer than 0.3 spacings merged as it settles.
+    m = run_scene(
+        "column-collapse",
+        {"spacing": 0.0167, "dt": 0.01, "refine": "surface", "refine_merge": 0.3},
+    )["metrics"]
+    assert m["merged"] > 0 and m["inserted"] == 0
+    assert m["mass_change"] == pytest.approx(0.0, abs=1e-12)
+    assert np.isfinite(m["runout"]) and m["runout"] > 0.2  # it spread
