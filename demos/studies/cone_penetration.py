@@ -24,7 +24,9 @@ deep (today's set-up):
 * pushed 8 D (``-w8``), to see where the curve levels off: D/12, D/16 (the
   set-up's convergence reference), I_r = 300 and D/12 with the cone moving a
   whole spacing a step (``-dt1``);
-* today's defaults, a 6 D push (``-w6``): D/12 at I_r = 30, 100 and 300.
+* today's defaults, a 6 D push (``-w6``): D/12 at I_r = 30, 100 and 300, and
+  at I_r = 100 with particles added where the soil stretches round the
+  shoulder (``-refined``: ``refine=bodies``).
 
 Each case is a separate process-sized run; cases already in the JSON are
 kept unless ``--redo`` (so the study can be run in parts, e.g. two at once on
@@ -87,6 +89,8 @@ CASES: dict[str, dict] = {
     "s12-ir300-w8": {"spacing": D / 12, "rigidity_index": 300.0, "penetration": 8 * D},
     # today's defaults (a 6 D push)
     "s12-w6": {"spacing": D / 12},
+    # the same with particles added where the soil stretches round the shoulder
+    "s12-w6-refined": {"spacing": D / 12, "refine": "bodies"},
     "s12-ir30-w6": {"spacing": D / 12, "rigidity_index": 30.0},
     "s12-ir300-w6": {"spacing": D / 12, "rigidity_index": 300.0},
     # the cone moving a whole spacing a step (the default moves half of one)
@@ -140,6 +144,7 @@ def run_case(name: str, threads: int = 0) -> dict:
         "error": m["relative_error"],
         "max_body_penetration": m["max_body_penetration"],
         "particles": m["n_particles"],
+        "inserted": m.get("inserted", 0),
         "steps": s["solver"]["steps"],
         "ipm_iterations": s["solver"]["ipm_iterations_total"],
         "peak_memory_mb": s["solver"].get("peak_memory_mb"),
@@ -183,9 +188,11 @@ def markdown(rows: dict[str, dict]) -> str:
             vs = f"{r['N_c'] / best['N_c'] - 1:+.1%}"
         lo, hi = r["N_c_range"]
         steps = " / ".join(f"{q:.2f}" for q in per_diameter(r["curve"]))
+        added = r.get("inserted", 0)
+        particles = f"{r['particles']} + {added}" if added else f"{r['particles']}"
         lines.append(
             f"| {name} | {r['D_over_h']:g} | {r['rigidity_index']:g} "
-            f"| {r['particles']} | {r['steps']} | {r['N_c']:.2f} "
+            f"| {particles} | {r['steps']} | {r['N_c']:.2f} "
             f"| {lo:.2f}–{hi:.2f} | {r['N_c_mean']:.2f} | {steps} "
             f"| {r['reference']:.2f} | {r['error']:+.1%} "
             f"| {vs} | {r['drops']} | {r['wall_s']:.0f} |"

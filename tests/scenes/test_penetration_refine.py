@@ -85,6 +85,7 @@ def test_a_baseline_method_refuses_refinement():
         )
 
 
+@pytest.mark.slow  # 20 s; the dead loads' rebuild is unit-tested in tests/mesh
 def test_the_cone_with_its_surcharge_refines_and_keeps_its_dead_load(tmp_path):
     from skfem_npfem.scenes import get_scene
 
