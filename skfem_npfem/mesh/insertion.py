@@ -47,12 +47,12 @@ __all__ = [
 
 @dataclass(frozen=True)
 class Insertion:
-    """What one insertion pass did.
+    """What one insertion (or merging) pass did.
 
     Attributes
     ----------
     count : int
-        Particles added.
+        Particles added (merging: pairs merged).
     mass_error : float
         ``|sum m_after - sum m_before| / sum m_before``.
     momentum_error : float
@@ -114,6 +114,8 @@ def long_edges(
     target: np.ndarray,
     ratio: float,
     allowed: np.ndarray | None = None,
+    *,
+    shorter: bool = False,
 ) -> np.ndarray:
     """Indices of edges longer than ``ratio`` times their ends' target spacing.
 
@@ -127,23 +129,36 @@ def long_edges(
     edges : ndarray (n_edges, 2)
     target : ndarray (N,)
         Target spacing of each particle, m; an edge's is the smaller of its
-        ends'.
+        ends' (with ``shorter``: the larger).
     ratio : float
         Insertion threshold (> 1).
     allowed : ndarray (n_edges,) of bool, optional
-        Edges that may be split (default: all).
+        Edges that may be taken (default: all).
+    shorter : bool
+        The converse, for merging: edges *shorter* than ``ratio`` times the
+        larger target of their ends, the shortest first.
 
     Returns
     -------
     ndarray of int
         Indices into ``edges``, increasing.
+
+    Examples
+    --------
+    >>> x = np.array([[0.0, 0.0], [0.1, 0.0], [2.0, 0.0]])
+    >>> e = np.array([[0, 1], [1, 2]])
+    >>> long_edges(x, e, np.ones(3), 1.6).tolist()
+    [1]
+    >>> long_edges(x, e, np.ones(3), 0.4, shorter=True).tolist()
+    [0]
     """
     a, b = edges[:, 0], edges[:, 1]
-    stretch = np.linalg.norm(x[b] - x[a], axis=1) / np.minimum(target[a], target[b])
-    candidate = stretch > ratio
+    pick = np.maximum if shorter else np.minimum
+    rel = np.linalg.norm(x[b] - x[a], axis=1) / pick(target[a], target[b])
+    candidate = rel < ratio if shorter else rel > ratio
     if allowed is not None:
         candidate &= allowed
-    return disjoint_edges(edges, stretch, candidate, x.shape[0])
+    return disjoint_edges(edges, -rel if shorter else rel, candidate, x.shape[0])
 
 
 def disjoint_edges(

@@ -3,8 +3,9 @@
 Where the soil is squeezed (at a body's corner, in a deposit compacting) two
 particles can come far closer than the spacing they were made with; their
 cells become slivers that carry no information the pair's mean does not.
-:func:`short_edges` picks edges shorter than ``ratio`` times the larger
-target spacing of their ends, at most one per particle in a pass, and
+:func:`~skfem_npfem.mesh.insertion.long_edges` with ``shorter=True`` picks
+edges shorter than ``ratio`` times the larger target spacing of their ends,
+at most one per particle in a pass, and
 :func:`merge_pairs` replaces each pair by one particle:
 
 * **mass** is the sum, and the position the pair's centre of mass;
@@ -23,61 +24,26 @@ their ``ids``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import fields
 
 import numpy as np
 
 from ..particles import Particles
-from .insertion import conservation_errors, disjoint_edges
+from .insertion import Insertion, conservation_errors
 
-__all__ = ["Merging", "merge_pairs", "short_edges"]
-
-
-@dataclass(frozen=True)
-class Merging:
-    """What one merging pass did: pairs merged and conservation errors."""
-
-    count: int = 0
-    mass_error: float = 0.0
-    momentum_error: float = 0.0
-
-
-def short_edges(
-    x: np.ndarray,
-    edges: np.ndarray,
-    target: np.ndarray,
-    ratio: float,
-    allowed: np.ndarray | None = None,
-) -> np.ndarray:
-    """Indices of edges shorter than ``ratio`` times their ends' larger target.
-
-    The shortest relative to the target first, at most one edge per particle.
-
-    Examples
-    --------
-    >>> x = np.array([[0.0, 0.0], [0.1, 0.0], [1.0, 0.0]])
-    >>> e = np.array([[0, 1], [1, 2]])
-    >>> short_edges(x, e, np.ones(3), 0.4).tolist()
-    [0]
-    """
-    a, b = edges[:, 0], edges[:, 1]
-    rel = np.linalg.norm(x[b] - x[a], axis=1) / np.maximum(target[a], target[b])
-    candidate = rel < ratio
-    if allowed is not None:
-        candidate &= allowed
-    return disjoint_edges(edges, -rel, candidate, x.shape[0])
+__all__ = ["merge_pairs"]
 
 
 def merge_pairs(
     p: Particles, pairs: np.ndarray, ids: np.ndarray, spacing: np.ndarray
-) -> tuple[Particles, Merging]:
+) -> tuple[Particles, Insertion]:
     """Merge each pair of particles (disjoint pairs) into one.
 
     Parameters
     ----------
     p : Particles
     pairs : ndarray (k, 2)
-        Disjoint pairs of rows (:func:`short_edges`).
+        Disjoint pairs of rows (``long_edges(..., shorter=True)``).
     ids, spacing : ndarray (N,)
         Stable ids and target spacings.
 
@@ -85,12 +51,12 @@ def merge_pairs(
     -------
     Particles
         ``N - k`` particles with ``ids`` and ``spacing`` set.
-    Merging
-        The count and the conservation errors.
+    Insertion
+        The pairs merged (``count``) and the conservation errors.
     """
     k = pairs.shape[0]
     if k == 0:
-        return p.replace(ids=ids, spacing=spacing), Merging()
+        return p.replace(ids=ids, spacing=spacing), Insertion()
     a, b = pairs.min(axis=1), pairs.max(axis=1)
     ma, mb = p.mass[a], p.mass[b]
     m = ma + mb
@@ -117,4 +83,4 @@ def merge_pairs(
     new_spacing[a] = np.maximum(spacing[a], spacing[b])
     changes["ids"], changes["spacing"] = new_ids[keep], new_spacing[keep]
     out = p.replace(**changes)
-    return out, Merging(k, *conservation_errors(p, out))
+    return out, Insertion(k, *conservation_errors(p, out))

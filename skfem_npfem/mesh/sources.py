@@ -273,9 +273,36 @@ class AlphaShapeMesher:
                 raise ParameterError("spacing", "values <= 0", "spacings > 0 (m)")
             self.spacing = hl
         self.last: Triangulation | None = None
+        self._memo: tuple | None = None  # (positions, spacing, tri, settings)
 
     def triangulate(self, x: np.ndarray) -> Triangulation:
-        """Alpha-shape triangulation of positions ``x`` (N, d)."""
+        """Alpha-shape triangulation of positions ``x`` (N, d).
+
+        The same positions, spacings and settings as the last call give the
+        last triangulation back (a refined run triangulates its particles
+        before the step does; the triangulation is read-only and
+        deterministic).
+        """
+        memo, settings = self._memo, self._settings()
+        if (
+            memo is not None
+            and memo[3] == settings
+            and np.array_equal(memo[0], x)
+            and (memo[1] is None) == (self.spacing is None)
+            and (self.spacing is None or np.array_equal(memo[1], self.spacing))
+        ):
+            return memo[2]
+        tri = self._triangulate(x)
+        spacing = None if self.spacing is None else self.spacing.copy()
+        self._memo = (np.array(x, dtype=float), spacing, tri, settings)
+        return tri
+
+    def _settings(self) -> tuple:
+        """What a triangulation depends on besides the positions and spacings."""
+        keep = self.keep_buried_slivers
+        return (self.h, self.alpha, self.min_quality, self.jitter, self.seed, keep)
+
+    def _triangulate(self, x: np.ndarray) -> Triangulation:
         extra = {}
         if self.spacing is not None:
             if self.spacing.size != x.shape[0]:

@@ -26,7 +26,7 @@ import numpy as np
 from ..boundary import RigidBody
 from ..errors import ParameterError
 from ..mesh.insertion import Insertion, edge_shares, insert_midpoints, long_edges
-from ..mesh.merging import Merging, merge_pairs, short_edges
+from ..mesh.merging import merge_pairs
 from ..particles import Particles
 
 __all__ = ["Refiner", "initial_rows", "refined_point_data"]
@@ -96,7 +96,7 @@ class Refiner:
         self.max_spacing_ratio = float(max_spacing_ratio)
         self.inserted = 0
         self.last = Insertion()
-        self.last_merge = Merging()
+        self.last_merge = Insertion()
         self._loads0: np.ndarray | None = None  # the model's dead loads at start
 
     def __call__(
@@ -131,18 +131,18 @@ class Refiner:
         edges, share, volume = edge_shares(p.x, tri.simplices)
         a, b = edges[:, 0], edges[:, 1]
         free = ~p.fixed.any(axis=1)
+        same = p.material[a] == p.material[b]
         d = p.dim
         donor = free & (volume > 0) & (volume < self.max_spacing_ratio * spacing**d)
-        allowed = donor[a] & donor[b] & (p.material[a] == p.material[b])
-        chosen = long_edges(p.x, edges, spacing, self.ratio, allowed)
+        chosen = long_edges(p.x, edges, spacing, self.ratio, donor[a] & donor[b] & same)
         chosen = chosen[_clear(bodies, 0.5 * (p.x[a[chosen]] + p.x[b[chosen]]), time)]
         pairs = edges[:0]
         if self.merge > 0.0:  # never a particle of a split edge
             busy = np.zeros(p.n, bool)
             busy[edges[chosen].ravel()] = True
-            same = free[a] & free[b] & (p.material[a] == p.material[b])
-            short = short_edges(
-                p.x, edges, spacing, self.merge, same & ~busy[a] & ~busy[b]
+            ok = free & ~busy
+            short = long_edges(
+                p.x, edges, spacing, self.merge, ok[a] & ok[b] & same, shorter=True
             )
             m = p.mass[a[short], None], p.mass[b[short], None]
             centre = (m[0] * p.x[a[short]] + m[1] * p.x[b[short]]) / (m[0] + m[1])

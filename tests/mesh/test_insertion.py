@@ -215,3 +215,23 @@ def test_dead_loads_follow_the_particles_and_ties_are_refused():
     )
     with pytest.raises(ParameterError, match="tied"):
         Refiner(1.6)(p, AlphaShapeMesher(0.125, 1.5), tied)
+
+
+def test_the_mesher_gives_the_last_triangulation_back_only_for_the_same_input():
+    # A refined run triangulates its particles before the step does: the
+    # step's call with the same positions, spacings and settings reuses it.
+    p = stretched()
+    mesher = AlphaShapeMesher(0.125, 1.5)
+    first = mesher.triangulate(p.x)
+    assert mesher.triangulate(p.x.copy()) is first
+    moved = p.x.copy()
+    moved[0, 0] += 1e-9
+    assert mesher.triangulate(moved) is not first
+    again = mesher.triangulate(p.x)
+    mesher.keep_buried_slivers = True  # a setting changed after a call
+    assert mesher.triangulate(p.x) is not again
+    mesher.spacing = np.full(p.n, 0.125)
+    fresh = mesher.triangulate(p.x)
+    np.testing.assert_array_equal(fresh.simplices, again.simplices)  # same h
+    mesher.spacing = np.full(p.n, 0.2)  # a new spacing array: triangulated again
+    assert mesher.triangulate(p.x) is not fresh

@@ -293,6 +293,7 @@ def _metrics(values: Mapping[str, Any], h: float, stop: AtRest | None):
         main = float(last.get("runout_main_body", L0))
         detached = float(last.get("detached_mass_fraction", 0.0))
         notes = detached_warnings("column-collapse", detached, runout, main, L0)
+        added = insert_metrics(sim_)
         for msg in notes:
             warn_user(msg)
         return {
@@ -315,11 +316,8 @@ def _metrics(values: Mapping[str, Any], h: float, stop: AtRest | None):
             "final_kinetic_energy": float(recs[-1].kinetic_energy) if recs else 0.0,
             "n_inactive_final": int(recs[-1].n_inactive) if recs else 0,
             "n_particles": int(sim_.particles.n),
-            **{
-                k: v
-                for k, v in insert_metrics(sim_).items()
-                if k != "n_particles_final"
-            },
+            "inserted": added["inserted"],
+            "merged": added["merged"],
         }
 
     return metrics
