@@ -24,10 +24,17 @@ free surfaces and the floor, twice it in the core), to rest: the run-out,
 the main body's edge, the height, the largest stress roughness, the volume
 change, the particle count and the wall time (about 15 minutes in all).
 
+The slope part runs the dry sand cut of the slope's run-out tests (H = 2 m
+at 60 deg, phi = 30 deg, c = 0, failing as it is) to rest at H/5, H/10, H/20
+and H/40, uniform and with ``refine=surface`` (a particle added at the
+middle of every edge of the sliding soil stretched beyond 1.6 spacings): the
+run-out from the toe, the moved volume, the particle counts and the wall time
+(about 30 minutes in all, most of it the two H/40 runs).
+
 Usage (from the repository root)::
 
     python demos/studies/particle_insertion.py [--out docs/validation]
-        [--spacing H] [--parts footing,cone,collapse]
+        [--spacing H] [--parts footing,cone,collapse,slope]
 
 Writes ``<out>/particle_insertion.json`` and ``<out>/particle_insertion.inc``
 (the tables of docs/validation/particle_insertion.md); a part not run keeps
@@ -43,6 +50,7 @@ from pathlib import Path
 import numpy as np
 from _common import VALIDATION, write_results
 from _reporting import markdown_table
+from slope_fos import RUNOUT
 from soil_profiles import run
 
 #: The insertion settings compared (the scene's default ratio).
@@ -135,11 +143,51 @@ def collapse_table(cases: list[dict]) -> str:
     return markdown_table(head, rows)
 
 
+#: The slope part's dry sand cut (the slope study's run-out case), H = 2 m.
+SAND_CUT = {k: v for k, v in RUNOUT.items() if k != "spacing"}
+#: The slope part's lattices: H / spacing.
+SLOPE_RESOLUTIONS = (5, 10, 20, 40)
+
+
+def slope_case(n: int, refine: str) -> dict:
+    """The dry sand cut at H/n with ``refine`` (none or surface), to rest."""
+    m = run("slope", {**SAND_CUT, "spacing": 2.0 / n, "refine": refine})
+    keys = ("runout", "moved_volume", "crest_settlement", "at_rest", "n_particles")
+    keys += ("inserted", "mass_change", "volume_change", "wall_s")
+    return {"resolution": n, "refine": refine, **{k: m[k] for k in keys}}
+
+
+def slope_table(cases: list[dict]) -> str:
+    """The slope part's table, each run-out against the finest uniform run."""
+    fine = max(
+        (c for c in cases if c["refine"] == "none"), key=lambda c: c["resolution"]
+    )
+    rows = []
+    for c in cases:
+        err = 100 * (c["runout"] / fine["runout"] - 1)
+        rows.append(
+            [
+                f"H/{c['resolution']}",
+                c["refine"],
+                f"{c['n_particles']} + {c['inserted']}",
+                f"{c['runout']:.3f} ({err:+.1f} %)",
+                f"{c['moved_volume']:.3f}",
+                f"{c['crest_settlement']:.3f}",
+                f"{100 * c['volume_change']:+.1f} %",
+                f"{c['wall_s']:.0f} s",
+            ]
+        )
+    head = ["spacing", "refine", "particles (+ added)"]
+    head += [f"run-out, m (vs uniform H/{fine['resolution']})", "moved, m^2"]
+    head += ["crest settlement, m", "volume", "wall"]
+    return markdown_table(head, rows)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", type=Path, default=VALIDATION)
     ap.add_argument("--spacing", type=float, default=0.05)
-    ap.add_argument("--parts", default="footing,cone,collapse")
+    ap.add_argument("--parts", default="footing,cone,collapse,slope")
     ap.add_argument(
         "--cone-refine",
         default="none,bodies",
@@ -165,6 +213,13 @@ def main() -> None:
             for refine in ("none", "surface"):
                 collapse.append(collapse_case(n, refine))
                 print(collapse[-1], flush=True)
+    slope = old.get("slope", [])
+    if "slope" in parts:
+        slope = []
+        for refine in ("none", "surface"):
+            for n in SLOPE_RESOLUTIONS:
+                slope.append(slope_case(n, refine))
+                print(slope[-1], flush=True)
     rows, cases = [], [] if "footing" in parts else old.get("cases", [])
     for interface in INTERFACES if "footing" in parts else ():
         for refine in REFINES:
@@ -212,7 +267,7 @@ def main() -> None:
         rows,
     )
     result = {"spacing": args.spacing, "cases": cases, "cone": cone}
-    text = json.dumps({**result, "collapse": collapse}, indent=1)
+    text = json.dumps({**result, "collapse": collapse, "slope": slope}, indent=1)
     page = table + "\n"
     if cone:
         page += (
@@ -222,6 +277,12 @@ def main() -> None:
         page += (
             "\n**The column** (plane strain, a = 2, to rest)\n\n"
             + collapse_table(collapse)
+            + "\n"
+        )
+    if slope:
+        page += (
+            "\n**The sand cut's run-out** (H = 2 m, 60 deg, phi = 30 deg, to rest)\n\n"
+            + slope_table(slope)
             + "\n"
         )
     write_results(path, text, page)

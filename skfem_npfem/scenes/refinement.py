@@ -32,16 +32,25 @@ __all__ = [
     "INSERT_PARAMS",
     "REFINE_METRICS",
     "REFINE_PARAMS",
+    "SLOPE_REFINE_PARAMS",
     "Adapted",
     "adapt",
     "check_refine",
     "insert_metrics",
     "insert_params",
     "refiner_from",
+    "strategies",
 ]
 
 #: The refinement strategies (``none``: the uniform lattice).
 REFINE_CHOICES = ("none", "strain")
+
+
+def strategies(values: Mapping[str, Any]) -> frozenset[str]:
+    """The strategies ``refine`` names (``a+b`` names two; ``none``: none)."""
+    chosen = str(values.get("refine", "none")).split("+")
+    return frozenset(s for s in chosen if s != "none")
+
 
 REFINE_PARAMS = [
     Param(
@@ -142,6 +151,28 @@ INSERT_PARAMS = insert_params(
     "bodies", "the lattice is graded round the body's path, as without; "
 )
 
+#: The slope: an adaptive factor of safety, insertion in its run-out, or both.
+SLOPE_REFINE_PARAMS = [
+    Param(
+        "refine",
+        "none",
+        "-",
+        "none (the uniform lattice), strain (the factor of safety adaptive: "
+        "the spacing is halved where its mechanism's plastic power "
+        "concentrates and the program solved again, until F changes by less "
+        "than refine_tol; with analysis=limit and before a run-out), surface "
+        "(runout=true: before each step of the run-out a particle is added at "
+        "the middle of every edge stretched beyond refine_ratio times its "
+        "particles' spacing, where the sliding soil thins; mass and momentum "
+        "kept; it also fills the crack behind the slide, so the crest settles "
+        "less) or strain+surface (both)",
+        str,
+        ("none", "strain", "surface", "strain+surface"),
+    ),
+    *REFINE_PARAMS[1:],
+    *insert_params("surface", "")[1:],
+]
+
 INSERT_METRICS = {
     "inserted": "refine: particles added during the run (0 without refinement)",
     "merged": "refine with refine_merge > 0: pairs of particles merged into one "
@@ -151,18 +182,23 @@ INSERT_METRICS = {
 }
 
 
-def refiner_from(values: Mapping[str, Any]) -> Refiner | None:
+def refiner_from(
+    values: Mapping[str, Any], strategy: str | None = None
+) -> Refiner | None:
     """The run's :class:`~skfem_npfem.run.refining.Refiner`.
 
-    None with ``refine=none``, or when it would neither add (``refine_ratio``
-    0) nor merge (``refine_merge`` 0) particles.
+    None with ``refine=none`` (or when ``refine`` does not name
+    ``strategy``, the insertion strategy of a scene that has others), or
+    when it would neither add (``refine_ratio`` 0) nor merge
+    (``refine_merge`` 0) particles.
 
     Raises
     ------
     ParameterError
         For a ``refine_ratio`` in (0, sqrt(2)].
     """
-    if values.get("refine", "none") == "none":
+    chosen = strategies(values)
+    if not chosen or (strategy is not None and strategy not in chosen):
         return None
     ratio = values["refine_ratio"]
     if 0.0 < ratio <= math.sqrt(2.0):
@@ -217,14 +253,42 @@ class Adapted(Generic[B]):
     converged: bool = False
 
 
-def check_refine(values: Mapping[str, Any]) -> None:
-    """Refuse ``refine`` on a run that is not a limit analysis."""
-    if values.get("refine", "none") != "none" and values.get("analysis") != "limit":
+def check_refine(
+    values: Mapping[str, Any],
+    limit_stage: bool = False,
+    insertion: str | None = None,
+    runs: bool = False,
+) -> None:
+    """Refuse a ``refine`` strategy the run would not use.
+
+    Parameters
+    ----------
+    values : mapping
+        ``refine`` and ``analysis``.
+    limit_stage : bool
+        The scene's incremental run has a limit analysis of its own (the
+        slope's factor of safety), which ``strain`` refines.
+    insertion : str, optional
+        The scene's insertion strategy (particles added during a run).
+    runs : bool
+        The scene steps (so that ``insertion`` has a run to act on).
+    """
+    chosen = strategies(values)
+    limit = values.get("analysis") == "limit"
+    if "strain" in chosen and not (limit or limit_stage):
         raise ParameterError(
             "refine",
             values["refine"],
             "none unless analysis=limit (the particles of an incremental run "
             "are not refined yet)",
+        )
+    if insertion is not None and insertion in chosen and not runs:
+        raise ParameterError(
+            "refine",
+            values["refine"],
+            f"without {insertion} unless the particles flow (analysis="
+            f"incremental with runout=true): {insertion} adds particles "
+            "during the run-out",
         )
 
 

@@ -81,8 +81,17 @@ def test_adaptive_footing_is_closer_to_prandtl():
     assert uniform["refine_history"] is None
 
 
-@pytest.mark.parametrize("scene", ["slope", "strip-footing"])
-def test_refine_is_refused_on_an_incremental_run(scene):
-    sc = get_scene(scene)
+def test_refine_is_refused_on_an_incremental_run():
+    sc = get_scene("strip-footing")
     with pytest.raises(ParameterError, match="refine"):
         sc.resolve({"refine": "strain", "analysis": "incremental"})
+
+
+def test_the_slope_refines_its_factor_of_safety_before_a_run_out_too():
+    """Its incremental run has a limit stage; insertion needs the run-out."""
+    sc = get_scene("slope")
+    sc.resolve({"refine": "strain", "analysis": "incremental", "runout": True})
+    with pytest.raises(ParameterError, match="runout=true"):
+        sc.resolve({"refine": "surface", "analysis": "limit"})
+    with pytest.raises(ParameterError, match="runout=true"):
+        sc.resolve({"refine": "strain+surface", "analysis": "incremental"})

@@ -286,6 +286,9 @@ def base_metrics(
         "at_rest": None,
         "deposit_factor_of_safety": None,
         "n_particles": n_particles,
+        "inserted": 0,
+        "merged": 0,
+        "n_particles_final": n_particles,
         "stage_wall_time": {
             "initial_stress": state.get("t_initial", 0.0),
             "factor_of_safety": state.get("t_fos", 0.0),

@@ -66,7 +66,14 @@ from ..common import (
 )
 from ..limit_mode import LIMIT_METRICS, analysis_param
 from ..params import ANGLE, POSITIVE, Param, Values
-from ..refinement import REFINE_METRICS, REFINE_PARAMS, check_refine
+from ..refinement import (
+    INSERT_METRICS,
+    REFINE_METRICS,
+    SLOPE_REFINE_PARAMS,
+    check_refine,
+    insert_metrics,
+    refiner_from,
+)
 from ..scenery import Scenery, number, section_lines
 from ..soil_profile import CLAY_PARAMS, PROFILE_PARAMS, check_layers
 from ..water import WATER_PARAMS
@@ -205,7 +212,7 @@ PARAMS = [
         float,
         **POSITIVE,
     ),
-    *REFINE_PARAMS,
+    *SLOPE_REFINE_PARAMS,
     *fidelity_params(0.0),
     *solver_params(),
 ]
@@ -226,7 +233,8 @@ METRICS = {
     "initial_equilibrium_residual": "|G s - f| / |f| on the free dofs of the "
     "initial stresses (null with analysis=limit)",
     **RUNOUT_METRICS,
-    "n_particles": "number of particles",
+    "n_particles": "particles of the run-out at its start (without it: of the "
+    "factor of safety's last lattice)",
     "stage_wall_time": "seconds per stage: initial_stress, factor_of_safety (all "
     "its cone programs), factor_of_safety_check (at twice the spacing), "
     "critical_kh (its program), runout (the steps)",
@@ -237,6 +245,7 @@ METRICS = {
     **SEISMIC_METRICS,
     **SURCHARGE_METRICS,
     **REFINE_METRICS,
+    **INSERT_METRICS,
     "undrained_strength_min": "drainage=undrained: the smallest strength s_u = "
     "c' cos phi' + s'_0 sin phi' (initial effective stress) used for F, Pa",
     "undrained_strength_max": "drainage=undrained only: the largest one, Pa",
@@ -291,7 +300,7 @@ def ignored(values: dict[str, Any], given: frozenset[str]) -> None:
     check_kh(values)
     check_surcharge(values)
     check_layers(values)
-    check_refine(values)
+    check_refine(values, True, "surface", values["runout"] and not limit)
     check_profile(values)
     if not stresses:
         warn_unused(
@@ -417,18 +426,20 @@ def build(
         max_displacement=values["max_displacement"],
         writer=make_writer(out, resume),
         progress=progress,
+        refiner=refiner_from(values, "surface") if run_out else None,
         meta={"scene": "slope", "parameters": recorded_parameters(values)},
     )
     toe_crest = toe_and_crest(body.sec, values)
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
         fos = fos_metrics(values, body, state, out)
-        n = len(state["fos_body"].pts)  # the last lattice of refine=strain
+        # The run-out's lattice, else the last lattice of refine=strain.
+        n = len(pts) if run_out else len(state["fos_body"].pts)
         m = base_metrics(fos, resid, n, state, sim_)
         if run_out:
             late = runout_metrics(sim_, state, values, body.h, *toe_crest)
             m["warnings"] = [*m.get("warnings", []), *late.pop("notes")]
-            m.update(late)
+            m.update(late | insert_metrics(sim_))
         return m
 
     derived = {}

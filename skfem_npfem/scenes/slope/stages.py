@@ -34,7 +34,7 @@ from ...step.program import ConeInput
 from ...water import Water, water_force
 from ..common import fidelity_from, solver_from
 from ..limit_mode import limit_metrics
-from ..refinement import adapt
+from ..refinement import adapt, strategies
 from ..shaking import model_kh, static_kh
 from ..soil_profile import clay_law
 from .body import SlopeBody, body_from, slope_body
@@ -264,7 +264,7 @@ def fos_metrics(
             return out, out[0].factor_of_safety, out[0].limit.dissipation
 
         history, sec = None, body.sec
-        if values["refine"] == "none":
+        if "strain" not in strategies(values):
             res, ni_, mats = solve(body)[0]
         else:
             run = adapt(
@@ -353,7 +353,7 @@ def spacing_check(
     t0 = time.perf_counter()
     coarse = {**values, "spacing": 2 * values["spacing"], "refine": "none"}
     try:
-        if values["refine"] != "none":  # its cycles are the convergence check
+        if "strain" in strategies(values):  # its cycles are the convergence check
             raise ValueError("refined")
         check_regions(section_of(coarse)[0].regions, coarse["spacing"])
         body = slope_body(coarse)
