@@ -27,6 +27,19 @@ Two experiments, each for N-PFEM and FEM-remap P1/P2 x nearest/recovery:
    their drift is measured against the exact values of each stress point's
    material point.  N-PFEM maps nothing: its drift is round-off by
    construction.
+3. **A shear band with particle insertion**: the same pre-stressed block is
+   sheared in a horizontal band (``v_x = V tanh((y - 1/2) / w)``, w = 2
+   spacings, the two halves sliding 0.5 m past each other in 100 steps), so
+   the edges across the band stretch to several spacings, as round a pushed
+   body's shoulder.  The stress is a frozen material field (no rotation, no
+   constitutive update): its exact value at a point is sigma0 at the point's
+   material point, which the motion gives in closed form
+   (``X = x - t V tanh((y - 1/2) / w)``).  N-PFEM adds particles where an edge
+   exceeds 1.6 spacings (the library's :class:`~skfem_npfem.run.refining.Refiner`,
+   the new particle's stress the mean of its edge's ends); FEM-remap transfers
+   its Gauss points whenever the band's Delaunay triangulation changes.  The
+   drift of q is measured as in experiment 2, over every stress point (for
+   N-PFEM: only the added particles can differ).
 
 Usage (from the repository root)::
 
@@ -232,14 +245,103 @@ def _fem_rigid(e, t, X, h, model, d_ang, place, pull_back, n_steps) -> dict:
     return res
 
 
+def _area(x: np.ndarray, cells: np.ndarray) -> float:
+    """Total area of the triangles ``cells`` (ne, 3) over ``x``."""
+    a, b, c = (x[cells[:, i]] for i in range(3))
+    d1, d2 = b - a, c - a
+    return float(0.5 * np.abs(d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]).sum())
+
+
+def band(kind: str, n_steps: int = 100, n: int = 20, slide: float = 0.5) -> dict:
+    """Experiment 3: q drift in a band that shears or opens, insertion vs transfer.
+
+    ``kind="shear"``: ``v_x = V tanh((y - 1/2) / w)``; ``"opening"``:
+    ``v_x = V tanh((x - 1/2) / w)``; w = 2 spacings, the two sides moving
+    ``slide`` apart.  Both motions have closed forms, so every point's
+    material point is exact.
+    """
+    from skfem_npfem.particles import Particles
+    from skfem_npfem.run.refining import Refiner
+
+    h = 1.0 / n
+    g = np.linspace(0.0, 1.0, n + 1)
+    X = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
+    model = Model(dim=2, materials=[LinearElastic(1.0e7, 0.3, 2000.0)], gravity=0.0)
+    w, V, dt = 2.0 * h, 0.5 * slide, 1.0 / n_steps
+    axis = 1 if kind == "shear" else 0
+
+    def moved(x: np.ndarray, t: float) -> np.ndarray:
+        """Points ``x`` carried by the flow for a time ``t`` (< 0: back)."""
+        out = x.copy()
+        if kind == "shear":  # y constant, so v_x constant along a path
+            out[:, 0] += t * V * np.tanh((x[:, 1] - 0.5) / w)
+        else:  # dx/dt = V tanh((x - 1/2)/w): sinh((x - 1/2)/w) grows as e^(Vt/w)
+            s = np.sinh((x[:, 0] - 0.5) / w) * math.exp(V * t / w)
+            out[:, 0] = 0.5 + w * np.arcsinh(s)
+        return out
+
+    out = {"kind": kind, "n_steps": n_steps, "n_particles": int(X.shape[0])}
+    out["slide"], out["band_axis"] = slide, "xy"[axis]
+    ends = moved(np.array([[0.0, 0.5], [1.0, 0.5]]), 1.0)
+    exact_area = float(ends[1, 0] - ends[0, 0])  # the shear keeps the unit area
+    # N-PFEM: the particles carry sigma0; the refiner adds particles, no rotation.
+    p = Particles.create(X, np.full(X.shape[0], h * h), stress=prestress(X))
+    mesher, refiner = AlphaShapeMesher(h=h, alpha=1.3, seed=0), Refiner(1.6)
+    history = []
+    for k in range(1, n_steps + 1):
+        p = refiner(p.replace(x=moved(p.x, dt)), mesher)
+        exact = prestress(moved(p.x, -k * dt))
+        history.append(_drift(p.stress, exact)["q_drift"])
+    res = _drift(p.stress, exact)
+    added = slice(X.shape[0], None)
+    res |= {"q_history": history, "inserted": refiner.inserted}
+    act, loc = mesher(p.x)
+    res["area_ratio"] = _area(p.x, act[loc].T) / exact_area
+    res["added_q_drift"] = (
+        _drift(p.stress[added], exact[added])["q_drift"] if refiner.inserted else None
+    )
+    out["npfem"] = res
+    for e, t in VARIANTS:
+        method, mesher = FemRemap(e, t), AlphaShapeMesher(h=h, alpha=1.3, seed=0)
+        q = Particles.create(X, np.ones(X.shape[0]), stress=prestress(X))
+        st = method.initial_state(q, mesher)
+        st = st.replace(gp_stress=prestress(gauss_points(st.x, st.cells, e)))
+        history, transfers = [], 0
+        for k in range(1, n_steps + 1):
+            st = st.replace(x=moved(st.x, dt))
+            act, loc = mesher(st.x)
+            cells = np.ascontiguousarray(act[loc].T)
+            sig, eps, info = method.remap(st, cells, model)
+            transfers += info["remapped"]
+            st = st.replace(cells=cells, gp_stress=sig, gp_eps_p=eps)
+            gp = gauss_points(st.x, st.cells, e)
+            exact = prestress(moved(gp, -k * dt))
+            history.append(_drift(st.gp_stress, exact)["q_drift"])
+        res = _drift(st.gp_stress, exact)
+        res |= {"q_history": history, "transfers": transfers}
+        res["area_ratio"] = _area(st.x, st.cells) / exact_area
+        out[f"fem-{e}-{t}"] = res | {"stress_points": int(gp.shape[0])}
+    out["npfem"]["stress_points"] = int(p.n)
+    return out
+
+
 def plot(result: dict, path: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, axes = plt.subplots(1, 3, figsize=(16, 4.2))
     rest, rigid = result["at_rest"], result["rigid_motion"]
+    opening = result["opening_band"]
+    for key, name in MAPPING_NAMES.items():
+        hist = np.maximum(np.array(opening[key]["q_history"]), 1e-17)
+        style = "k-" if key == "npfem" else ("-" if "recovery" in key else "--")
+        axes[2].semilogy(np.arange(1, hist.size + 1), hist, style, label=name)
+    axes[2].set_xlabel("steps")
+    axes[2].set_ylabel("RMS drift of q")
+    axes[2].set_title("opening band: insertion (N-PFEM) vs transfer")
+    axes[2].grid(True, which="both", alpha=0.3)
     for e, t in VARIANTS:
         key = f"fem-{e}-{t}"
         style = "-" if t == "recovery" else "--"
@@ -317,6 +419,32 @@ def mapping() -> str:
     )
 
 
+@docs_table("docs/validation/comparison/mapping.json")
+def mapping_band() -> str:
+    """Insertion against transfer in a band that shears or opens."""
+    return band_table(docs_tables.load("docs/validation/comparison/mapping.json"))
+
+
+def band_table(data: dict) -> str:
+    """The shear and opening bands: q drift after the last step, what was mapped."""
+    rows = []
+    for key, name in MAPPING_NAMES.items():
+        row = [name]
+        for kind in ("shear_band", "opening_band"):
+            r = data[kind][key]
+            if key == "npfem":
+                done = f"{r['inserted']} particles added, each once"
+            else:
+                done = f"{r['stress_points']} points, {r['transfers']} transfers"
+            row += [done, *map(docs_tables.sci, (r["q_drift"], r["max_drift"]))]
+            row.append(f"{r['area_ratio']:.3f}")
+        rows.append(row)
+    head = ["method"]
+    for kind in ("shear", "opening"):
+        head += [f"{kind} band: what is mapped", "q drift", "max", "area"]
+    return docs_tables.md(head, rows)
+
+
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     ap.add_argument("--quick", action="store_true", help="reduced run (tests)")
@@ -332,6 +460,8 @@ def main(argv: list[str] | None = None) -> dict:
     result = {
         "at_rest": at_rest(n_remesh),
         "rigid_motion": rigid_motion(n_steps, n),
+        "shear_band": band("shear", n_steps, n),
+        "opening_band": band("opening", n_steps, n),
         "quick": args.quick,
     }
     result["wall_time"] = time.perf_counter() - start
@@ -340,6 +470,7 @@ def main(argv: list[str] | None = None) -> dict:
         if not args.no_plot:
             plot(result, args.out / "mapping.png")
     print(table(result))
+    print(band_table(result))
     return result
 
 
