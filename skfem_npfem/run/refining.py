@@ -18,7 +18,7 @@ uninterrupted one step for step.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -50,6 +50,14 @@ class Refiner:
     max_spacing_ratio : float, default 4.0
         A particle whose nodal volume exceeds this many times its spacing^d is
         no donor (a lone particle at a free surface).
+    target : callable, optional
+        ``target(x, time) -> (n,)``: the spacing wanted at the particles'
+        positions ``x`` (n, d) at ``time``, m (a user's grading: finer where a
+        result is read, coarser far away).  The edge and merge tests read it
+        instead of each particle's carried spacing; the carried spacing stays
+        what the alpha test reads, so a coarse region is refined edge by edge
+        (at most one edge per particle a pass) rather than dropped.  None:
+        the carried spacing is the target.
 
     Attributes
     ----------
@@ -72,6 +80,7 @@ class Refiner:
         ratio: float | None = 1.6,
         merge: float = 0.0,
         max_spacing_ratio: float = 4.0,
+        target: Callable[[np.ndarray, float], np.ndarray] | None = None,
     ) -> None:
         if ratio is not None and (
             not (isinstance(ratio, int | float) and math.isfinite(ratio))
@@ -94,6 +103,11 @@ class Refiner:
         self.ratio = math.inf if ratio is None else float(ratio)
         self.merge = float(merge)
         self.max_spacing_ratio = float(max_spacing_ratio)
+        if target is not None and not callable(target):
+            raise ParameterError(
+                "target", type(target).__name__, "a function target(x, time)"
+            )
+        self.target = target
         self.inserted = 0
         self.last = Insertion()
         self.last_merge = Insertion()
@@ -134,7 +148,8 @@ class Refiner:
         same = p.material[a] == p.material[b]
         d = p.dim
         donor = free & (volume > 0) & (volume < self.max_spacing_ratio * spacing**d)
-        chosen = long_edges(p.x, edges, spacing, self.ratio, donor[a] & donor[b] & same)
+        goal = spacing if self.target is None else self._goal(p.x, time)
+        chosen = long_edges(p.x, edges, goal, self.ratio, donor[a] & donor[b] & same)
         chosen = chosen[_clear(bodies, 0.5 * (p.x[a[chosen]] + p.x[b[chosen]]), time)]
         pairs = edges[:0]
         if self.merge > 0.0:  # never a particle of a split edge
@@ -142,7 +157,7 @@ class Refiner:
             busy[edges[chosen].ravel()] = True
             ok = free & ~busy
             short = long_edges(
-                p.x, edges, spacing, self.merge, ok[a] & ok[b] & same, shorter=True
+                p.x, edges, goal, self.merge, ok[a] & ok[b] & same, shorter=True
             )
             m = p.mass[a[short], None], p.mass[b[short], None]
             centre = (m[0] * p.x[a[short]] + m[1] * p.x[b[short]]) / (m[0] + m[1])
@@ -161,6 +176,19 @@ class Refiner:
             model.loads = loads
         self.particles = out
         return out
+
+    def _goal(self, x: np.ndarray, time: float) -> np.ndarray:
+        """The user's target spacing at ``x``, checked: (n,) finite, > 0."""
+        goal = np.asarray(self.target(x, time), dtype=float)
+        if goal.ndim == 0:
+            goal = np.full(x.shape[0], float(goal))
+        if goal.shape != (x.shape[0],) or not np.all(np.isfinite(goal) & (goal > 0)):
+            raise ParameterError(
+                "target",
+                f"values of shape {goal.shape}",
+                f"({x.shape[0]},) finite spacings > 0 (m), one per particle",
+            )
+        return goal
 
     def _check_model(self, model: Any) -> Sequence[RigidBody]:
         """The model's bodies; keeps its initial dead loads; refuses ties."""

@@ -235,3 +235,35 @@ def test_the_mesher_gives_the_last_triangulation_back_only_for_the_same_input():
     np.testing.assert_array_equal(fresh.simplices, again.simplices)  # same h
     mesher.spacing = np.full(p.n, 0.2)  # a new spacing array: triangulated again
     assert mesher.triangulate(p.x) is not fresh
+
+
+def test_a_user_target_spacing_refines_only_where_it_asks():
+    """target(x, t): half the spacing on the left; passes until no edge is long."""
+    h = 0.1
+    g = np.linspace(0.0, 1.0, 11)
+    p = Particles.create(np.stack(np.meshgrid(g, g), -1).reshape(-1, 2), h * h)
+    mesher = AlphaShapeMesher(h, 1.3)
+
+    def target(x, time):
+        return np.where(x[:, 0] < 0.5, h / 2, h)
+
+    refiner = Refiner(1.6, target=target)
+    for _ in range(40):  # at most one edge per particle a pass
+        p = refiner(p, mesher)
+        if refiner.last.count == 0:
+            break
+    assert refiner.last.count == 0
+    assert p.mass.sum() == pytest.approx(121 * h * h, rel=1e-13)
+    edges, _, _ = edge_shares(p.x, mesher.triangulate(p.x).simplices)
+    a, b = edges[:, 0], edges[:, 1]
+    length = np.linalg.norm(p.x[a] - p.x[b], axis=1)
+    assert np.all(length <= 1.6 * np.minimum(target(p.x[a], 0), target(p.x[b], 0)))
+    # The right half (target h) keeps its lattice: no particle added there.
+    assert np.all(p.x[121:, 0] <= 0.5 + 1e-12)
+    # About four times the particles on the left half: (h / (h/2))^2.
+    left = np.sum(p.x[:, 0] < 0.5 - 1e-9)
+    assert 3.0 < left / 55 < 5.0
+    with pytest.raises(ParameterError, match="target"):
+        Refiner(1.6, target=lambda x, t: -np.ones(x.shape[0]))(p, mesher)
+    with pytest.raises(ParameterError, match="target"):
+        Refiner(1.6, target=0.05)

@@ -58,6 +58,7 @@ __all__ = [
     "column_particles",
     "column_walls",
     "cylinder_column",
+    "graded_column",
     "half_section_lattice",
     "mass_quantile",
     "quarter_cylinder_lattice",
@@ -186,6 +187,27 @@ def _named(wall: RigidWall, name: str) -> RigidWall:
     return RigidWall(wall.point, wall.normal, wall.friction_angle, name)
 
 
+def graded_column(
+    x: np.ndarray, h: float, radius: float, height: float, band: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """A cylindrical lattice with every other point kept in its core.
+
+    ``x`` and ``h`` are a lattice of :func:`half_section_lattice` or
+    :func:`quarter_cylinder_lattice` and its spacing.  Points within ``band``
+    of the top, the floor or the column's free side (``r > r0 - band``) keep
+    the spacing; the others only where every lattice index is even (twice
+    the spacing).  The axis and the symmetry planes are no free surfaces:
+    the core reaches them.  Returns the points and the spacing of each.
+    """
+    hz = height / max(1, round(height / h))
+    z = x[:, -1]
+    r = np.linalg.norm(x[:, :-1], axis=1)
+    fine = (z > height - band) | (z < band) | (r > radius - band)
+    idx = np.rint(np.column_stack([x[:, :-1] / h, z / hz])).astype(int)
+    keep = fine | np.all(idx % 2 == 0, axis=1)
+    return x[keep], np.where(fine[keep], h, 2.0 * h)
+
+
 def column_particles(
     x: np.ndarray,
     mesher: AlphaShapeMesher,
@@ -288,6 +310,7 @@ def cylinder_column(
     match: str = "compression",
     material: str = "drucker-prager",
     solver: SolverOptions | None = None,
+    band: float | None = None,
     **overrides: float,
 ) -> ColumnSetup:
     """The seed column (or a variant) as particles, model and remesher.
@@ -308,6 +331,10 @@ def cylinder_column(
         axisymmetry (3D Mohr-Coulomb is not a second-order cone).
     solver : SolverOptions, optional
         Clarabel settings.
+    band : float, optional
+        A graded lattice (:func:`graded_column`): the spacing within ``band``
+        (m) of the free surfaces and the floor, twice it in the core.  None:
+        the uniform lattice.
     **overrides
         Any key of :data:`SEED` (``radius``, ``height``, ``rho``, ``E``, ...).
         ``alpha`` defaults to the section's 1.3 here for both geometries; the
@@ -332,7 +359,10 @@ def cylinder_column(
         x, h_lat = half_section_lattice(r0, h0, h)
     else:
         x, h_lat = quarter_cylinder_lattice(r0, h0, h)
-    mesher = AlphaShapeMesher(h_lat, v["alpha"], walls=walls)
+    graded = None
+    if band is not None:
+        x, graded = graded_column(x, h_lat, r0, h0, band)
+    mesher = AlphaShapeMesher(h_lat, v["alpha"], walls=walls, spacing=graded)
     particles = column_particles(
         x,
         mesher,

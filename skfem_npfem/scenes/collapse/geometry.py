@@ -207,7 +207,7 @@ def used_parameters(
             "aspect", "half_width", "symmetric", "depth", "max_displacement",
             "buried_slivers", "kh",
         }  # fmt: skip
-    used = common | {"radius", "height"}
+    used = common | {"radius", "height", "refine", "refine_band"}
     if not {"radius", "height"} <= given:
         used.add("aspect")
     if geometry == "quarter-cylinder":

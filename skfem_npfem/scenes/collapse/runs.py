@@ -162,6 +162,9 @@ def _column_setup(values: Mapping[str, Any]) -> ColumnSetup:
     }
     if geo in CYLINDRICAL:
         soil.update(radius=values["radius"], height=values["height"])
+        if values["refine"] == "surface":  # the spacing: r0 / round(r0 / spacing)
+            h = values["radius"] / max(1, round(values["radius"] / values["spacing"]))
+            kw["band"] = values["refine_band"] * h
         return cylinder_column(
             geo, values["spacing"], material=values["material"], **kw, **soil
         )
@@ -309,6 +312,11 @@ GEOMETRY_NOTES = {
     "where psi = 0 and rho g h0 / E <= 0.01",
     "alpha": "quarter-cylinder: default 2.0",
     "max_displacement": "not in axisymmetry",
+    "refine": "axisymmetric and quarter-cylinder: the graded lattice, the fine "
+    "band along the top, the floor and the free side (the axis and the symmetry "
+    "planes are no free surface); not box",
+    "refine_ratio": "plane-strain only",
+    "refine_merge": "plane-strain only",
 }
 
 
