@@ -333,8 +333,8 @@ def cylinder_column(
         Clarabel settings.
     band : float, optional
         A graded lattice (:func:`graded_column`): the spacing within ``band``
-        (m) of the free surfaces and the floor, twice it in the core.  None:
-        the uniform lattice.
+        lattice spacings of the free surfaces and the floor, twice it in the
+        core.  None: the uniform lattice.
     **overrides
         Any key of :data:`SEED` (``radius``, ``height``, ``rho``, ``E``, ...).
         ``alpha`` defaults to the section's 1.3 here for both geometries; the
@@ -361,7 +361,7 @@ def cylinder_column(
         x, h_lat = quarter_cylinder_lattice(r0, h0, h)
     graded = None
     if band is not None:
-        x, graded = graded_column(x, h_lat, r0, h0, band)
+        x, graded = graded_column(x, h_lat, r0, h0, band * h_lat)
     mesher = AlphaShapeMesher(h_lat, v["alpha"], walls=walls, spacing=graded)
     particles = column_particles(
         x,

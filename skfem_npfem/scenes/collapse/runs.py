@@ -162,9 +162,8 @@ def _column_setup(values: Mapping[str, Any]) -> ColumnSetup:
     }
     if geo in CYLINDRICAL:
         soil.update(radius=values["radius"], height=values["height"])
-        if values["refine"] == "surface":  # the spacing: r0 / round(r0 / spacing)
-            h = values["radius"] / max(1, round(values["radius"] / values["spacing"]))
-            kw["band"] = values["refine_band"] * h
+        if values["refine"] == "surface":
+            kw["band"] = values["refine_band"]
         return cylinder_column(
             geo, values["spacing"], material=values["material"], **kw, **soil
         )
