@@ -23,6 +23,7 @@ from skfem_npfem.cli import main
 from skfem_npfem.laws import lube2004_runout
 from skfem_npfem.metrics import roughness_index
 from skfem_npfem.scenes import get_scene
+from skfem_npfem.scenes.collapse.runs import bare_method
 from skfem_npfem.scenes.collapse.sizing import lattice_particles
 from skfem_npfem.viz.scenery import scenery
 
@@ -53,7 +54,11 @@ def quarter_count(n_r: int, n_z: int) -> int:
 CASES = {
     "plane-strain": (["spacing=0.04", "t_end=0.02"], 6 * 11),
     "axisymmetric": ([f"spacing={R0 / 6}", "t_end=0.012"], 7 * 13),
-    "quarter-cylinder": ([f"spacing={R0 / 6}", "t_end=0.006"], quarter_count(6, 12)),
+    # (the uniform lattice and the seed's fixed step, not the speed defaults)
+    "quarter-cylinder": (
+        [f"spacing={R0 / 6}", "t_end=0.006", "refine=none", "dt=0.002"],
+        quarter_count(6, 12),
+    ),
     "box": (["spacing=0.04", "t_end=0.015"], 6 * 5 * 11),
 }
 
@@ -162,8 +167,26 @@ def test_geometry_defaults_are_the_seed_case():
     scene = get_scene("column-collapse")
     v = scene.resolve({"geometry": "quarter-cylinder"})
     assert (v["radius"], v["height"], v["aspect"]) == (R0, H0, 2.0)
-    assert v["spacing"] == R0 / 18 and v["dt"] == 2e-3
+    assert v["spacing"] == R0 / 18
     assert (v["material"], v["dp_match"]) == ("drucker-prager", "compression")
+    # The quarter's speed defaults (docs/performance.md): the graded lattice,
+    # the fast preset, steps of up to 6 ms within one spacing of motion ...
+    assert (v["refine"], v["accuracy"]) == ("surface", "fast")
+    assert (v["dt"], v["max_displacement"]) == (6e-3, 1.0)
+    # ... each off where the user chose: a dt given alone is a fixed step, a
+    # tol keeps its tolerance, a max_displacement keeps the 6 ms cap.
+    w = scene.resolve({"geometry": "quarter-cylinder", "dt": 4e-3, "tol": 1e-7})
+    assert (w["dt"], w["max_displacement"], w["accuracy"]) == (4e-3, None, None)
+    w = scene.resolve({"geometry": "quarter-cylinder", "max_displacement": 0.5})
+    assert (w["dt"], w["max_displacement"]) == (6e-3, 0.5)
+    w = scene.resolve(
+        {"geometry": "quarter-cylinder", **bare_method("quarter-cylinder")}
+    )
+    assert (w["refine"], w["tol"], w["accuracy"]) == ("none", 1e-8, None)
+    assert (w["dt"], w["max_displacement"]) == (2e-3, None)
+    # The axisymmetric section keeps the seed's fixed 2 ms and uniform lattice.
+    w = scene.resolve({"geometry": "axisymmetric"})
+    assert (w["dt"], w["max_displacement"], w["refine"]) == (2e-3, None, "none")
     # The 3D quarter's alpha shape: 2.0 (docs/seed_column.md, "Where the 3D
     # volume goes"); the sections keep 1.3, and a given alpha is kept.
     assert v["alpha"] == 2.0

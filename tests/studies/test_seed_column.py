@@ -160,6 +160,8 @@ def test_3d_volume_budget_of_a_short_run(tmp_path, monkeypatch):
     # masses are rho times the initial mesh's cells, so the first step's mesh
     # holds exactly what the particles carry, and the budget's parts agree
     # with the run's own volume change.
+    from skfem_npfem.scenes.collapse.geometry import QUARTER_FIXED
+
     study = importlib.import_module("seed_3d_volume")
     tiny = {
         "geometry": "quarter-cylinder",
@@ -167,6 +169,7 @@ def test_3d_volume_budget_of_a_short_run(tmp_path, monkeypatch):
         "t_end": 0.006,
         "rest_fraction": 0.0,
         "threads": 1,
+        **QUARTER_FIXED,  # three fixed steps on the uniform lattice
     }
     monkeypatch.setitem(study.CASES, "tiny", tiny)
     rec = study.run_case("tiny", tmp_path)

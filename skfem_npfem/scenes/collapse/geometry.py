@@ -15,7 +15,8 @@
 The cylindrical geometries default to the reference paper's seed column
 (:data:`~skfem_npfem.scenes.collapse.cylinder.SEED`: ``r0 = 3.9`` cm, ``h0 = 7.8`` cm,
 the soil of the plane-strain defaults, ``dt = 2`` ms, Drucker-Prager matched to
-Mohr-Coulomb in triaxial compression, spacing ``r0/18``).  Two of ``radius``,
+Mohr-Coulomb in triaxial compression, spacing ``r0/18``); the quarter cylinder
+runs with :data:`QUARTER_SPEED` unless told otherwise.  Two of ``radius``,
 ``height`` and ``aspect`` fix the third; the defaults fill ``radius`` first,
 then ``aspect``.  A parameter the chosen geometry does not use, given
 explicitly, is refused (``aspect`` with both ``radius`` and ``height``,
@@ -50,6 +51,8 @@ __all__ = [
     "GEOMETRIES",
     "GEOMETRY_METRICS",
     "GEOMETRY_PARAMS",
+    "QUARTER_FIXED",
+    "QUARTER_SPEED",
     "GeometryScene",
     "finalize",
     "metrics_doc",
@@ -61,6 +64,22 @@ CYLINDRICAL = ("axisymmetric", "quarter-cylinder")
 DP_MATCHES = ("plane-strain", "compression", "extension")
 #: Time step of the seed case, s.
 SEED_DT = SEED["dt"]
+#: The quarter cylinder's speed defaults: a graded lattice (fine along the free
+#: surfaces and the floor, twice as coarse in the core), the solver preset
+#: ``fast`` and steps of up to 6 ms that keep every particle's displacement
+#: within one spacing.  Each applies unless its own parameters are given
+#: (``refine``; ``accuracy`` or ``tol``; ``dt`` or ``max_displacement``: a
+#: ``dt`` given alone is a fixed step).  docs/performance.md measures them.
+QUARTER_SPEED: dict[str, Any] = {
+    "refine": "surface",
+    "accuracy": "fast",
+    "dt": 6e-3,
+    "max_displacement": 1.0,
+}
+#: Overrides that turn :data:`QUARTER_SPEED` off: the uniform lattice, the
+#: interior-point tolerance 1e-8 and the paper's fixed 2 ms (what the quarter
+#: cylinder ran before it had speed defaults).
+QUARTER_FIXED: dict[str, Any] = {"refine": "none", "tol": 1e-8, "dt": SEED_DT}
 
 GEOMETRY_PARAMS = [
     Param(
@@ -74,7 +93,9 @@ GEOMETRY_PARAMS = [
         "walls). "
         "The cylindrical geometries default to the seed column (radius 3.9 cm, "
         "height 7.8 cm, spacing r0/18, dt = 2 ms, Drucker-Prager compression "
-        "match); box: Drucker-Prager plane-strain match",
+        "match; the quarter cylinder with its speed defaults: refine=surface, "
+        "accuracy=fast, steps of up to 6 ms within one spacing of motion); box: "
+        "Drucker-Prager plane-strain match",
         str,
         GEOMETRIES,
     ),
@@ -244,7 +265,9 @@ def finalize(
         return
     if geo in CYLINDRICAL:
         _cylinder_sizes(values, given)
-        if "dt" not in given:
+        if geo == "quarter-cylinder":
+            _speed_defaults(values, given)
+        elif "dt" not in given:
             values["dt"] = SEED_DT
         if "alpha" not in given:
             values["alpha"] = GEOMETRY_ALPHA[geo]
@@ -260,6 +283,18 @@ def finalize(
     blame = "spacing" if "spacing" in given or geo == "box" else "radius"
     dim = 2 if geo == "axisymmetric" else 3
     check_size(n, dim, values, blame, "use a larger spacing or a smaller column")
+
+
+def _speed_defaults(values: dict[str, Any], given: frozenset[str]) -> None:
+    """Fill :data:`QUARTER_SPEED` where the user did not choose (in place)."""
+    if "refine" not in given:
+        values["refine"] = QUARTER_SPEED["refine"]
+    if not given & {"accuracy", "tol"}:
+        values["accuracy"] = QUARTER_SPEED["accuracy"]
+    if "dt" not in given:
+        values["dt"] = QUARTER_SPEED["dt"]
+        if "max_displacement" not in given:
+            values["max_displacement"] = QUARTER_SPEED["max_displacement"]
 
 
 def fill_column_defaults(values: dict[str, Any]) -> None:

@@ -44,6 +44,7 @@ from .cylinder import ColumnSetup, cylinder_column, mass_quantile, radial_front
 from .geometry import (
     CYLINDRICAL,
     GEOMETRY_PARAMS,
+    QUARTER_FIXED,
     GeometryScene,
     metrics_doc,
 )
@@ -93,7 +94,10 @@ def bare_method(geometry: str) -> dict[str, Any]:
     :data:`CYLINDER_FIDELITY`: no stabilisation, no volume correction, the
     alpha factor 1.3, and in 3D the buried slivers dropped by the alpha shape.
     Studies and benchmarks measured then pin these, so that a rerun repeats
-    their committed numbers.  Plane strain has its own defaults: empty.
+    their committed numbers; in 3D they include
+    :data:`~.geometry.QUARTER_FIXED` (the uniform lattice, tol 1e-8 and the
+    paper's fixed 2 ms, which the bare method ran with).  Plane strain has its
+    own defaults: empty.
 
     Parameters
     ----------
@@ -114,6 +118,7 @@ def bare_method(geometry: str) -> dict[str, Any]:
     }
     if geometry == "quarter-cylinder":
         bare["buried_slivers"] = "drop"
+        bare.update(QUARTER_FIXED)
     return bare
 
 
@@ -303,15 +308,19 @@ GEOMETRY_NOTES = {
     "symmetric": "plane-strain and box only",
     "spacing": "cylindrical: default r0/18; box: L0/22",
     "material": "3D: drucker-prager only; cylindrical and box default drucker-prager",
-    "dt": "cylindrical: default 2 ms",
+    "dt": "axisymmetric: default 2 ms; quarter-cylinder: default up to 6 ms "
+    "with max_displacement 1 (a dt given alone is fixed)",
+    "accuracy": "quarter-cylinder: default fast, unless tol is given",
     "stabilisation": "axisymmetric: default 100; quarter-cylinder: default 1000; "
     "the paper's bare method: 0",
     "stabilisation_mode": "quarter-cylinder: default vertical",
     "volume_correction": "axisymmetric: default 0.05, quarter-cylinder: 0.15, "
     "where psi = 0 and rho g h0 / E <= 0.01",
     "alpha": "quarter-cylinder: default 2.0",
-    "max_displacement": "not in axisymmetry",
-    "refine": "axisymmetric and quarter-cylinder: the graded lattice, the fine "
+    "max_displacement": "not in axisymmetry; quarter-cylinder: default 1 unless "
+    "dt is given",
+    "refine": "quarter-cylinder: default surface; "
+    "axisymmetric and quarter-cylinder: the graded lattice, the fine "
     "band along the top, the floor and the free side (the axis and the symmetry "
     "planes are no free surface); not box",
     "refine_ratio": "plane-strain only",
