@@ -76,6 +76,7 @@ from _common import ROOT, benchmark
 from _reporting import save_png
 
 from skfem_npfem.laws import lube2004_runout
+from skfem_npfem.scenes.collapse.geometry import QUARTER_FIXED
 from skfem_npfem.scenes.collapse.runs import bare_method
 
 R0, H0, G, RHO = 0.039, 0.078, 9.81, 1800.0
@@ -163,10 +164,15 @@ def as_measured(case: dict) -> dict:
 CASES: dict[str, dict] = {
     name: as_measured(v) for name, v in _PAPER_CASES.items()
 } | {
-    "3d-18-default": {"geometry": "quarter-cylinder", "spacing": R0 / 18},
+    # The quarter's default before its speed defaults (QUARTER_FIXED: the
+    # uniform lattice, tol 1e-8, the paper's fixed 2 ms), and with two levers.
+    "3d-18-fixed": {"geometry": "quarter-cylinder", "spacing": R0 / 18,
+                    **QUARTER_FIXED},
     "3d-18-default-fast-dt4": {"geometry": "quarter-cylinder",
                                "spacing": R0 / 18, "accuracy": "fast",
-                               "dt": 4e-3},
+                               "dt": 4e-3, "refine": "none"},
+    # Today's default: the three speed levers (QUARTER_SPEED) on.
+    "3d-18-default": {"geometry": "quarter-cylinder", "spacing": R0 / 18},
     # The three speed levers of docs/performance.md on the default: a graded
     # lattice, the fast preset, steps of up to 6 ms limited to one spacing.
     "3d-18-levers": {"geometry": "quarter-cylinder", "spacing": R0 / 18,
@@ -184,8 +190,9 @@ LABELS = {
     "plane-18": "plane strain, r0/18",
     "3d-18-fast-dt4": "3D quarter, r0/18, fast, dt 4 ms",
     "3d-18-fast": "3D quarter, r0/18, fast",
-    "3d-18-default": "3D quarter, r0/18, defaults",
-    "3d-18-default-fast-dt4": "3D quarter, r0/18, defaults, fast, dt 4 ms",
+    "3d-18-fixed": "3D quarter, r0/18, stabilised, uniform lattice, dt 2 ms",
+    "3d-18-default-fast-dt4": "3D quarter, r0/18, stabilised, uniform, fast, dt 4 ms",
+    "3d-18-default": "3D quarter, r0/18, defaults (graded, fast, dt <= 6 ms)",
     "3d-18-levers": "3D quarter, r0/18, defaults, graded, fast, dt <= 6 ms",
     "3d-12-fast-dt4": "3D quarter, r0/12, fast, dt 4 ms",
     "axi-12-fast-dt4": "axisymmetric, r0/12, fast, dt 4 ms",
