@@ -27,8 +27,11 @@ Usage::
 
 The step is the reference paper's bare method, as the committed results
 measured it (``--method bare``, pinned whatever the scene's defaults);
-``--method default`` profiles the quarter cylinder's stabilised,
-volume-keeping default step instead (add ``--name`` to keep both).  The
+``--method default`` profiles the quarter cylinder's default step instead
+(stabilised, volume-keeping, with its speed defaults; add ``--name`` to keep
+both), and ``--set KEY=JSON`` adds scene overrides on top of either
+(``--method default --set refine=none``: the default step on the uniform
+lattice).  The
 committed r0/6 result is older than the symmetry planes' prescribed
 displacements: a rerun takes the same 14 iterations on 35 contact candidates
 instead of 217, with 0.47 M factor non-zeros instead of 0.56 M (today's
@@ -50,6 +53,7 @@ import sys
 import tempfile
 from pathlib import Path
 from statistics import median
+from typing import Any
 
 import _harness as harness
 
@@ -200,6 +204,7 @@ def run(args) -> dict:
         "rest_fraction": 0.0,
         "linear_solver": "mkl",
         **harness.method_overrides("quarter-cylinder", args.method),
+        **dict(args.set),
     }
     values = get_scene("column-collapse").resolve(over)
     sim = build_geometry(values).simulation
@@ -216,6 +221,7 @@ def run(args) -> dict:
     return {
         "divisions": args.divisions,
         "method": args.method,
+        "set": dict(args.set),
         "scene_overrides": over,
         "n_particles": int(sim.particles.n),
         "step": rec.step,
@@ -301,7 +307,8 @@ def markdown(rep: dict) -> str:
     lines = [
         f"# One 3D seed-column step: spacing r0/{rep['divisions']:g}, "
         f"{rep['n_particles']} particles, step {rep['step']}, "
-        f"{METHOD_LABEL[rep.get('method', 'bare')]}",
+        f"{METHOD_LABEL[rep.get('method', 'bare')]}"
+        + "".join(f", {k}={v}" for k, v in rep.get("set", {}).items()),
         "",
         harness.code_line(rep["machine"]["code"]),
         "",
@@ -343,6 +350,17 @@ def markdown(rep: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _override(text: str) -> tuple[str, Any]:
+    """``KEY=JSON`` as a (key, value) pair (a bare word is a string)."""
+    key, sep, raw = text.partition("=")
+    if not key or not sep:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected KEY=JSON")
+    try:
+        return key, json.loads(raw)
+    except json.JSONDecodeError:
+        return key, raw
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--divisions", type=float, default=12.0)
@@ -354,6 +372,14 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--rounds", type=int, default=2, help="solves of each variant")
     harness.add_method_argument(ap)
+    ap.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        type=_override,
+        metavar="KEY=JSON",
+        help='a scene override on top of the method (repeatable): refine="none"',
+    )
     ap.add_argument("--name", default=None, help="result file stem")
     ap.add_argument("--render", default=None, help="rewrite FILE.md from FILE.json")
     args = ap.parse_args(argv)
