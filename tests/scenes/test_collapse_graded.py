@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -119,3 +121,29 @@ def test_a_graded_cylinder_has_the_mass_and_weight_of_the_uniform_one(geometry):
     assert not np.any(coarse & (r > r0 - 3.5 * h))
     # The symmetry planes (and the axis) are no free surface: the core reaches them.
     assert np.any(coarse & (graded.x[:, 0] == 0.0))
+
+
+def test_the_quarter_cylinders_speed_defaults_reach_its_run():
+    """Unset, the graded lattice, the fast preset and the step control run."""
+    base = {"geometry": "quarter-cylinder", "spacing": 0.039 / 6, "t_end": 0.06}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # not at rest at t_end: expected
+        s = run_scene("column-collapse", base)
+    p, m, hist = s["parameters"], s["metrics"], s["history"]
+    assert (p["refine"], p["accuracy"], p["dt"], p["max_displacement"]) == (
+        "surface",
+        "fast",
+        6e-3,
+        1.0,
+    )
+    scene = get_scene("column-collapse")
+    uniform = scene.build(scene.resolve({**base, "refine": "none"})).simulation
+    assert m["n_particles"] < uniform.particles.n  # graded: fewer particles
+    assert m["mass_change"] == 0.0
+    # Displacement-controlled steps: each measured against the mesh's spacing,
+    # none longer than 6 ms, together exactly the run's time.
+    assert all(h["status"] == "Solved" for h in hist)
+    assert all(0 < h["dt"] <= 6e-3 for h in hist)
+    assert sum(h["dt"] for h in hist) == pytest.approx(0.06, rel=1e-12)
+    ratios = [h["max_displacement_ratio"] for h in hist]
+    assert all(np.isfinite(ratios)) and max(ratios) < 1.0

@@ -66,8 +66,10 @@ DP_MATCHES = ("plane-strain", "compression", "extension")
 SEED_DT = SEED["dt"]
 #: The quarter cylinder's speed defaults: a graded lattice (fine along the free
 #: surfaces and the floor, twice as coarse in the core), the solver preset
-#: ``fast`` and steps of up to 6 ms that keep every particle's displacement
-#: within one spacing.  Each applies unless its own parameters are given
+#: ``fast`` and steps of up to 6 ms that keep the largest particle displacement
+#: a step near one mean particle spacing of the mesh (a step that moves further
+#: shortens the next; :class:`~skfem_npfem.run.Simulation`'s
+#: ``max_displacement``).  Each applies unless its own parameters are given
 #: (``refine``; ``accuracy`` or ``tol``; ``dt`` or ``max_displacement``: a
 #: ``dt`` given alone is a fixed step).  docs/performance.md measures them.
 QUARTER_SPEED: dict[str, Any] = {
