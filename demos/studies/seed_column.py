@@ -173,6 +173,7 @@ CASES: dict[str, dict] = {
                                "dt": 4e-3, "refine": "none"},
     # Today's default: the three speed levers (QUARTER_SPEED) on.
     "3d-18-default": {"geometry": "quarter-cylinder", "spacing": R0 / 18},
+    "3d-12-default": {"geometry": "quarter-cylinder", "spacing": R0 / 12},
     # The three speed levers of docs/performance.md on the default: a graded
     # lattice, the fast preset, steps of up to 6 ms limited to one spacing.
     "3d-18-levers": {"geometry": "quarter-cylinder", "spacing": R0 / 18,
@@ -193,6 +194,7 @@ LABELS = {
     "3d-18-fixed": "3D quarter, r0/18, stabilised, uniform lattice, dt 2 ms",
     "3d-18-default-fast-dt4": "3D quarter, r0/18, stabilised, uniform, fast, dt 4 ms",
     "3d-18-default": "3D quarter, r0/18, defaults (graded, fast, dt <= 6 ms)",
+    "3d-12-default": "3D quarter, r0/12, defaults (graded, fast, dt <= 6 ms)",
     "3d-18-levers": "3D quarter, r0/18, defaults, graded, fast, dt <= 6 ms",
     "3d-12-fast-dt4": "3D quarter, r0/12, fast, dt 4 ms",
     "axi-12-fast-dt4": "axisymmetric, r0/12, fast, dt 4 ms",
