@@ -96,7 +96,7 @@ GEOMETRY_PARAMS = [
         "The cylindrical geometries default to the seed column (radius 3.9 cm, "
         "height 7.8 cm, spacing r0/18, dt = 2 ms, Drucker-Prager compression "
         "match; the quarter cylinder with its speed defaults: refine=surface, "
-        "accuracy=fast, steps of up to 6 ms within one spacing of motion); box: "
+        "accuracy=fast, steps of up to 6 ms with max_displacement 1); box: "
         "Drucker-Prager plane-strain match",
         str,
         GEOMETRIES,
