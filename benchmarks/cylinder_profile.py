@@ -29,7 +29,7 @@ The step is the reference paper's bare method, as the committed results
 measured it (``--method bare``, pinned whatever the scene's defaults);
 ``--method default`` profiles the quarter cylinder's default step instead
 (stabilised, volume-keeping, with its speed defaults; add ``--name`` to keep
-both), and ``--set KEY=JSON`` adds scene overrides on top of either
+both), and ``--set KEY=VALUE`` adds scene overrides on top of either
 (``--method default --set refine=none``: the default step on the uniform
 lattice).  The
 committed r0/6 result is older than the symmetry planes' prescribed
@@ -53,7 +53,6 @@ import sys
 import tempfile
 from pathlib import Path
 from statistics import median
-from typing import Any
 
 import _harness as harness
 
@@ -350,15 +349,12 @@ def markdown(rep: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _override(text: str) -> tuple[str, Any]:
-    """``KEY=JSON`` as a (key, value) pair (a bare word is a string)."""
-    key, sep, raw = text.partition("=")
+def _override(text: str) -> tuple[str, str]:
+    """``KEY=VALUE`` as ``skfem-npfem run --set`` takes it (the scene converts)."""
+    key, sep, value = text.partition("=")
     if not key or not sep:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected KEY=JSON")
-    try:
-        return key, json.loads(raw)
-    except json.JSONDecodeError:
-        return key, raw
+        raise argparse.ArgumentTypeError(f"{text!r}: expected KEY=VALUE")
+    return key, value
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -377,8 +373,9 @@ def main(argv: list[str] | None = None) -> int:
         action="append",
         default=[],
         type=_override,
-        metavar="KEY=JSON",
-        help='a scene override on top of the method (repeatable): refine="none"',
+        metavar="KEY=VALUE",
+        help="a scene override on top of the method, as `skfem-npfem run --set` "
+        "takes it (repeatable): refine=none",
     )
     ap.add_argument("--name", default=None, help="result file stem")
     ap.add_argument("--render", default=None, help="rewrite FILE.md from FILE.json")
