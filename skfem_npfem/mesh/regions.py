@@ -34,6 +34,7 @@ __all__ = [
     "fill_regions",
     "mesh_regions",
     "point_in_polygon",
+    "point_spacing",
     "region_thickness",
 ]
 
@@ -380,3 +381,49 @@ def mesh_regions(
     region = np.full(used.size, len(regions))
     np.minimum.at(region, new[tri].ravel(), np.repeat(owner, 3))
     return pts[used], new[tri].T, region
+
+
+def point_spacing(
+    pts: np.ndarray, tri: np.ndarray, regions: list[Region], spacing: float
+) -> np.ndarray | None:
+    """Each point's spacing: the finest of the regions of its triangles.
+
+    A region's own ``spacing`` (else ``spacing``) goes to the points of the
+    triangles whose centroid it holds (the first listed region where regions
+    overlap, as :func:`mesh_regions`); a point on an edge shared by regions of
+    different spacings takes the finer, as :func:`fill_regions` placed it.
+
+    Parameters
+    ----------
+    pts : ndarray (n, 2)
+    tri : ndarray (3, m) int
+        Triangles of the points (:func:`fill_regions`).
+    regions : list of Region
+    spacing : float
+        The section's spacing, m.
+
+    Returns
+    -------
+    ndarray (n,) or None
+        Spacing per point, m; None when no region gives its own (every point
+        at ``spacing``).
+
+    Examples
+    --------
+    >>> a = Region("a", np.array([[0, 0], [2, 0], [2, 1], [0, 1]], float))
+    >>> b = Region("b", np.array([[0, 1], [2, 1], [2, 2], [0, 2]], float), 0.5)
+    >>> pts, tri, _ = fill_regions([a, b], 1.0)
+    >>> h = point_spacing(pts, tri, [a, b], 1.0)
+    >>> sorted(set(h.tolist())), bool(np.all(h[pts[:, 1] >= 1.0 - 1e-9] == 0.5))
+    ([0.5, 1.0], True)
+    """
+    if all(r.spacing is None for r in regions):
+        return None
+    hs = np.array([spacing if r.spacing is None else r.spacing for r in regions])
+    cen = pts[tri.T].mean(axis=1)
+    owner = np.full(tri.shape[1], len(regions) - 1)
+    for k in range(len(regions) - 1, -1, -1):
+        owner[point_in_polygon(cen, regions[k].polygon)] = k
+    out = np.full(pts.shape[0], np.inf)
+    np.minimum.at(out, tri.T.ravel(), np.repeat(hs[owner], 3))
+    return out

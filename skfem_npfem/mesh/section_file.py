@@ -17,10 +17,12 @@ The geometry file of the ``slope`` scene (:func:`read_cross_section`) is JSON::
 Lengths in m, stresses in Pa, angles in degrees, densities ``rho`` in kg/m^3 (the
 unit weight is ``rho g``). A region may give its own ``"spacing"`` (finer where
 asked: a thin layer, the zone where a slip is expected); edges it shares with
-coarser regions take its points. A material may also give ``E``, ``nu`` and ``psi``
-(defaults: the scene's), and ``k``, its hydraulic conductivity (m/s) for the
-steady seepage of ``"heads"``: every material or none (none: one uniform ``k``;
-the heads of a soil of one conductivity do not depend on its value). Polygons
+coarser regions take its points, and its particles keep it in a run-out
+(:func:`~skfem_npfem.mesh.regions.point_spacing`). A material may also give
+``E``, ``nu`` and ``psi`` (defaults: the scene's), and ``k``, its hydraulic
+conductivity (m/s) for the steady seepage of ``"heads"``: every material or none
+(none: one uniform ``k``; the heads of a soil of one conductivity do not depend
+on its value). Polygons
 are closed: the last vertex repeats the first. The base is the lowest ``y`` of
 the section (``fixed``: both velocities zero; ``rollers``: vertical only), the
 sides its smallest and largest ``x`` (``rollers``: horizontal velocity zero;

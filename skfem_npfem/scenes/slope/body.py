@@ -15,11 +15,12 @@ import numpy as np
 from skfem import MeshTri
 
 from ...materials import Material
-from ...mesh.regions import CrossSection, fill_regions
+from ...mesh.regions import CrossSection, fill_regions, point_spacing
+from ...mesh.sources import AlphaShapeMesher
 from .profile import profile_factors
 from .section import section_materials, section_of, supports
 
-__all__ = ["SlopeBody", "body_from", "slope_body"]
+__all__ = ["SlopeBody", "body_from", "run_out_mesher", "slope_body"]
 
 
 @dataclass
@@ -34,7 +35,7 @@ class SlopeBody:
         Particle spacing, m.
     pts : ndarray (n, 2)
         Particle positions, m.
-    tri : ndarray (n_t, 3)
+    tri : ndarray (3, n_t)
         Triangles of the particles' mesh.
     material : ndarray (n,) int
         Material index per particle (into ``mats``).
@@ -93,3 +94,20 @@ def body_from(
     mats = section_materials(sec, values)
     strength, stiffness = profile_factors(values, pts)
     return SlopeBody(sec, h, pts, tri, material, mesh, fixed, mats, strength, stiffness)
+
+
+def run_out_mesher(body: SlopeBody, alpha: float) -> AlphaShapeMesher:
+    """The run-out's remesher: each particle keeps its region's spacing.
+
+    A section whose regions give their own ``spacing`` fills each at its own;
+    the alpha test then reads the spacing of every particle (a simplex is
+    kept below ``alpha`` times the largest spacing of its particles), and
+    ``refine=surface`` adds a particle where an edge is stretched beyond
+    ``refine_ratio`` times that spacing, so a fine region stays fine as it
+    slides.  Without region spacings: ``alpha`` times the section's spacing
+    everywhere, as before.
+    """
+    own = point_spacing(body.pts, body.tri, body.sec.regions, body.h)
+    if own is None:
+        return AlphaShapeMesher(body.h, alpha)
+    return AlphaShapeMesher(float(own.min()), alpha, spacing=own)

@@ -51,7 +51,7 @@ from ...constants import GRAVITY
 from ...errors import NpfemError, ParameterError
 from ...mesh.regions import fill_regions
 from ...mesh.smoothing import nodal_integration
-from ...mesh.sources import AlphaShapeMesher, FixedMesh
+from ...mesh.sources import FixedMesh
 from ...particles import Particles
 from ...run.rest import AtRest
 from ...run.simulation import Simulation
@@ -78,7 +78,7 @@ from ..scenery import Scenery, number, section_lines
 from ..soil_profile import CLAY_PARAMS, PROFILE_PARAMS, check_layers
 from ..water import WATER_PARAMS
 from ..wet_soil import recorded_parameters
-from .body import slope_body
+from .body import run_out_mesher, slope_body
 from .profile import check_profile
 from .runout import RUNOUT_METRICS, base_metrics, runout_metrics
 from .section import check_section, section_of, toe_and_crest
@@ -415,7 +415,7 @@ def build(
     ).replace(strength=body.strength, stiffness=body.stiffness)
     particles = wet_particles(particles, water, body.mesh.t)
     source = (
-        AlphaShapeMesher(body.h, values["alpha"]) if run_out else FixedMesh(body.mesh.t)
+        run_out_mesher(body, values["alpha"]) if run_out else FixedMesh(body.mesh.t)
     )
     sim = Simulation(
         particles,
