@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """A footing pushed to w = B with and without particles added where the soil stretches.
 
-``footing-penetration`` (weightless Tresca clay, E/s_u = 1000) at its default
+``footing-penetration`` (weightless Tresca clay, E/s_u = 100) at its default
 spacing (B/20), smooth and rough, with ``refine=none`` and ``refine=bodies``
 (a particle at the middle of every edge stretched beyond 1.6 times its
 particles' lattice spacing, before each step).  For each run: the bearing

@@ -1,0 +1,235 @@
+#!/usr/bin/env python
+"""What the footing's one-step load drops are: measured step by step.
+
+``footing-penetration`` at its defaults (a smooth rigid strip pushed to w = B
+into weightless Tresca clay, E/s_u = 100, B/20 graded away from the footing,
+the footing moving a quarter of the spacing a step) shows a few steps whose
+load falls by 20-40 % and comes back in the next step.  This study runs it
+one step at a time and records, for every step, the load q/s_u, its dip below
+the mean of the two neighbouring steps (over the median load beyond w = 0.1 B),
+and three things the step did to the soil:
+
+* the triangles of the step's mesh that the step turned over (positive
+  area at the start, none or negative at the end);
+* the largest element strain increment of the step: the norm of the
+  (element-constant) strain of the step's displacement increment on each
+  triangle of the step's own mesh.  Nodal integration smooths the strains
+  over each particle's cell, so a triangle can deform far more than the
+  strains its particles' stresses see; one that inverts in the step shows a
+  value of order one or more;
+* the largest release of vertical stress at a particle, ``max(s_yy,n+1 -
+  s_yy,n)`` (compression negative: how much of its compressive vertical
+  stress a particle lost in the step).
+
+It then runs the scene with one setting changed at a time (a stiffer clay
+E/s_u = 1000, nu = 0.45 instead of 0.495, half the step, and the stress
+stabilisation at beta = 3) and reports the load drops and the largest dip of
+each, so that what does not remove them is measured too.  The runs are one
+process, one after another (about 8 minutes in all).
+
+Usage (from the repository root)::
+
+    python demos/studies/footing_drops.py [--out docs/validation]
+
+Writes ``<out>/footing_drops.json`` and ``<out>/footing_drops.inc`` (tables of
+docs/validation/particle_insertion.md).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+from _common import VALIDATION, write_results
+from _reporting import markdown_table
+
+import skfem_npfem as npfem
+from skfem_npfem.scenes.footing.penetration import build
+
+#: The settings changed one at a time (the scene's defaults otherwise).
+VARIANTS = {
+    "defaults": {},
+    "E/s_u = 1000": {"E": 1.0e6},
+    "nu = 0.45": {"nu": 0.45},
+    "half the step": {"dt": 0.00625},
+    "stabilisation beta = 3": {"stabilisation": 3.0},
+}
+#: A step whose load is this far (over the median) under its neighbours' mean
+#: counts as a dip in the step table.
+DIP = 0.10
+
+
+def dips(q: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Each step's dip under the mean of its neighbours, over the median load.
+
+    The first and last steps have one neighbour only and get 0.
+
+    Examples
+    --------
+    >>> dips(np.array([5.0, 4.0, 5.0, 5.0]), np.array([0.2, 0.3, 0.4, 0.5]))
+    array([0. , 0.2, 0. , 0. ])
+    """
+    out = np.zeros(q.size)
+    median = np.median(q[w >= 0.1]) if np.any(w >= 0.1) else np.median(q)
+    out[1:-1] = (0.5 * (q[:-2] + q[2:]) - q[1:-1]) / median
+    return np.maximum(out, 0.0)
+
+
+def element_strain(x0: np.ndarray, x1: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Norm of each triangle's strain increment from positions ``x0`` to ``x1``.
+
+    ``tri`` (ne, 3) global indices.  The increment is the symmetric part of the
+    gradient of the P1 displacement on the triangle at ``x0``.
+
+    Examples
+    --------
+    >>> x0 = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    >>> element_strain(x0, 1.1 * x0, np.array([[0, 1, 2]])).round(4).tolist()
+    [0.1414]
+    """
+    du = x1 - x0
+    a, b, c = (x0[tri[:, k]] for k in range(3))
+    J = np.stack([b - a, c - a], axis=2)
+    dU = np.stack([du[tri[:, 1]] - du[tri[:, 0]], du[tri[:, 2]] - du[tri[:, 0]]], 2)
+    grad = dU @ np.linalg.inv(J)
+    eps = 0.5 * (grad + grad.transpose(0, 2, 1))
+    return np.linalg.norm(eps, axis=(1, 2))
+
+
+def inverted(x0: np.ndarray, x1: np.ndarray, tri: np.ndarray) -> int:
+    """Triangles (ne, 3) positive at ``x0`` that the step turned over at ``x1``.
+
+    Examples
+    --------
+    >>> x0 = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    >>> inverted(x0, x0 * [1.0, -1.0], np.array([[0, 1, 2]]))
+    1
+    """
+
+    def area2(x: np.ndarray) -> np.ndarray:
+        a, b, c = (x[tri[:, k]] for k in range(3))
+        return (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (
+            c[:, 0] - a[:, 0]
+        )
+
+    return int(np.sum((area2(x0) > 0) & (area2(x1) <= 0)))
+
+
+def stepwise(over: dict) -> dict:
+    """The footing run one step at a time: load, dip, strain and stress release."""
+    values = npfem.get_scene("footing-penetration").resolve(over)
+    srun = build(values, progress=False)
+    sim = srun.simulation
+    B, su = values["width"], values["su"]
+    t0 = time.perf_counter()
+    rows = []
+    while sim.time < srun.run_kwargs["t_end"] * (1 - 1e-12):
+        x0, s0 = sim.particles.x.copy(), sim.particles.stress.copy()
+        sim.run(steps=1)
+        tri = sim.mesh_source.last
+        if not np.array_equal(tri.points, x0):
+            raise RuntimeError("the mesher's last triangulation is not the step's")
+        p, rec = sim.particles, sim.records[-1]
+        strain = element_strain(x0, p.x, tri.simplices)
+        release = p.stress[:, 1] - s0[:, 1]
+        rows.append(
+            {
+                "w": -rec.extra["footing_y"] / B,
+                "q": rec.extra["footing_force_y"] / (B / 2) / su,
+                "element_strain": float(strain.max()),
+                "inverted": inverted(x0, p.x, tri.simplices),
+                "stress_release": float(release.max() / su),
+            }
+        )
+    w = np.array([r["w"] for r in rows])
+    d = dips(np.array([r["q"] for r in rows]), w)
+    for r, di in zip(rows, d, strict=True):
+        r["dip"] = float(di)
+    return {"steps": rows, "wall_s": time.perf_counter() - t0}
+
+
+def variant(over: dict) -> dict:
+    """One run's load drops, largest dip, largest fall and roughness."""
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = npfem.run_scene("footing-penetration", over)["metrics"]
+    c = np.asarray(m["curve"])
+    return {
+        "load_drops": m["load_drops"],
+        "largest_dip": float(dips(c[:, 1], c[:, 0]).max()),
+        "bearing_factor": m["bearing_factor"],
+        "stress_roughness_max": m["stress_roughness_max"],
+        "steps": int(c.shape[0]),
+        "wall_s": time.perf_counter() - t0,
+    }
+
+
+def tables(result: dict) -> str:
+    """The step table (the dips and the median step) and the variants' table."""
+    steps = result["stepwise"]["steps"]
+    strain = np.array([s["element_strain"] for s in steps])
+    release = np.array([s["stress_release"] for s in steps])
+    turned = np.array([s["inverted"] for s in steps])
+    dipped = np.array([s["dip"] >= DIP for s in steps])
+    rows = [
+        [
+            f"{s['w']:.3f}",
+            f"{s['q']:.3f}",
+            f"{100 * s['dip']:.1f} %",
+            s["inverted"],
+            f"{s['element_strain']:.2f}",
+            f"{s['stress_release']:.2f}",
+        ]
+        for s in steps
+        if s["dip"] >= DIP
+    ]
+    rows.append(
+        [
+            "median step",
+            f"{np.median([s['q'] for s in steps]):.3f}",
+            f"{100 * np.median([s['dip'] for s in steps]):.1f} %",
+            f"{np.median(turned):.0f} (most in a step without a dip: "
+            f"{turned[~dipped].max(initial=0)})",
+            f"{np.median(strain):.2f}",
+            f"{np.median(release):.2f}",
+        ]
+    )
+    head = ["w/B", "q/s_u", "dip", "triangles turned over"]
+    head += ["largest element strain increment", "largest s_yy release / s_u"]
+    page = markdown_table(head, rows)
+    vrows = [
+        [
+            name,
+            v["load_drops"],
+            f"{100 * v['largest_dip']:.1f} %",
+            f"{v['bearing_factor']:.3f}",
+            f"{v['stress_roughness_max']:.3f}",
+            v["steps"],
+            f"{v['wall_s']:.0f} s",
+        ]
+        for name, v in result["variants"].items()
+    ]
+    head = ["setting", "load drops", "largest dip", "q/s_u at w = 0.1 B", "R max"]
+    page += "\n\n" + markdown_table([*head, "steps", "wall"], vrows)
+    return page + "\n"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--out", type=Path, default=VALIDATION)
+    args = ap.parse_args()
+    result = {"stepwise": stepwise({}), "variants": {}}
+    for name, over in VARIANTS.items():
+        result["variants"][name] = variant(over)
+        print(name, result["variants"][name], flush=True)
+    path = args.out / "footing_drops.json"
+    write_results(path, json.dumps(result, indent=1), tables(result))
+
+
+if __name__ == "__main__":
+    main()
