@@ -10,7 +10,8 @@ the mean of the two neighbouring steps (over the median load beyond w = 0.1 B),
 and three things the step did to the soil:
 
 * the triangles of the step's mesh that the step turned over (positive
-  area at the start, none or negative at the end);
+  area at the start, none or negative at the end), and the largest distance
+  a particle moved in the step over the footing's own motion;
 * the largest element strain increment of the step: the norm of the
   (element-constant) strain of the step's displacement increment on each
   triangle of the step's own mesh.  Nodal integration smooths the strains
@@ -137,6 +138,7 @@ def stepwise(over: dict) -> dict:
         if not np.array_equal(tri.points, x0):
             raise RuntimeError("the mesher's last triangulation is not the step's")
         p, rec = sim.particles, sim.records[-1]
+        footing = values["speed"] * rec.dt
         strain = element_strain(x0, p.x, tri.simplices)
         release = p.stress[:, 1] - s0[:, 1]
         rows.append(
@@ -145,6 +147,9 @@ def stepwise(over: dict) -> dict:
                 "q": rec.extra["footing_force_y"] / (B / 2) / su,
                 "element_strain": float(strain.max()),
                 "inverted": inverted(x0, p.x, tri.simplices),
+                "largest_motion": float(
+                    np.linalg.norm(p.x - x0, axis=1).max() / footing
+                ),
                 "stress_release": float(release.max() / su),
             }
         )
@@ -204,6 +209,7 @@ def tables(result: dict) -> str:
     strain = np.array([s["element_strain"] for s in steps])
     release = np.array([s["stress_release"] for s in steps])
     turned = np.array([s["inverted"] for s in steps])
+    motion = np.array([s["largest_motion"] for s in steps])
     dipped = np.array([s["dip"] >= DIP for s in steps])
     rows = [
         [
@@ -211,6 +217,7 @@ def tables(result: dict) -> str:
             f"{s['q']:.3f}",
             f"{100 * s['dip']:.1f} %",
             s["inverted"],
+            f"{s['largest_motion']:.1f}",
             f"{s['element_strain']:.2f}",
             f"{s['stress_release']:.2f}",
         ]
@@ -224,11 +231,14 @@ def tables(result: dict) -> str:
             f"{100 * np.median([s['dip'] for s in steps]):.1f} %",
             f"{np.median(turned):.0f} (most in a step without a dip: "
             f"{turned[~dipped].max(initial=0)})",
+            f"{np.median(motion):.1f} (most without a dip: "
+            f"{motion[~dipped].max(initial=0.0):.1f})",
             f"{np.median(strain):.2f}",
             f"{np.median(release):.2f}",
         ]
     )
     head = ["w/B", "q/s_u", "dip", "triangles turned over"]
+    head += ["largest particle motion / footing's"]
     head += ["largest element strain increment", "largest s_yy release / s_u"]
     page = markdown_table(head, rows)
     vrows = [
