@@ -15,6 +15,12 @@ axisymmetric, 3D quarter cylinder, 3D box), the three methods (N-PFEM,
 FEM-remap, SPFEM), rigid bodies in plane strain and axisymmetry, and limit
 analysis with and without strength reduction.  Every run uses one solver thread.
 
+The digests are one machine's: another CPU rounds some runs differently in the
+last bits (seen on a new machine: 9 of the 16 cases matched
+``benchmarks/results/digest.json``, with the code it was written with as with
+later code that changed nothing), so compare two runs made on the same machine,
+before and after the change, rather than a run with the committed file.
+
 Usage::
 
     python benchmarks/digest.py --out digest.json          # all cases
