@@ -342,6 +342,14 @@ def fill_regions(
     return mesh_regions(np.concatenate([bnd, inner]), regions, h)
 
 
+def _owners(centroids: np.ndarray, regions: list[Region]) -> np.ndarray:
+    """Region of each centroid (the first listed where they overlap; -1: none)."""
+    owner = np.full(len(centroids), -1)
+    for k in range(len(regions) - 1, -1, -1):
+        owner[point_in_polygon(centroids, regions[k].polygon)] = k
+    return owner
+
+
 def mesh_regions(
     pts: np.ndarray, regions: list[Region], h: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -364,10 +372,7 @@ def mesh_regions(
         As :func:`fill_regions`.
     """
     tri = Delaunay(pts).simplices
-    cen = pts[tri].mean(axis=1)
-    owner = np.full(len(tri), -1)
-    for k in range(len(regions) - 1, -1, -1):
-        owner[point_in_polygon(cen, regions[k].polygon)] = k
+    owner = _owners(pts[tri].mean(axis=1), regions)
     v = pts[tri]
     area2 = (v[:, 1, 0] - v[:, 0, 0]) * (v[:, 2, 1] - v[:, 0, 1]) - (
         v[:, 1, 1] - v[:, 0, 1]
@@ -420,10 +425,7 @@ def point_spacing(
     if all(r.spacing is None for r in regions):
         return None
     hs = np.array([spacing if r.spacing is None else r.spacing for r in regions])
-    cen = pts[tri.T].mean(axis=1)
-    owner = np.full(tri.shape[1], len(regions) - 1)
-    for k in range(len(regions) - 1, -1, -1):
-        owner[point_in_polygon(cen, regions[k].polygon)] = k
+    owner = _owners(pts[tri.T].mean(axis=1), regions)
     out = np.full(pts.shape[0], np.inf)
     np.minimum.at(out, tri.T.ravel(), np.repeat(hs[owner], 3))
     return out
