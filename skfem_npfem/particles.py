@@ -73,8 +73,10 @@ class Particles:
     shear_rate : ndarray (N,) or None
         Plastic shear-strain rate of the last step, 1/s (``sqrt(3)`` times
         the increment of ``eps_p`` over ``dt``): what a rate-dependent
-        strength (:attr:`~skfem_npfem.Model.strength_law`) reads.  None
-        without one.
+        strength (:attr:`~skfem_npfem.Model.strength_law`) reads, and a
+        refinement by the plastic strain rate marks by
+        (:class:`~skfem_npfem.run.refining.Refiner`, ``strain_share``).  None
+        without either.
     ids : ndarray (N,) int or None
         Stable particle ids (a particle keeps its id when particles are
         added, so ParaView can follow it; written as ``particle_id``).  None:

@@ -27,6 +27,7 @@ from ..boundary import RigidBody
 from ..errors import ParameterError
 from ..mesh.insertion import Insertion, edge_shares, insert_midpoints, long_edges
 from ..mesh.merging import merge_pairs
+from ..mesh.refine import mark_share
 from ..particles import Particles
 
 __all__ = ["Refiner", "initial_rows", "refined_point_data"]
@@ -58,6 +59,21 @@ class Refiner:
         what the alpha test reads, so a coarse region is refined edge by edge
         (at most one edge per particle a pass) rather than dropped.  None:
         the carried spacing is the target.
+    strain_share : float, optional
+        Refine where the plastic strain rate concentrates: before each step
+        the fewest particles whose cells carry this share (in (0, 1]) of the
+        last step's plastic shear-strain rate times cell volume
+        (:func:`~skfem_npfem.mesh.refine.mark_share`; for a soil of one
+        strength, that share of the plastic power) have their target halved,
+        so the edges round them are split until the spacing there is about
+        half the carried one; where the flow has moved on, the target is the
+        carried spacing again (and ``merge`` thins the particles there).  The
+        particles carry the rate (:attr:`Particles.shear_rate`, zero before
+        the first step).  None: no such marking.
+    stretched : bool, default True
+        Split an edge stretched beyond ``ratio`` times its ends' target
+        anywhere.  False (with ``strain_share``): only the edges round the
+        marked particles are split, the rest of the lattice stays as made.
 
     Attributes
     ----------
@@ -81,6 +97,8 @@ class Refiner:
         merge: float = 0.0,
         max_spacing_ratio: float = 4.0,
         target: Callable[[np.ndarray, float], np.ndarray] | None = None,
+        strain_share: float | None = None,
+        stretched: bool = True,
     ) -> None:
         if ratio is not None and (
             not (isinstance(ratio, int | float) and math.isfinite(ratio))
@@ -108,6 +126,18 @@ class Refiner:
                 "target", type(target).__name__, "a function target(x, time)"
             )
         self.target = target
+        if strain_share is not None and not (
+            isinstance(strain_share, int | float) and 0.0 < strain_share <= 1.0
+        ):
+            raise ParameterError(
+                "strain_share",
+                strain_share,
+                "a number in (0, 1] (the share of the plastic power whose "
+                "particles are refined), or None",
+            )
+        self.strain_share = strain_share
+        self.stretched = bool(stretched) or strain_share is None
+        self.marked = 0  # particles whose target the last pass halved
         self.inserted = 0
         self.last = Insertion()
         self.last_merge = Insertion()
@@ -149,7 +179,16 @@ class Refiner:
         d = p.dim
         donor = free & (volume > 0) & (volume < self.max_spacing_ratio * spacing**d)
         goal = spacing if self.target is None else self._goal(p.x, time)
-        chosen = long_edges(p.x, edges, goal, self.ratio, donor[a] & donor[b] & same)
+        if self.strain_share is not None:
+            if p.shear_rate is None:  # the steps record it from now on
+                p = p.replace(shear_rate=np.zeros(p.n))
+            marked = self._mark(p.shear_rate * np.maximum(volume, 0.0))
+            goal = np.where(marked, 0.5 * goal, goal)
+            # Without the stretched edges' insertion only the marked split.
+            split = goal if self.stretched else np.where(marked, goal, np.inf)
+        else:
+            split = goal
+        chosen = long_edges(p.x, edges, split, self.ratio, donor[a] & donor[b] & same)
         chosen = chosen[_clear(bodies, 0.5 * (p.x[a[chosen]] + p.x[b[chosen]]), time)]
         pairs = edges[:0]
         if self.merge > 0.0:  # never a particle of a split edge
@@ -176,6 +215,18 @@ class Refiner:
             model.loads = loads
         self.particles = out
         return out
+
+    def _mark(self, power: np.ndarray) -> np.ndarray:
+        """The fewest particles that carry ``strain_share`` of ``power`` (n,) bool.
+
+        None marked while nothing flows plastically.
+        """
+        if not np.any(power > 0.0):
+            self.marked = 0
+            return np.zeros(power.size, bool)
+        marked = mark_share(power, self.strain_share)
+        self.marked = int(marked.sum())
+        return marked
 
     def _goal(self, x: np.ndarray, time: float) -> np.ndarray:
         """The user's target spacing at ``x``, checked: (n,) finite, > 0."""
@@ -219,7 +270,7 @@ class Refiner:
             "insertion_momentum_error": self.last.momentum_error,
             "merged": float(self.last_merge.count),
             "merging_momentum_error": self.last_merge.momentum_error,
-        }
+        } | ({} if self.strain_share is None else {"refined": float(self.marked)})
 
 
 def _clear(bodies: Sequence[RigidBody], x: np.ndarray, time: float) -> np.ndarray:

@@ -102,13 +102,29 @@ REFINE_METRICS = {
 }
 
 
-def insert_params(strategy: str, what: str, ratio: float = 1.6) -> list[Param]:
+#: ``refine=strain`` and ``...+strain`` in a run (help of ``refine``).
+STRAIN_HELP = (
+    "; strain: before each step the target spacing is halved at the fewest "
+    "particles that carry refine_share of the last step's plastic power "
+    "(plastic shear-strain rate times cell volume) and particles are added "
+    "on their edges longer than refine_ratio times it, only there: where the "
+    "soil flows plastically (needs refine_ratio > 1.414); {s}+strain: both"
+)
+
+
+def insert_params(
+    strategy: str, what: str, ratio: float = 1.6, strain: bool = False
+) -> list[Param]:
     """``refine`` (``none`` or ``strategy``), ``refine_ratio``, ``refine_merge``.
 
     ``what`` says what ``refine=strategy`` does besides the insertion;
-    ``ratio`` is the default ``refine_ratio`` (0: no insertion by default).
+    ``ratio`` is the default ``refine_ratio`` (0: no insertion by default);
+    ``strain`` adds ``strain`` and ``strategy+strain`` (the target halved
+    where the plastic strain rate concentrates, :func:`refiner_from`) and
+    ``refine_share``.
     """
-    return [
+    more = ["strain", f"{strategy}+strain"] if strain else []
+    params = [
         Param(
             "refine",
             "none",
@@ -116,9 +132,10 @@ def insert_params(strategy: str, what: str, ratio: float = 1.6) -> list[Param]:
             f"none (the particles stay as made) or {strategy} ({what}with "
             "refine_ratio > 0, before each step a particle is added at the middle "
             "of every edge stretched beyond refine_ratio times its particles' "
-            "spacing: where the soil thins; mass and momentum kept)",
+            "spacing: where the soil thins; mass and momentum kept)"
+            + (STRAIN_HELP.format(s=strategy) if strain else ""),
             str,
-            ("none", strategy),
+            ("none", strategy, *more),
         ),
         Param(
             "refine_ratio",
@@ -144,11 +161,27 @@ def insert_params(strategy: str, what: str, ratio: float = 1.6) -> list[Param]:
             hi_open=True,
         ),
     ]
+    if strain:
+        params.append(
+            Param(
+                "refine_share",
+                0.5,
+                "-",
+                "refine=strain: share of the last step's plastic "
+                "power whose particles (the fewest that carry it) get half "
+                "their spacing as target",
+                float,
+                lo=0.0,
+                hi=1.0,
+                lo_open=True,
+            )
+        )
+    return params
 
 
 #: Particle insertion in the penetration scenes (round the pushed body).
 INSERT_PARAMS = insert_params(
-    "bodies", "the lattice is graded round the body's path, as without; "
+    "bodies", "the lattice is graded round the body's path, as without; ", strain=True
 )
 
 #: The slope: an adaptive factor of safety, insertion in its run-out, or both.
@@ -190,12 +223,16 @@ def refiner_from(
     None with ``refine=none`` (or when ``refine`` does not name
     ``strategy``, the insertion strategy of a scene that has others), or
     when it would neither add (``refine_ratio`` 0) nor merge
-    (``refine_merge`` 0) particles.
+    (``refine_merge`` 0) particles.  ``strain`` (a scene whose ``refine``
+    offers it, :func:`insert_params`) halves the target where the plastic
+    strain rate concentrates (``refine_share``,
+    :class:`~skfem_npfem.run.refining.Refiner`'s ``strain_share``) and splits
+    only the edges there; ``...+strain`` also every stretched edge.
 
     Raises
     ------
     ParameterError
-        For a ``refine_ratio`` in (0, sqrt(2)].
+        For a ``refine_ratio`` in (0, sqrt(2)], or 0 with ``strain``.
     """
     chosen = strategies(values)
     if not chosen or (strategy is not None and strategy not in chosen):
@@ -208,9 +245,25 @@ def refiner_from(
             "0 (no insertion) or a number > 1.414 (the lattice's diagonal over "
             "its spacing: an undeformed lattice would be split everywhere)",
         )
+    strain = "strain" in chosen and strategy is None and "refine_share" in values
+    if strain and ratio == 0.0:
+        raise ParameterError(
+            "refine_ratio",
+            ratio,
+            f"a number > 1.414 with refine={values['refine']} (e.g. 1.6: the "
+            "particles are added on the edges longer than refine_ratio times "
+            "the halved spacing)",
+        )
     if ratio == 0.0 and values["refine_merge"] == 0.0:
         return None  # a graded lattice only: its mesher carries the spacing
-    return Refiner(ratio or None, values["refine_merge"])
+    if not strain:
+        return Refiner(ratio or None, values["refine_merge"])
+    return Refiner(
+        ratio,
+        values["refine_merge"],
+        strain_share=values["refine_share"],
+        stretched=bool(chosen - {"strain"}),  # strain alone: round the flow only
+    )
 
 
 def insert_metrics(sim: Any) -> dict[str, int]:

@@ -70,7 +70,9 @@ def update_particles(
         p, model, dt, active, sol.du, ops.data.dynamic, boundaries, ops.time + dt
     )
     new = p.replace(**motion, stress=stress, eps_p=eps_p, wall_force=wall_force)
-    if model.strength_law is not None:  # the rate a rate-dependent strength reads
+    # The rate a rate-dependent strength reads, and that a refinement by the
+    # plastic strain rate marks by (it gives the particles a shear_rate).
+    if model.strength_law is not None or p.shear_rate is not None:
         rate = np.zeros(p.n)
         rate[active] = SHEAR_FROM_EQUIVALENT * increment / dt
         new = new.replace(shear_rate=rate)

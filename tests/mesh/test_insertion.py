@@ -267,3 +267,58 @@ def test_a_user_target_spacing_refines_only_where_it_asks():
         Refiner(1.6, target=lambda x, t: -np.ones(x.shape[0]))(p, mesher)
     with pytest.raises(ParameterError, match="target"):
         Refiner(1.6, target=0.05)
+
+
+def test_the_target_is_halved_where_the_plastic_strain_rate_concentrates():
+    """strain_share: particles added only round those that carry the plastic flow."""
+    h = 0.1
+    g = np.linspace(0.0, 1.0, 11)
+    p = Particles.create(np.stack(np.meshgrid(g, g), -1).reshape(-1, 2), h * h)
+    mesher = AlphaShapeMesher(h, 1.3)
+    refiner = Refiner(1.6, strain_share=1.0)
+    # No rate yet (before the first step): nothing marked, nothing added, and
+    # the particles carry a zero rate for the steps to fill in.
+    q = refiner(p, mesher)
+    assert q.n == p.n and refiner.marked == 0
+    np.testing.assert_array_equal(q.shear_rate, np.zeros(p.n))
+    # A band of plastic flow x <= 0.2 (3 columns of 11 particles).
+    band = p.x[:, 0] < 0.25
+    p = p.replace(shear_rate=np.where(band, 2.0, 0.0))
+    q = refiner(p, mesher)
+    assert refiner.record()["refined"] == refiner.marked == 33
+    assert q.n > p.n
+    # Every new particle is on an edge with an end in the band, and it takes
+    # the rate of the edge's midpoint (the linear interpolant).
+    new = q.x[p.n :]
+    assert np.all(new[:, 0] <= 0.25 + 1e-12)
+    expect = np.where(new[:, 0] < 0.2 + 1e-12, 2.0, 1.0)
+    np.testing.assert_allclose(q.shear_rate[p.n :], expect, rtol=1e-15)
+    assert q.mass.sum() == pytest.approx(p.mass.sum(), rel=1e-14)
+    for _ in range(40):  # passes until no edge round the flow is long
+        q = refiner(q, mesher)
+        if refiner.last.count == 0:
+            break
+    assert refiner.last.count == 0
+    # Outside the band and its edge (x > 0.3) the lattice is untouched.
+    assert np.sum(q.x[:, 0] > 0.3 + 1e-9) == np.sum(p.x[:, 0] > 0.3 + 1e-9)
+    # About four times the particles in the band: (h / (h / 2))^2.
+    inner = np.sum(q.x[:, 0] < 0.2 - 1e-9) / np.sum(p.x[:, 0] < 0.2 - 1e-9)
+    assert 3.0 < inner < 5.0
+    with pytest.raises(ParameterError, match="strain_share"):
+        Refiner(1.6, strain_share=0.0)
+    with pytest.raises(ParameterError, match="strain_share"):
+        Refiner(1.6, strain_share=1.5)
+
+
+def test_refining_by_strain_alone_leaves_the_stretched_soil_elsewhere():
+    """stretched=False: only the edges round the marked particles are split."""
+    p = stretched()  # spacing 1/8, stretched 2x sideways at its top (y = 1)
+    h = 1.0 / 8
+    low = p.x[:, 1] < 0.2  # plastic flow in the two bottom rows only
+    p = p.replace(shear_rate=np.where(low, 1.0, 0.0))
+    both = Refiner(1.6, strain_share=1.0)(p, AlphaShapeMesher(h, 1.5))
+    only = Refiner(1.6, strain_share=1.0, stretched=False)
+    only = only(p, AlphaShapeMesher(h, 1.5))
+    # Both split round the flow; only the first splits the stretched top too.
+    assert np.any(both.x[p.n :, 1] > 0.5) and np.any(both.x[p.n :, 1] < 0.25)
+    assert only.n > p.n and np.all(only.x[p.n :, 1] < 0.25 + 1e-12)

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from skfem_npfem.errors import ParameterError
+from skfem_npfem.io import read_pvd, read_step
 from skfem_npfem.scenes import get_scene, run_scene
 from skfem_npfem.scenes.collapse.plane_strain import graded_lattice, lattice
 
@@ -147,3 +148,26 @@ def test_the_quarter_cylinders_speed_defaults_reach_its_run():
     assert sum(h["dt"] for h in hist) == pytest.approx(0.06, rel=1e-12)
     ratios = [h["max_displacement_ratio"] for h in hist]
     assert all(np.isfinite(ratios)) and max(ratios) < 1.0
+
+
+def test_a_column_refined_where_it_flows_adds_particles_in_the_sliding_soil(tmp_path):
+    over = {"spacing": 0.02, "refine": "strain", "refine_ratio": 1.6, "t_end": 0.15}
+    out = tmp_path / "s"
+    m = run_scene("column-collapse", {**over, "rest_fraction": 0.0}, out=out)
+    m = m["metrics"]
+    assert m["inserted"] > 0 and m["merged"] == 0
+    assert m["mass_change"] == pytest.approx(0.0, abs=1e-12)
+    last = read_step(read_pvd(out / "result.pvd")[-1][1])
+    eps, ids = last.point_data["plastic_strain_eq"], last.point_data["particle_id"]
+    n0 = ids.size - m["inserted"]  # the initial particles keep ids 0 .. n0 - 1
+    added = ids >= n0
+    assert added.sum() == m["inserted"] and n0 == 11 * 21
+    # The added particles are in soil that has flowed (each over 1 % of
+    # plastic strain; measured at least 2 %), where the core behind the
+    # failure wedge has barely yielded (13 % of the initial particles under 1 %).
+    assert np.all(eps[added] > 0.01)
+    assert np.mean(eps[~added] < 0.01) > 0.05
+    with pytest.raises(ParameterError, match="refine_ratio"):
+        run_scene("column-collapse", {"refine": "strain", "t_end": 0.01})
+    with pytest.raises(ParameterError, match="plane strain only"):
+        run_scene("column-collapse", {"geometry": "axisymmetric", "refine": "strain"})

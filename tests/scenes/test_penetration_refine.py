@@ -1,4 +1,5 @@
-"""A footing pushed with particles added where the soil stretches (refine=bodies)."""
+"""A footing pushed with particles added where the soil stretches (refine=bodies)
+and where it flows plastically (refine=strain)."""
 
 from __future__ import annotations
 
@@ -12,16 +13,53 @@ from skfem_npfem.io import load_checkpoint, read_pvd, read_step
 from skfem_npfem.scenes import run_scene
 
 COARSE = {"spacing": 0.1, "refine": "bodies"}  # 957 particles, 40 steps
+STRAIN = {**COARSE, "refine": "strain"}
 
 
 @pytest.fixture(scope="module")
-def refined(tmp_path_factory):
-    out = tmp_path_factory.mktemp("refined") / "run"
-    return out, run_scene("footing-penetration", COARSE, out=out)
+def coarse_runs(tmp_path_factory):
+    """``runs(given)``: the coarse footing run with ``given``, run once a module."""
+    done = {}
+
+    def runs(given):
+        key = given["refine"]
+        if key not in done:
+            out = tmp_path_factory.mktemp(key.replace("+", "_")) / "run"
+            done[key] = out, run_scene("footing-penetration", given, out=out), given
+        return done[key]
+
+    return runs
+
+
+@pytest.fixture(params=[COARSE, STRAIN], ids=["bodies", "strain"])
+def refined(coarse_runs, request):
+    return coarse_runs(request.param)
+
+
+def test_refining_by_strain_rate_adds_particles_where_the_soil_yields(coarse_runs):
+    out, strain, _ = coarse_runs(STRAIN)
+    _, bodies, _ = coarse_runs(COARSE)
+    n0 = strain["metrics"]["n_particles"]
+    assert strain["metrics"]["inserted"] > 5 * bodies["metrics"]["inserted"]
+    last = read_step(read_pvd(out / "result.pvd")[-1][1])
+    eps, ids = last.point_data["plastic_strain_eq"], last.point_data["particle_id"]
+    # The added particles are in the soil that flowed: each has a plastic
+    # strain (the elastic soil's are round-off, < 1e-9), and most of them more
+    # than 5 % where less than half of the initial particles have that much.
+    added = ids >= n0
+    assert np.all(eps[added] > 1e-3)
+    assert np.mean(eps[added] > 0.05) > 0.8 > 0.5 > np.mean(eps[~added] > 0.05)
+    # Each step records how many particles its target halved.
+    records = summary_records(out)
+    assert max(r["refined"] for r in records) > 0
+    # The load at w = 0.1 B moves by less than the coarse lattice's own spread.
+    assert strain["metrics"]["bearing_factor"] == pytest.approx(
+        bodies["metrics"]["bearing_factor"], rel=0.1
+    )
 
 
 def test_particles_are_added_with_mass_kept_and_ids_stable(refined):
-    out, summary = refined
+    out, summary, _ = refined
     m = summary["metrics"]
     assert m["inserted"] > 0
     assert m["n_particles_final"] == m["n_particles"] + m["inserted"]
@@ -38,14 +76,14 @@ def test_particles_are_added_with_mass_kept_and_ids_stable(refined):
 def test_a_run_resumed_across_insertions_repeats_the_uninterrupted_one(
     refined, tmp_path
 ):
-    out, summary = refined
+    out, summary, given = refined
     cut = tmp_path / "cut"
     shutil.copytree(out, cut)  # the folder a kill -9 after step 25 leaves
     (cut / "checkpoint_000040.npz").unlink()
     _, meta20 = load_checkpoint(cut / "checkpoint_000020.npz")
     added_after = sum(r["inserted"] for r in summary_records(out)[20:])
     assert added_after > 0  # the resumed part inserts particles
-    resumed = run_scene("footing-penetration", COARSE, out=cut, resume=True)
+    resumed = run_scene("footing-penetration", given, out=cut, resume=True)
     assert resumed["metrics"]["inserted"] == summary["metrics"]["inserted"]
     a, _ = load_checkpoint(out / "checkpoint_000040.npz")
     b, _ = load_checkpoint(cut / "checkpoint_000040.npz")
@@ -121,10 +159,10 @@ def test_merging_crowded_particles_keeps_the_mass_and_the_ids_unique(tmp_path):
 def test_a_footing_pushed_ten_times_faster_a_spacing_a_step_refines_stably(refined):
     # The extreme: ten times the default speed with the footing moving a whole
     # spacing a step (four times the default), particles added every few steps.
-    _, slow = refined
-    fast = run_scene(
-        "footing-penetration", {**COARSE, "speed": 10.0, "dt": 0.1 / 10.0}
-    )["metrics"]
+    _, slow, given = refined
+    fast = run_scene("footing-penetration", {**given, "speed": 10.0, "dt": 0.1 / 10.0})[
+        "metrics"
+    ]
     assert fast["inserted"] > 0
     assert fast["bearing_factor"] == pytest.approx(
         slow["metrics"]["bearing_factor"], rel=0.05

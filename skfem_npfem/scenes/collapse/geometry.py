@@ -266,6 +266,13 @@ def finalize(
         fill_column_defaults(values)
         return
     if geo in CYLINDRICAL:
+        if "strain" in str(values["refine"]).split("+"):
+            raise ParameterError(
+                "refine",
+                values["refine"],
+                f"none or surface with geometry={geo} (particles are added "
+                "where the soil flows in plane strain only)",
+            )
         _cylinder_sizes(values, given)
         if geo == "quarter-cylinder":
             _speed_defaults(values, given)

@@ -205,6 +205,7 @@ PARAMS = [
         "a graded lattice: the spacing in a band of refine_band spacings along "
         "the free surfaces and the floor, twice it in the column's core; ",
         ratio=0.0,
+        strain=True,
     ),
     Param(
         "refine_band",

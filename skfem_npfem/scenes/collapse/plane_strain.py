@@ -69,7 +69,7 @@ from ..common import (
 from ..limits import check_size
 from ..methods import with_method
 from ..params import Values
-from ..refinement import insert_metrics, refiner_from
+from ..refinement import insert_metrics, refiner_from, strategies
 from ..scenery import Scenery, box, number, time_label
 from ..shaking import model_kh
 from ..water import scene_water
@@ -333,7 +333,7 @@ def build(
     model = _model(values)
     x0 = 0.0 if symmetric else -L0
     x, graded = lattice(x0, L0, H0, h), None
-    if values["refine"] == "surface":
+    if "surface" in strategies(values):  # surface or surface+strain
         band = values["refine_band"] * h
         x, graded = graded_lattice(x0, L0, H0, h, band, symmetric)
     mesher = AlphaShapeMesher(h, values["alpha"], walls=model.walls, spacing=graded)

@@ -322,8 +322,9 @@ GEOMETRY_NOTES = {
     "refine": "quarter-cylinder: default surface; "
     "axisymmetric and quarter-cylinder: the graded lattice, the fine "
     "band along the top, the floor and the free side (the axis and the symmetry "
-    "planes are no free surface); not box",
+    "planes are no free surface), no strain; not box",
     "refine_ratio": "plane-strain only",
+    "refine_share": "plane-strain only",
     "refine_merge": "plane-strain only",
 }
 
