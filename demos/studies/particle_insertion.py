@@ -2,17 +2,19 @@
 """A footing pushed to w = B with and without particles added where the soil stretches.
 
 ``footing-penetration`` (weightless Tresca clay, E/s_u = 100) at its default
-spacing (B/20), smooth and rough, with ``refine=none`` and ``refine=bodies``
+spacing (B/20), smooth and rough, with ``refine=none``, ``refine=bodies``
 (a particle at the middle of every edge stretched beyond 1.6 times its
-particles' lattice spacing, before each step).  For each run: the bearing
-factor at w = 0.1 B, the load drops (``load_drops``: a step under 80 % of the
-running median), the largest one-step fall of q/s_u in the second half of the
-push (relative to the median load there), the particles added, the largest
-stress roughness and the wall time.  The runs are one process, one after
-another: the wall times compare.
+particles' lattice spacing, before each step) and ``refine=strain`` (the
+target spacing halved at the particles that carry half of the last step's
+plastic power, and the edges round them split at 1.6 times it).  For each
+run: the bearing factor at w = 0.1 B, the load drops (``load_drops``: a step
+under 80 % of the running median), the largest one-step fall of q/s_u in the
+second half of the push (relative to the median load there), the particles
+added, the largest stress roughness and the wall time.  The runs are one
+process, one after another: the wall times compare.
 
 The cone part runs ``cone-penetration`` at its defaults (D/12, a 6 D push)
-with ``refine=none`` and ``refine=bodies``: the steady N_c (the median over
+with ``refine=none``, ``bodies`` and ``strain``: the steady N_c (the median over
 the last diameter), the mean and median of N_c over the last two diameters,
 the largest one-step fall there over that mean, the particles added and the
 wall time (about 15 minutes each).
@@ -20,7 +22,8 @@ wall time (about 15 minutes each).
 The collapse part runs the plane-strain ``column-collapse`` (a = 2) at
 L0/22 (the default) and L0/44, each on the uniform lattice and on the graded
 one (``refine=surface``: the spacing in a band of four spacings along the
-free surfaces and the floor, twice it in the core), to rest: the run-out,
+free surfaces and the floor, twice it in the core) and refined where it
+flows (``refine=strain``, ``refine_ratio`` 1.6), to rest: the run-out,
 the main body's edge, the height, the largest stress roughness, the volume
 change, the particle count and the wall time (about 15 minutes in all).
 
@@ -35,10 +38,14 @@ Usage (from the repository root)::
 
     python demos/studies/particle_insertion.py [--out docs/validation]
         [--spacing H] [--parts footing,cone,collapse,slope]
+        [--footing-refine none,bodies,strain] [--cone-refine ...]
+        [--collapse-refine none,surface,strain]
 
 Writes ``<out>/particle_insertion.json`` and ``<out>/particle_insertion.inc``
 (the tables of docs/validation/particle_insertion.md); a part not run keeps
-its rows from the JSON.  The footing part takes about 5 minutes.
+its rows from the JSON, and so do the settings of a part not named in its
+``--<part>-refine`` (e.g. ``--parts cone --cone-refine strain`` adds the cone's
+refined row).  The footing part takes about 15 minutes.
 """
 
 from __future__ import annotations
@@ -53,8 +60,10 @@ from _reporting import markdown_table
 from slope_fos import RUNOUT
 from soil_profiles import run
 
-#: The insertion settings compared (the scene's default ratio).
-REFINES = ("none", "bodies")
+#: The insertion settings compared (the scene's default ratio): none, the
+#: stretched edges round the body, and the target halved where the soil flows
+#: plastically (``refine=strain``, the scene's ``refine_share``).
+REFINES = ("none", "bodies", "strain")
 INTERFACES = ("smooth", "rough")
 
 
@@ -110,12 +119,25 @@ def cone_table(cases: list[dict]) -> str:
 COLLAPSE_RESOLUTIONS = (22, 44)
 
 
+#: The collapse's settings: uniform, graded, refined where it flows (the
+#: footing's split ratio, 1.6).
+COLLAPSE_REFINES = ("none", "surface", "strain")
+
+
 def collapse_case(n: int, refine: str) -> dict:
-    """The plane-strain column at L0/n with ``refine`` (none or surface), to rest."""
-    m = run("column-collapse", {"spacing": 0.2 / n, "refine": refine})
+    """The plane-strain column at L0/n with ``refine``, to rest."""
+    over = {"spacing": 0.2 / n, "refine": refine}
+    if "strain" in refine:
+        over["refine_ratio"] = 1.6
+    m = run("column-collapse", over)
     keys = ("runout", "runout_main_body", "final_height", "at_rest", "n_particles")
-    keys += ("stress_roughness_max", "volume_change", "wall_s")
+    keys += ("stress_roughness_max", "volume_change", "wall_s", "inserted")
     return {"resolution": n, "refine": refine, **{k: m[k] for k in keys}}
+
+
+def added(n_final: int, inserted: int) -> str:
+    """A particle count at the end, with the particles added during the run."""
+    return f"{n_final} ({inserted} added)" if inserted else str(n_final)
 
 
 def collapse_table(cases: list[dict]) -> str:
@@ -129,7 +151,7 @@ def collapse_table(cases: list[dict]) -> str:
             [
                 f"L0/{c['resolution']}",
                 c["refine"],
-                c["n_particles"],
+                added(c["n_particles"], c.get("inserted") or 0),
                 f"{c['runout']:.4f}{err}",
                 f"{c['runout_main_body']:.4f}",
                 f"{c['final_height']:.3f}",
@@ -188,11 +210,16 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=VALIDATION)
     ap.add_argument("--spacing", type=float, default=0.05)
     ap.add_argument("--parts", default="footing,cone,collapse,slope")
-    ap.add_argument(
-        "--cone-refine",
-        default="none,bodies",
-        help="the cone's cases to run (the others kept from the JSON)",
-    )
+    for part, default in (
+        ("cone", "none,bodies,strain"),
+        ("footing", "none,bodies,strain"),
+        ("collapse", "none,surface,strain"),
+    ):
+        ap.add_argument(
+            f"--{part}-refine",
+            default=default,
+            help=f"the {part}'s refine settings to run (the others kept from the JSON)",
+        )
     args = ap.parse_args()
     parts = args.parts.split(",")
     path = args.out / "particle_insertion.json"
@@ -206,13 +233,17 @@ def main() -> None:
                 c["refine"]: c for c in json.loads(path.read_text()).get("cone", [])
             } | {refine: cone[refine]}
     cone = [cone[r] for r in REFINES if r in cone]
-    collapse = old.get("collapse", [])
-    if "collapse" in parts:
-        collapse = []
+    collapse = {(c["resolution"], c["refine"]): c for c in old.get("collapse", [])}
+    for refine in args.collapse_refine.split(",") if "collapse" in parts else ():
         for n in COLLAPSE_RESOLUTIONS:
-            for refine in ("none", "surface"):
-                collapse.append(collapse_case(n, refine))
-                print(collapse[-1], flush=True)
+            collapse[n, refine] = collapse_case(n, refine)
+            print(collapse[n, refine], flush=True)
+    collapse = [
+        collapse[n, r]
+        for n in COLLAPSE_RESOLUTIONS
+        for r in COLLAPSE_REFINES
+        if (n, r) in collapse
+    ]
     slope = old.get("slope", [])
     if "slope" in parts:
         slope = []
@@ -220,9 +251,9 @@ def main() -> None:
             for n in SLOPE_RESOLUTIONS:
                 slope.append(slope_case(n, refine))
                 print(slope[-1], flush=True)
-    rows, cases = [], [] if "footing" in parts else old.get("cases", [])
+    cases = {(c["interface"], c["refine"]): c for c in old.get("cases", [])}
     for interface in INTERFACES if "footing" in parts else ():
-        for refine in REFINES:
+        for refine in args.footing_refine.split(","):
             over = {"spacing": args.spacing, "interface": interface, "refine": refine}
             m = run("footing-penetration", over)
             case = {
@@ -236,8 +267,10 @@ def main() -> None:
                 "stress_roughness_max": m["stress_roughness_max"],
                 "wall_s": m["wall_s"],
             }
-            cases.append(case)
+            cases[interface, refine] = case
             print(case, flush=True)
+    cases = [cases[i, r] for i in INTERFACES for r in REFINES if (i, r) in cases]
+    rows = []
     for case in cases:
         rows.append(
             [
