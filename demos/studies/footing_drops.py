@@ -20,7 +20,10 @@ and three things the step did to the soil:
   value of order one or more;
 * the largest release of vertical stress at a particle, ``max(s_yy,n+1 -
   s_yy,n)`` (compression negative: how much of its compressive vertical
-  stress a particle lost in the step).
+  stress a particle lost in the step);
+* the triangles of the step's mesh that the last step's mesh did not have
+  (the remeshing the step starts with: the particles' cells, over which
+  their stresses act, change with it).
 
 It then runs the scene with one setting changed at a time (a stiffer clay
 E/s_u = 1000, nu = 0.45 instead of 0.495, half the step, and the stress
@@ -28,12 +31,15 @@ stabilisation at beta = 3) and reports the load drops and the largest dip of
 each, so that what does not remove them is measured too; and it solves the
 step of the largest dip again on triangulations of the same particles with
 other tie-breaking (jitter up to 5e-2 h^2), to tell the step's mesh from the
-state it starts from.  The runs are one
-process, one after another (about 8 minutes in all).
+state it starts from.  Last, it runs the scene with inertia (dynamic steps
+and a soil of density 10 and 100 kg/m^3, gravity still off): whether the
+dips are a velocity field that a quasi-static step picks among many.  The runs are one process, one after another (about 15
+minutes in all; ``--parts`` runs some and keeps the others from the JSON).
 
 Usage (from the repository root)::
 
     python demos/studies/footing_drops.py [--out docs/validation]
+        [--parts stepwise,resolved,variants,inertia]
 
 Writes ``<out>/footing_drops.json`` and ``<out>/footing_drops.inc`` (tables of
 docs/validation/particle_insertion.md).
@@ -131,6 +137,7 @@ def stepwise(over: dict) -> dict:
     B, su = values["width"], values["su"]
     t0 = time.perf_counter()
     rows = []
+    before = None  # the last step's triangles
     while sim.time < srun.run_kwargs["t_end"] * (1 - 1e-12):
         x0, s0 = sim.particles.x.copy(), sim.particles.stress.copy()
         sim.run(steps=1)
@@ -141,6 +148,7 @@ def stepwise(over: dict) -> dict:
         footing = values["speed"] * rec.dt
         strain = element_strain(x0, p.x, tri.simplices)
         release = p.stress[:, 1] - s0[:, 1]
+        now = set(map(tuple, np.sort(tri.simplices, axis=1).tolist()))
         rows.append(
             {
                 "w": -rec.extra["footing_y"] / B,
@@ -151,8 +159,10 @@ def stepwise(over: dict) -> dict:
                     np.linalg.norm(p.x - x0, axis=1).max() / footing
                 ),
                 "stress_release": float(release.max() / su),
+                "new_triangles": None if before is None else len(now - before),
             }
         )
+        before = now
     w = np.array([r["w"] for r in rows])
     d = dips(np.array([r["q"] for r in rows]), w)
     for r, di in zip(rows, d, strict=True):
@@ -186,6 +196,65 @@ def resolved(over: dict, step: int) -> list[dict]:
     return out
 
 
+#: Densities of the soil given to the weightless footing's steps with inertia.
+DENSITIES = (10.0, 100.0)
+
+
+def inertial(rho: float) -> dict:
+    """The footing at its defaults with dynamic steps and a soil of density ``rho``.
+
+    The scene's soil is weightless and its steps quasi-static; here the steps
+    keep the inertia of a soil of density ``rho`` (kg/m^3; gravity stays
+    off): a swirl of particles that a quasi-static step may pick among many
+    equally admissible fields costs kinetic energy.  Returns the largest dip,
+    the dips of 10 % or more, the triangles turned over in the run and the
+    largest particle motion of a step over the footing's.
+    """
+    values = npfem.get_scene("footing-penetration").resolve({})
+    srun = build(values, progress=False)
+    sim = srun.simulation
+    sim.model.mode = "dynamic"
+    sim.model.materials[0].rho = rho
+    # The nodal masses are the cells' volumes times the density (the scene's
+    # default nodal_mass=mesh); the particles' own masses are set alike.
+    p = sim.particles
+    sim.particles = p.replace(mass=rho * p.mass / p.mass.sum() * domain_area(values))
+    B, su = values["width"], values["su"]
+    t0 = time.perf_counter()
+    q, w, turned, motion = [], [], 0, 0.0
+    while sim.time < srun.run_kwargs["t_end"] * (1 - 1e-12):
+        x0 = sim.particles.x.copy()
+        sim.run(steps=1)
+        tri, rec = sim.mesh_source.last, sim.records[-1]
+        q.append(rec.extra["footing_force_y"] / (B / 2) / su)
+        w.append(-rec.extra["footing_y"] / B)
+        turned += inverted(x0, sim.particles.x, tri.simplices)
+        step = np.linalg.norm(sim.particles.x - x0, axis=1).max()
+        motion = max(motion, step / (values["speed"] * rec.dt))
+    d = dips(np.array(q), np.array(w))
+    return {
+        "rho": rho,
+        "largest_dip": float(d.max()),
+        "dips": int(np.sum(d >= DIP)),
+        "inverted": turned,
+        "largest_motion": motion,
+        "q_01": float(np.interp(0.1, w, q)),
+        "wall_s": time.perf_counter() - t0,
+    }
+
+
+def domain_area(values: dict) -> float:
+    """The modelled half-domain's area, m^2 (its width over 2 times its depth).
+
+    Examples
+    --------
+    >>> domain_area({"width": 1.0, "domain_width": 10.0, "domain_depth": 5.0})
+    25.0
+    """
+    B = values["width"]
+    return 0.5 * values["domain_width"] * B * values["domain_depth"] * B
+
+
 def variant(over: dict) -> dict:
     """One run's load drops, largest dip, largest fall and roughness."""
     m = run("footing-penetration", over)
@@ -217,10 +286,12 @@ def tables(result: dict) -> str:
             f"{s['largest_motion']:.1f}",
             f"{s['element_strain']:.2f}",
             f"{s['stress_release']:.2f}",
+            s.get("new_triangles", "-"),
         ]
         for s in steps
         if s["dip"] >= DIP
     ]
+    new = [s["new_triangles"] for s in steps if s.get("new_triangles") is not None]
     rows.append(
         [
             "median step",
@@ -232,12 +303,13 @@ def tables(result: dict) -> str:
             f"{motion[~dipped].max(initial=0.0):.1f})",
             f"{np.median(strain):.2f}",
             f"{np.median(release):.2f}",
+            f"{np.median(new):.0f}" if new else "-",
         ]
     )
     head = ["w/B", "q/s_u", "dip", "triangles turned over"]
     head += ["largest particle motion / footing's"]
     head += ["largest element strain increment", "largest s_yy release / s_u"]
-    page = markdown_table(head, rows)
+    page = markdown_table([*head, "triangles new since the last step"], rows)
     vrows = [
         [
             name,
@@ -258,20 +330,72 @@ def tables(result: dict) -> str:
         page += f"\n\nThe largest dip's step solved on three triangulations: {q}."
     head = ["setting", "load drops", "largest dip", "q/s_u at w = 0.1 B", "R max"]
     page += "\n\n" + markdown_table([*head, "steps", "wall"], vrows)
+    runs = []
+    if "inertia" in result:
+        runs = [result["quasi_static"], *result["inertia"]]
+    if runs:
+        irows = [
+            [
+                "0 (quasi-static)" if r["rho"] == 0 else f"{r['rho']:g}",
+                r["dips"],
+                f"{100 * r['largest_dip']:.1f} %",
+                r["inverted"],
+                f"{r['largest_motion']:.1f}",
+                f"{r['q_01']:.3f}",
+            ]
+            for r in runs
+        ]
+        head = ["soil density, kg/m^3", "dips >= 10 %", "largest dip"]
+        head += ["triangles turned over (run)", "largest particle motion / footing's"]
+        page += "\n\n" + markdown_table([*head, "q/s_u at w = 0.1 B"], irows)
     return page + "\n"
+
+
+def quasi_static(stepwise_result: dict) -> dict:
+    """The step table's run in the inertia table's terms (density 0)."""
+    steps = stepwise_result["steps"]
+    d = np.array([s["dip"] for s in steps])
+    w = [s["w"] for s in steps]
+    return {
+        "rho": 0.0,
+        "largest_dip": float(d.max()),
+        "dips": int(np.sum(d >= DIP)),
+        "inverted": int(sum(s["inverted"] for s in steps)),
+        "largest_motion": max(s["largest_motion"] for s in steps),
+        "q_01": float(np.interp(0.1, w, [s["q"] for s in steps])),
+        "wall_s": stepwise_result["wall_s"],
+    }
+
+
+PARTS = ("stepwise", "resolved", "variants", "inertia")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", type=Path, default=VALIDATION)
+    ap.add_argument(
+        "--parts",
+        default=",".join(PARTS),
+        help="the parts to run (the others kept from the JSON): " + ", ".join(PARTS),
+    )
     args = ap.parse_args()
-    result = {"stepwise": stepwise({}), "variants": {}}
-    dip = [s["dip"] for s in result["stepwise"]["steps"]]
-    result["resolved"] = resolved({}, int(np.argmax(dip)))
-    for name, over in VARIANTS.items():
-        result["variants"][name] = variant(over)
-        print(name, result["variants"][name], flush=True)
+    parts = args.parts.split(",")
     path = args.out / "footing_drops.json"
+    result = json.loads(path.read_text()) if path.exists() else {}
+    if "stepwise" in parts:
+        result["stepwise"] = stepwise({})
+    dip = [s["dip"] for s in result["stepwise"]["steps"]]
+    if "resolved" in parts:
+        result["resolved"] = resolved({}, int(np.argmax(dip)))
+    if "variants" in parts:
+        result["variants"] = {}
+        for name, over in VARIANTS.items():
+            result["variants"][name] = variant(over)
+            print(name, result["variants"][name], flush=True)
+    if "inertia" in parts:
+        result["inertia"] = [inertial(rho) for rho in DENSITIES]
+    if "inertia" in result:
+        result["quasi_static"] = quasi_static(result["stepwise"])
     write_results(path, json.dumps(result, indent=1), tables(result))
 
 
