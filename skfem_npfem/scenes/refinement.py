@@ -332,8 +332,10 @@ def check_refine(
         raise ParameterError(
             "refine",
             values["refine"],
-            "none unless analysis=limit (the particles of an incremental run "
-            "are not refined yet)",
+            "none unless analysis=limit (this scene's incremental run keeps "
+            "its lattice; footing-penetration, cone-penetration and "
+            "column-collapse add particles where the soil flows with "
+            "refine=strain)",
         )
     if insertion is not None and insertion in chosen and not runs:
         raise ParameterError(
