@@ -33,8 +33,9 @@ step of the largest dip again on triangulations of the same particles with
 other tie-breaking (jitter up to 5e-2 h^2), to tell the step's mesh from the
 state it starts from.  Last, it runs the scene with inertia (dynamic steps
 and a soil of density 10 and 100 kg/m^3, gravity still off): whether the
-dips are a velocity field that a quasi-static step picks among many.  The runs are one process, one after another (about 15
-minutes in all; ``--parts`` runs some and keeps the others from the JSON).
+dips are a velocity field that a quasi-static step picks among many.  The
+runs are one process, one after another (about 15 minutes in all;
+``--parts`` runs some and keeps the others from the JSON).
 
 Usage (from the repository root)::
 
@@ -347,7 +348,8 @@ def tables(result: dict) -> str:
         ]
         head = ["soil density, kg/m^3", "dips >= 10 %", "largest dip"]
         head += ["triangles turned over (run)", "largest particle motion / footing's"]
-        page += "\n\n" + markdown_table([*head, "q/s_u at w = 0.1 B"], irows)
+        head.append("q/s_u at w = 0.1 B (curve interpolated)")
+        page += "\n\n" + markdown_table(head, irows)
     return page + "\n"
 
 
