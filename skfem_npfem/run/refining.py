@@ -67,9 +67,11 @@ class Refiner:
         strength, that share of the plastic power) have their target halved,
         so the edges round them are split until the spacing there is about
         half the carried one; where the flow has moved on, the target is the
-        carried spacing again (and ``merge`` thins the particles there).  The
-        particles carry the rate (:attr:`Particles.shear_rate`, zero before
-        the first step).  None: no such marking.
+        carried spacing again and the added particles stay (a ``merge`` below
+        0.5 leaves a halved lattice alone; above it merges them whenever the
+        marking moves away, and they are split again when it comes back).
+        The particles carry the rate (:attr:`Particles.shear_rate`, zero
+        before the first step).  None: no such marking.
     stretched : bool, default True
         Split an edge stretched beyond ``ratio`` times its ends' target
         anywhere.  False (with ``strain_share``): only the edges round the
