@@ -124,6 +124,7 @@ def insert_params(
     ``refine_share``.
     """
     more = ["strain", f"{strategy}+strain"] if strain else []
+    named = f"{strategy} or strain" if strain else strategy
     params = [
         Param(
             "refine",
@@ -141,7 +142,7 @@ def insert_params(
             "refine_ratio",
             ratio,
             "-",
-            f"refine={strategy}: an edge longer than this times the smaller "
+            f"refine={named}: an edge longer than this times the smaller "
             "spacing of its two particles is split (> 1.414, the diagonal of "
             "the lattice; 0: no particle is added)",
             float,
@@ -152,7 +153,7 @@ def insert_params(
             "refine_merge",
             0.0,
             "-",
-            f"refine={strategy}: two particles closer than this times the larger "
+            f"refine={named}: two particles closer than this times the larger "
             "spacing of the two are merged into one (mass and momentum kept; "
             "0: never; below refine_ratio / 2)",
             float,
