@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 
 from ...constants import GRAVITY
-from ...errors import NpfemError, ParameterError
+from ...errors import NpfemError
 from ...mesh.regions import fill_regions
 from ...mesh.smoothing import nodal_integration
 from ...mesh.sources import FixedMesh
@@ -60,9 +60,7 @@ from ..common import (
     elastic_params,
     fidelity_params,
     make_writer,
-    refuse_frictional,
     solver_params,
-    warn_unused,
 )
 from ..limit_mode import LIMIT_METRICS, analysis_param
 from ..params import ANGLE, POSITIVE, Param, Values
@@ -70,19 +68,26 @@ from ..refinement import (
     INSERT_METRICS,
     REFINE_METRICS,
     SLOPE_REFINE_PARAMS,
-    check_refine,
     insert_metrics,
     refiner_from,
 )
 from ..scenery import Scenery, number, section_lines
-from ..soil_profile import CLAY_PARAMS, PROFILE_PARAMS, check_layers
+from ..soil_profile import CLAY_PARAMS, PROFILE_PARAMS
 from ..water import WATER_PARAMS
 from ..wet_soil import recorded_parameters
 from .body import run_out_mesher, slope_body
-from .profile import check_profile
+from .checks import ignored
+from .push import (
+    PUSH_METRICS,
+    PUSH_PARAMS,
+    push_metrics,
+    push_model,
+    push_time,
+    pushing,
+)
 from .runout import RUNOUT_METRICS, base_metrics, runout_metrics
 from .section import check_section, section_of, toe_and_crest
-from .seismic import KH_PARAM, SEISMIC_METRICS, check_kh
+from .seismic import KH_PARAM, SEISMIC_METRICS
 from .stages import (
     flow_model,
     fos_metrics,
@@ -91,7 +96,6 @@ from .stages import (
 from .surcharge import (
     SURCHARGE_METRICS,
     SURCHARGE_PARAMS,
-    check_surcharge,
     surcharge_load,
 )
 from .water import (
@@ -158,6 +162,7 @@ PARAMS = [
     Param("rho", 2000.0, "kg/m^3", "density (saturated with water)", float, **POSITIVE),
     KH_PARAM,
     *SURCHARGE_PARAMS,
+    *PUSH_PARAMS,
     *PROFILE_PARAMS,
     *CLAY_PARAMS,
     *WATER_PARAMS,
@@ -244,6 +249,7 @@ METRICS = {
     "any multiple of its weight)",
     **SEISMIC_METRICS,
     **SURCHARGE_METRICS,
+    **PUSH_METRICS,
     **REFINE_METRICS,
     **INSERT_METRICS,
     "undrained_strength_min": "drainage=undrained: the smallest strength s_u = "
@@ -253,75 +259,6 @@ METRICS = {
 
 
 # -- build ----------------------------------------------------------------------
-#: Parameters only the failure and run-out stage uses.
-RUNOUT_ONLY = (
-    "psi",
-    "reduction",
-    "margin",
-    "dt",
-    "t_end",
-    "rest_fraction",
-    "alpha",
-    "max_displacement",
-)
-
-#: The cross-section's own parameters (a geometry file replaces them).
-SECTION = ("height", "angle", "foundation_depth", "crest_length", "toe_length")
-
-
-def ignored(values: dict[str, Any], given: frozenset[str]) -> None:
-    """Refuse what the chosen material, section or analysis would ignore silently.
-
-    ``phi``/``psi`` with Tresca, Tresca with a cross-section file (whose
-    regions are Mohr-Coulomb) and ``runout=true`` with ``analysis=limit`` are
-    refused; parameters of a stage that does not run are warned about.
-    """
-    refuse_frictional(values, given)
-    limit = values["analysis"] == "limit"
-    # Undrained, the factor of safety needs the initial effective stresses.
-    stresses = not limit or values.get("drainage") == "undrained"
-    if values["geometry"]:
-        if values["material"] == "tresca":
-            raise ParameterError(
-                "material",
-                "tresca",
-                "mohr-coulomb with geometry (the regions of a cross-section "
-                "file are Mohr-Coulomb: give a material phi = 0 there for an "
-                "undrained clay)",
-            )
-        warn_unused(given, SECTION, "geometry (the cross-section file) replaces them")
-    if limit and values["runout"]:
-        raise ParameterError(
-            "runout",
-            True,
-            "false with analysis=limit (one cone program: no failure and "
-            "run-out stage); choose analysis=incremental for the run-out",
-        )
-    check_kh(values)
-    check_surcharge(values)
-    check_layers(values)
-    check_refine(values, True, "surface", values["runout"] and not limit)
-    check_profile(values)
-    if not stresses:
-        warn_unused(
-            given,
-            ("E", "nu", "initial_stress", "K0"),
-            "analysis=limit solves one rigid-plastic cone program (no "
-            "elasticity, no initial stresses)",
-        )
-    elif values["initial_stress"] == "gravity":
-        warn_unused(
-            given, ("K0",), "initial_stress=gravity (K0 sets initial_stress=k0)"
-        )
-    if limit or not values["runout"]:
-        warn_unused(
-            given,
-            RUNOUT_ONLY,
-            "the run-out stage does not run (it needs runout=true with "
-            "analysis=incremental)",
-        )
-
-
 def resolve_values(values: dict[str, Any]) -> None:
     """The slope's derived defaults, in place: ``spacing``, ``dt``, ``t_end``.
 
@@ -357,6 +294,31 @@ def resolve_values(values: dict[str, Any]) -> None:
             values["t_end"] = 15 * math.sqrt(H / GRAVITY)
 
 
+def stage_one(
+    values: Values, body: Any, water: Any, state: dict[str, Any]
+) -> tuple[np.ndarray, float | None]:
+    """Stage 1's stresses and residual (zero and None with ``analysis=limit``).
+
+    Its wall time and the stresses go into ``state``.
+    """
+    if values["analysis"] == "limit":
+        return np.zeros((len(body.pts), 4)), None
+    t0 = time.perf_counter()
+    sigma, resid = initial_stress(
+        values,
+        body.mesh,
+        body.mats,
+        body.material,
+        body.fixed,
+        water,
+        surcharge_load(body.pts, body.sec, values),
+        body.stiffness,
+    )
+    state["t_initial"] = time.perf_counter() - t0
+    state["initial_stress"] = sigma
+    return sigma, resid
+
+
 def build(
     values: Values, out: Path | None = None, progress=None, resume: bool = False
 ) -> SceneRun:
@@ -385,26 +347,15 @@ def build(
     limit_only = values["analysis"] == "limit"
     water = slope_water(values, body.sec)
     state: dict[str, Any] = {}
-    if limit_only:
-        sigma, resid = np.zeros((len(pts), 4)), None
-    else:
-        t0 = time.perf_counter()
-        sigma, resid = initial_stress(
-            values,
-            body.mesh,
-            body.mats,
-            material,
-            fixed,
-            water,
-            surcharge_load(pts, body.sec, values),
-            body.stiffness,
-        )
-        state["t_initial"] = time.perf_counter() - t0
-        state["initial_stress"] = sigma
+    sigma, resid = stage_one(values, body, water, state)
     ni = nodal_integration(body.mesh, (0, 1, 3))
     masses = np.array([m.rho for m in body.mats])[material] * ni.volumes
     run_out = values["runout"] and not limit_only
-    model = flow_model(values, body, state, run_out)
+    push = pushing(values)
+    if push:
+        model = push_model(values, body)
+    else:
+        model = flow_model(values, body, state, run_out)
     particles = Particles.create(
         pts,
         masses,
@@ -414,16 +365,17 @@ def build(
         n_walls=len(model.walls),
     ).replace(strength=body.strength, stiffness=body.stiffness)
     particles = wet_particles(particles, water, body.mesh.t)
-    source = (
-        run_out_mesher(body, values["alpha"]) if run_out else FixedMesh(body.mesh.t)
-    )
+    moving = run_out or push
+    source = run_out_mesher(body, values["alpha"]) if moving else FixedMesh(body.mesh.t)
+    dt, t_push = push_time(values) if push else (values["dt"], 0.0)
     sim = Simulation(
         particles,
         model,
         source,
-        values["dt"],
+        dt,
         adaptive=True,
-        max_displacement=values["max_displacement"],
+        # The push moves its footing a quarter spacing per step.
+        max_displacement=None if push else values["max_displacement"],
         writer=make_writer(out, resume),
         progress=progress,
         refiner=refiner_from(values, "surface") if run_out else None,
@@ -435,7 +387,11 @@ def build(
         fos = fos_metrics(values, body, state, out)
         # The run-out's lattice, else the last lattice of refine=strain.
         n = len(pts) if run_out else len(state["fos_body"].pts)
-        m = base_metrics(fos, resid, n, state, sim_)
+        m = base_metrics(fos, resid, n, state, sim_) | dict.fromkeys(PUSH_METRICS)
+        if push:
+            late = push_metrics(sim_, values, body)
+            m["warnings"] = [*m.get("warnings", []), *late.pop("notes")]
+            m.update(late)
         if run_out:
             late = runout_metrics(sim_, state, values, body.h, *toe_crest)
             m["warnings"] = [*m.get("warnings", []), *late.pop("notes")]
@@ -446,6 +402,8 @@ def build(
     phis = {getattr(m, "phi", 0.0) for m in body.mats}
     if values["initial_stress"] == "k0" and not limit_only and len(phis) == 1:
         derived["K0"] = float(1 - np.sin(np.radians(phis.pop())))  # as used
+    if push:
+        return SceneRun(sim, {"t_end": t_push}, metrics, derived=derived)
     if not run_out:
         return SceneRun(sim, {"steps": 0}, metrics, derived=derived)
     stop = AtRest(values["rest_fraction"], 2 * math.sqrt(H / GRAVITY))
