@@ -19,6 +19,29 @@ os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 
 
+#: The numerical libraries' thread pools, one thread each under pytest-xdist.
+THREAD_POOLS = (
+    "OMP_NUM_THREADS",
+    "MKL_NUM_THREADS",
+    "OPENBLAS_NUM_THREADS",
+    "RAYON_NUM_THREADS",
+)
+
+
+def pytest_configure(config):
+    """Give each pytest-xdist worker one thread of every numerical library.
+
+    The workers (``-n``, one per core by default) share the machine's cores;
+    a worker whose BLAS or sparse solver also started a thread per core would
+    oversubscribe them.  Set in the controller before the workers start, so
+    they inherit it; a value the user set is kept.
+    """
+    workers = getattr(config.option, "numprocesses", None)
+    if workers and not os.environ.get("PYTEST_XDIST_WORKER"):
+        for name in THREAD_POOLS:
+            os.environ.setdefault(name, "1")
+
+
 #: Docstring examples that start a Dask cluster (the ``sweep`` extra).
 NEEDS_SWEEP_EXTRA = {"skfem_npfem.sweeps.engine.run_tasks"}
 
