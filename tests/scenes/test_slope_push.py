@@ -11,6 +11,7 @@ the spacing shrinks (docs/validation/slope_loads.md).
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -99,3 +100,32 @@ def test_a_push_speed_without_a_push_is_warned_about():
     values = {**EDGE, "push_depth": 0.0, "push_speed": 0.1, "analysis": "limit"}
     with pytest.warns(UserWarning, match="push_speed"):
         npfem.run_scene("slope", values)
+
+
+def test_a_push_on_a_section_with_water_is_refused(tmp_path):
+    # The push runs dry: a cross-section file's water line (no water_level
+    # parameter to refuse up front) is refused when the run is built.
+    section = {
+        "materials": {"clay": {"c": 1.0e4, "phi": 0.0, "rho": 2000.0}},
+        "regions": [
+            {
+                "material": "clay",
+                "polygon": [[0, 0], [5, 0], [5, 1], [3, 3], [0, 3], [0, 0]],
+            }
+        ],
+        "supports": {"base": "fixed", "sides": "rollers"},
+        "water": [[0, 1], [5, 1]],
+    }
+    path = tmp_path / "wet.json"
+    path.write_text(json.dumps(section))
+    values = {
+        "geometry": str(path),
+        "spacing": 0.25,
+        "surcharge_width": 1.0,
+        "surcharge_footing": "smooth",
+        "push_depth": 0.1,
+    }
+    with pytest.raises(ParameterError) as err:
+        npfem.run_scene("slope", values)
+    assert err.value.name == "push_depth"
+    assert "dry" in str(err.value)

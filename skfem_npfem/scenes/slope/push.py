@@ -40,6 +40,7 @@ from ..soil_profile import clay_law
 from .section import section_materials, toe_and_crest
 from .seismic import slope_loads
 from .surcharge import strip, surcharge_collapse
+from .water import slope_water
 
 __all__ = [
     "PUSH_METRICS",
@@ -179,7 +180,21 @@ def push_time(values: Mapping[str, Any]) -> tuple[float, float]:
 
 
 def push_model(values: Mapping[str, Any], body: Any) -> Model:
-    """The quasi-static model of the push: gravity, the footing, no reduction."""
+    """The quasi-static model of the push: gravity, the footing, no reduction.
+
+    Raises
+    ------
+    ParameterError
+        For a section with pore water (a cross-section file's water line):
+        the push runs dry.
+    """
+    if slope_water(values, body.sec) is not None:
+        raise ParameterError(
+            "push_depth",
+            values["push_depth"],
+            "0 on a section with pore water (the push runs dry; give the "
+            "section without its water line)",
+        )
     mats = section_materials(body.sec, values, flow=True)
     return Model(
         dim=2,

@@ -25,7 +25,10 @@ Stages, in one run:
    ``reduction`` (default: ``margin`` times the factor of safety, or 1 when
    the factor of safety is below 1: such a slope fails as it is) and the
    PFEM loop run until the slide is at rest (kinetic energy below
-   ``rest_fraction`` of its peak) or ``t_end``.
+   ``rest_fraction`` of its peak) or ``t_end``; or, with ``push_depth > 0``,
+   **a footing pushed** down on the crest instead: the surcharge's strip as a
+   rigid footing, quasi-static steps with the strengths unreduced, its
+   pressure-settlement curve against its limit analysis (:mod:`.push`).
 
 With water (``rho`` saturated, ``c``, ``phi`` effective) the factor of safety
 adds the pore pressure's force (``drained``) or uses the undrained strengths
@@ -242,7 +245,7 @@ METRICS = {
     "factor of safety's last lattice)",
     "stage_wall_time": "seconds per stage: initial_stress, factor_of_safety (all "
     "its cone programs), factor_of_safety_check (at twice the spacing), "
-    "critical_kh (its program), runout (the steps)",
+    "critical_kh (its program), runout (the steps of the run-out or the push)",
     **LIMIT_METRICS,
     "collapse_multiplier": "gravity multiplier of the unreduced strengths (the "
     "first program; capped at 1e3: a cohesionless slope that stands carries "

@@ -85,7 +85,8 @@ SURCHARGE_PARAMS = [
 ]
 
 SURCHARGE_METRICS = {
-    "surcharge_collapse": "analysis=limit with surcharge_width: the pressure on "
+    "surcharge_collapse": "analysis=limit (or push_depth > 0) with "
+    "surcharge_width: the pressure on "
     "the strip at which the slope collapses with its strengths unreduced, Pa "
     "(one more limit analysis: gravity and a constant kh the dead load, capped "
     "at 1e3 times the largest cohesion or weight of the section's height); "
