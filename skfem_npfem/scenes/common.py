@@ -13,6 +13,8 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ..errors import ParameterError
 from ..io import ResultWriter, checkpoint_step
 from ..step.model import NODAL_MASS
@@ -25,6 +27,7 @@ __all__ = [
     "make_writer",
     "solver_from",
     "solver_params",
+    "window_mean",
 ]
 
 
@@ -327,3 +330,33 @@ def warn_unused(given: frozenset[str], names: Iterable[str], why: str) -> None:
     unused = [name for name in names if name in given]
     if unused:
         warnings.warn(f"{', '.join(unused)} not used: {why}", stacklevel=5)
+
+
+def window_mean(
+    curve: list[list[float]], w: float, half: float
+) -> tuple[float | None, list[float] | None]:
+    """Mean of a ``[x, y]`` curve over ``[w - half, w + half]`` and its range there.
+
+    The curve starts from ``(0, 0)`` (a load-settlement curve of steps).
+
+    The window is cut at the curve's end; None when the curve stops short of
+    ``w``.  The mean is that of the linear interpolant (the trapezoidal
+    integral over the window's length).
+
+    Examples
+    --------
+    >>> window_mean([[0.1, 1.0], [0.2, 3.0], [0.3, 1.0]], 0.2, 0.1)
+    (2.0, [1.0, 3.0])
+    """
+    if not curve or curve[-1][0] < w * (1 - 1e-9):
+        return None, None
+    c = np.array([[0.0, 0.0], *curve])
+    lo, hi = max(w - half, 0.0), min(w + half, c[-1, 0])
+    if hi <= lo:
+        value = float(np.interp(w, c[:, 0], c[:, 1]))
+        return value, [value, value]
+    inner = c[(c[:, 0] > lo) & (c[:, 0] < hi)]
+    ws = np.concatenate([[lo], inner[:, 0], [hi]])
+    qs = np.interp(ws, c[:, 0], c[:, 1])
+    mean = float(np.sum(0.5 * (qs[1:] + qs[:-1]) * np.diff(ws)) / (hi - lo))
+    return mean, [float(qs.min()), float(qs.max())]

@@ -87,6 +87,7 @@ def test_a_rough_footing_carries_more_than_a_smooth_one(pushed):
         ({"kh": 0.1}, "kh"),
         ({"surcharge_width": None}, "surcharge_width"),
         ({"push_depth": 3.0}, "push_depth"),
+        ({"water_level": 1.0}, "push_depth"),  # the push runs dry
     ],
 )
 def test_a_push_the_scene_cannot_model_is_refused(over, name):

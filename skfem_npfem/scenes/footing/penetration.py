@@ -64,6 +64,7 @@ from ..common import (
     make_writer,
     solver_from,
     solver_params,
+    window_mean,
 )
 from ..limits import check_size
 from ..methods import METHOD_METRICS_NO_SPFEM, method_params, with_method
@@ -334,7 +335,7 @@ def build(
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
         curve = penetration_curve(sim_.records, B, su)
-        factor, spread = _window(curve, 0.1, 0.5 * values["spacing"] / B)
+        factor, spread = window_mean(curve, 0.1, 0.5 * values["spacing"] / B)
         ref = prandtl_nc(0.0)
         compared = factor is not None and values["E"] >= RIGID_ENOUGH * su
         pen = [r.extra.get("footing_penetration", 0.0) for r in sim_.records]
@@ -368,34 +369,6 @@ def build(
         return {**out, **pore_metrics(sim_.particles, values)}
 
     return with_method(values, SceneRun(sim, {"t_end": t_end}, metrics))
-
-
-def _window(
-    curve: list[list[float]], w: float, half: float
-) -> tuple[float | None, list[float] | None]:
-    """Mean of the curve over ``[w - half, w + half]`` and its range there.
-
-    The window is cut at the curve's end; None when the curve stops short of
-    ``w``.  The mean is that of the linear interpolant (the trapezoidal
-    integral over the window's length).
-
-    Examples
-    --------
-    >>> _window([[0.1, 1.0], [0.2, 3.0], [0.3, 1.0]], 0.2, 0.1)
-    (2.0, [1.0, 3.0])
-    """
-    if not curve or curve[-1][0] < w * (1 - 1e-9):
-        return None, None
-    c = np.array([[0.0, 0.0], *curve])
-    lo, hi = max(w - half, 0.0), min(w + half, c[-1, 0])
-    if hi <= lo:
-        value = float(np.interp(w, c[:, 0], c[:, 1]))
-        return value, [value, value]
-    inner = c[(c[:, 0] > lo) & (c[:, 0] < hi)]
-    ws = np.concatenate([[lo], inner[:, 0], [hi]])
-    qs = np.interp(ws, c[:, 0], c[:, 1])
-    mean = float(np.sum(0.5 * (qs[1:] + qs[:-1]) * np.diff(ws)) / (hi - lo))
-    return mean, [float(qs.min()), float(qs.max())]
 
 
 def penetration_scenery(p: dict, folder: Path | None = None) -> Scenery:

@@ -23,7 +23,6 @@ says what the two share and where they differ.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -34,7 +33,7 @@ from ...constants import GRAVITY
 from ...errors import ParameterError, SolverError, warn_user
 from ...mesh.smoothing import nodal_integration
 from ...step.model import Model
-from ..common import fidelity_from, solver_from
+from ..common import fidelity_from, solver_from, window_mean
 from ..params import POSITIVE, Param
 from ..soil_profile import clay_law
 from .section import section_materials, toe_and_crest
@@ -92,8 +91,8 @@ PUSH_METRICS = {
 
 
 def pushing(values: Mapping[str, Any]) -> bool:
-    """Whether the run is a footing push."""
-    return values["push_depth"] > 0 and values["analysis"] != "limit"
+    """Whether the run is a footing push (:func:`check_push` has passed)."""
+    return values["push_depth"] > 0
 
 
 def check_push(values: Mapping[str, Any]) -> None:
@@ -102,8 +101,9 @@ def check_push(values: Mapping[str, Any]) -> None:
     A push needs ``analysis=incremental``, a strip (``surcharge_width``) that
     is a rigid footing (``surcharge_footing`` smooth or rough) and no dead
     pressure on it (``surcharge = 0``); it replaces the run-out
-    (``runout=false``), runs dry and without ``kh``, and goes at most the
-    slope's height down.
+    (``runout=false``), runs without ``kh`` and goes at most the slope's
+    height down.  That it runs dry is checked when it is built
+    (:func:`push_model`: the water is known once the section is read).
     """
     depth = values["push_depth"]
     if depth == 0:
@@ -127,11 +127,6 @@ def check_push(values: Mapping[str, Any]) -> None:
             "false with push_depth > 0 (the push replaces the run-out)",
         ),
         ("kh", values["kh"] in (0, 0.0), "0 with push_depth > 0 (a static push)"),
-        (
-            "water_level",
-            values.get("water_level") is None,
-            "none with push_depth > 0 (the push runs dry)",
-        ),
     ]
     for name, ok, allowed in rules:
         if not ok:
@@ -185,15 +180,15 @@ def push_model(values: Mapping[str, Any], body: Any) -> Model:
     Raises
     ------
     ParameterError
-        For a section with pore water (a cross-section file's water line):
-        the push runs dry.
+        For a slope with pore water (``water_level``, or a cross-section
+        file's water line): the push runs dry.
     """
     if slope_water(values, body.sec) is not None:
         raise ParameterError(
             "push_depth",
             values["push_depth"],
-            "0 on a section with pore water (the push runs dry; give the "
-            "section without its water line)",
+            "0 on a slope with pore water (the push runs dry: leave out "
+            "water_level, or the section file's water line)",
         )
     mats = section_materials(body.sec, values, flow=True)
     return Model(
@@ -223,12 +218,8 @@ def push_metrics(sim: Any, values: Mapping[str, Any], body: Any) -> dict[str, An
     curve = push_curve(sim.records, B)
     lo, hi = (f * B for f in CAPACITY_WINDOW)
     capacity = None
-    if curve and curve[-1][0] >= hi * (1 - 1e-9):
-        c = np.array([[0.0, 0.0], *curve])
-        inner = c[(c[:, 0] > lo) & (c[:, 0] < hi), 0]
-        w = np.concatenate([[lo], inner, [hi]])
-        q = np.interp(w, c[:, 0], c[:, 1])
-        capacity = float(np.sum(0.5 * (q[1:] + q[:-1]) * np.diff(w)) / (hi - lo))
+    if curve and curve[-1][0] >= hi * (1 - 1e-9):  # the whole window pushed
+        capacity = window_mean(curve, 0.5 * (lo + hi), 0.5 * (hi - lo))[0]
     notes: list[str] = []
     ni = nodal_integration(body.mesh, (0, 1, 3))
     gravity, _ = slope_loads(ni, body.mats, body.material, body.mesh, None)
@@ -246,6 +237,6 @@ def push_metrics(sim: Any, values: Mapping[str, Any], body: Any) -> dict[str, An
         "notes": notes,
         "push_curve": curve,
         "push_capacity": capacity,
-        "push_capacity_ratio": None if ratio is None or math.isnan(ratio) else ratio,
+        "push_capacity_ratio": ratio,
         "surcharge_collapse": collapse,
     }
