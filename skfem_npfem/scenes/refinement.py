@@ -6,7 +6,9 @@ carry ``refine_share`` of the mechanism's plastic power
 (:func:`~skfem_npfem.mesh.refine.mark_share`), halves the spacing round them
 (:func:`~skfem_npfem.mesh.refine.split_around`), triangulates again and
 solves again: at most ``refine_cycles`` times, stopping when the multiplier
-changes by less than ``refine_tol`` (relative) from one cycle to the next.  A
+has changed by less than ``refine_tol`` (relative) in two successive cycles
+(one small change can be a stall: a refinement that moved the result little
+before the next one moved it again).  A
 limit analysis carries no history, so nothing is mapped between the lattices:
 each cycle is a fresh program on more particles.  docs/theory.md ("Adaptive
 limit analysis") says why the plastic power is the indicator.
@@ -60,7 +62,7 @@ REFINE_PARAMS = [
         "analysis=limit: none (the uniform lattice) or strain (adaptive: the "
         "spacing is halved where the collapse mechanism's plastic power "
         "concentrates and the program solved again, until the result changes "
-        "by less than refine_tol)",
+        "by less than refine_tol in two successive cycles)",
         str,
         REFINE_CHOICES,
     ),
@@ -68,14 +70,14 @@ REFINE_PARAMS = [
         "refine_tol",
         0.005,
         "-",
-        "refine=strain: stop when the result changes by less than this "
-        "(relative) from one cycle to the next",
+        "refine=strain: stop when the result has changed by less than this "
+        "(relative) in two successive cycles",
         float,
         **POSITIVE,
     ),
     Param(
         "refine_cycles",
-        4,
+        6,
         "-",
         "refine=strain: largest number of refinements",
         int,
@@ -193,8 +195,9 @@ SLOPE_REFINE_PARAMS = [
         "-",
         "none (the uniform lattice), strain (the factor of safety adaptive: "
         "the spacing is halved where its mechanism's plastic power "
-        "concentrates and the program solved again, until F changes by less "
-        "than refine_tol; with analysis=limit and before a run-out), surface "
+        "concentrates and the program solved again, until F has changed by "
+        "less than refine_tol in two successive cycles; with analysis=limit "
+        "and before a run-out), surface "
         "(runout=true: before each step of the run-out a particle is added at "
         "the middle of every edge stretched beyond refine_ratio times its "
         "particles' spacing, where the sliding soil thins; mass and momentum "
@@ -298,7 +301,7 @@ class Adapted(Generic[B]):
     history : list of [int, float, float]
         Particles, result and seconds of every cycle.
     converged : bool
-        The last change was below the tolerance.
+        The last two changes were below the tolerance.
     """
 
     body: B
@@ -380,6 +383,7 @@ def adapt(
     t0 = time.perf_counter()
     result, number, power = solve(body)
     history.append([len(points(body)[0]), number, time.perf_counter() - t0])
+    small = 0  # successive cycles whose change was below the tolerance
     for _ in range(values["refine_cycles"]):
         pts, t = points(body)
         marked = mark_share(power, values["refine_share"])
@@ -389,6 +393,7 @@ def adapt(
         history.append([len(points(new_body)[0]), new_number, time.perf_counter() - t0])
         change = abs(new_number - number) / max(abs(new_number), 1e-300)
         body, result, number, power = new_body, new_result, new_number, new_power
-        if change < values["refine_tol"]:
+        small = small + 1 if change < values["refine_tol"] else 0
+        if small == 2:
             return Adapted(body, result, history, True)
     return Adapted(body, result, history, False)
