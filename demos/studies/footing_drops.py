@@ -23,7 +23,11 @@ and three things the step did to the soil:
   stress a particle lost in the step);
 * the triangles of the step's mesh that the last step's mesh did not have
   (the remeshing the step starts with: the particles' cells, over which
-  their stresses act, change with it).
+  their stresses act, change with it);
+* the smooth footing's collapse load on the step's start: one limit program
+  on its particles and the step's own mesh, the particles within a quarter
+  spacing of the base tied and loaded (weightless Tresca soil: a property of
+  the positions alone, not of the stresses).
 
 It then runs the scene with one setting changed at a time (a stiffer clay
 E/s_u = 1000, nu = 0.45 instead of 0.495, half the step, and the stress
@@ -33,14 +37,16 @@ step of the largest dip again on triangulations of the same particles with
 other tie-breaking (jitter up to 5e-2 h^2), to tell the step's mesh from the
 state it starts from.  Last, it runs the scene with inertia (dynamic steps
 and a soil of density 10 and 100 kg/m^3, gravity still off): whether the
-dips are a velocity field that a quasi-static step picks among many.  The
-runs are one process, one after another (about 15 minutes in all;
-``--parts`` runs some and keeps the others from the JSON).
+dips are a velocity field that a quasi-static step picks among many.  And it
+runs the step table again with ``seal_cavities=true`` (the holes the alpha
+test opens inside the soil kept meshed).  The runs are one process, one after
+another (about 20 minutes in all; ``--parts`` runs some and keeps the others
+from the JSON).
 
 Usage (from the repository root)::
 
     python demos/studies/footing_drops.py [--out docs/validation]
-        [--parts stepwise,resolved,variants,inertia]
+        [--parts stepwise,resolved,variants,inertia,sealed]
 
 Writes ``<out>/footing_drops.json`` and ``<out>/footing_drops.inc`` (tables of
 docs/validation/particle_insertion.md).
@@ -56,9 +62,12 @@ from pathlib import Path
 import numpy as np
 from _common import VALIDATION, write_results
 from _reporting import markdown_table
+from skfem import MeshTri
 from soil_profiles import run
 
 import skfem_npfem as npfem
+from skfem_npfem.limit.analysis import limit_analysis
+from skfem_npfem.mesh.smoothing import nodal_integration
 from skfem_npfem.scenes.footing.penetration import build
 
 #: The settings changed one at a time (the scene's defaults otherwise).
@@ -130,17 +139,55 @@ def inverted(x0: np.ndarray, x1: np.ndarray, tri: np.ndarray) -> int:
     return int(np.sum((area2(x0) > 0) & (area2(x1) <= 0)))
 
 
+def collapse_load(
+    values: dict, sim, x0: np.ndarray, fixed: np.ndarray, tri, base: float
+) -> float:
+    """The smooth rigid footing's collapse pressure over s_u on a step's start.
+
+    One limit program on the step's own triangulation of its start positions
+    ``x0`` (the same nodal integration), the particles on the footing's base
+    (within a quarter spacing of it, ``base`` its height) tied vertically and
+    loaded, the supports ``fixed`` held.  The soil is weightless Tresca, so
+    this is a property of the configuration alone, not of the stresses.
+    """
+    b, h = values["width"] / 2, values["spacing"]
+    used = np.unique(tri.simplices)
+    local = np.full(len(x0), -1)
+    local[used] = np.arange(used.size)
+    mesh = MeshTri(
+        np.ascontiguousarray(x0[used].T), np.ascontiguousarray(local[tri.simplices].T)
+    )
+    xu = x0[used]
+    foot = np.flatnonzero((xu[:, 0] <= b + 1e-9) & (np.abs(xu[:, 1] - base) < h / 4))
+    free = fixed[used].copy()
+    free[foot, 1] = False
+    load = np.zeros((used.size, 2))
+    load[foot, 1] = -values["su"] * b / foot.size
+    res = limit_analysis(
+        nodal_integration(mesh, (0, 1, 3)),
+        sim.model.materials,
+        np.zeros(used.size, int),
+        load,
+        fixed=free,
+        tied=[2 * foot + 1],
+    )
+    return float(res.multiplier)
+
+
 def stepwise(over: dict) -> dict:
     """The footing run one step at a time: load, dip, strain and stress release."""
     values = npfem.get_scene("footing-penetration").resolve(over)
     srun = build(values, progress=False)
     sim = srun.simulation
     B, su = values["width"], values["su"]
+    surface = float(sim.particles.x[:, 1].max())
     t0 = time.perf_counter()
     rows = []
     before = None  # the last step's triangles
     while sim.time < srun.run_kwargs["t_end"] * (1 - 1e-12):
         x0, s0 = sim.particles.x.copy(), sim.particles.stress.copy()
+        fixed = np.asarray(sim.particles.fixed, bool).copy()
+        base = surface + (sim.records[-1].extra["footing_y"] if sim.records else 0.0)
         sim.run(steps=1)
         tri = sim.mesh_source.last
         if not np.array_equal(tri.points, x0):
@@ -161,6 +208,7 @@ def stepwise(over: dict) -> dict:
                 ),
                 "stress_release": float(release.max() / su),
                 "new_triangles": None if before is None else len(now - before),
+                "collapse": collapse_load(values, sim, x0, fixed, tri, base),
             }
         )
         before = now
@@ -288,6 +336,7 @@ def tables(result: dict) -> str:
             f"{s['element_strain']:.2f}",
             f"{s['stress_release']:.2f}",
             s.get("new_triangles", "-"),
+            f"{s['collapse']:.3f}" if "collapse" in s else "-",
         ]
         for s in steps
         if s["dip"] >= DIP
@@ -305,12 +354,14 @@ def tables(result: dict) -> str:
             f"{np.median(strain):.2f}",
             f"{np.median(release):.2f}",
             f"{np.median(new):.0f}" if new else "-",
+            f"{np.median([s.get('collapse', np.nan) for s in steps]):.3f}",
         ]
     )
     head = ["w/B", "q/s_u", "dip", "triangles turned over"]
     head += ["largest particle motion / footing's"]
     head += ["largest element strain increment", "largest s_yy release / s_u"]
-    page = markdown_table([*head, "triangles new since the last step"], rows)
+    head += ["triangles new since the last step"]
+    page = markdown_table([*head, "collapse load of the step's start / s_u"], rows)
     vrows = [
         [
             name,
@@ -369,7 +420,49 @@ def quasi_static(stepwise_result: dict) -> dict:
     }
 
 
-PARTS = ("stepwise", "resolved", "variants", "inertia")
+PARTS = ("stepwise", "resolved", "variants", "inertia", "sealed")
+
+
+def summary(stepwise_result: dict) -> dict:
+    """A stepwise run's dips, loads and collapse loads in one row."""
+    steps = stepwise_result["steps"]
+    d = np.array([s["dip"] for s in steps])
+    w = np.array([s["w"] for s in steps])
+    limit = np.array([s["collapse"] for s in steps])
+    return {
+        "dips": int(np.sum(d >= DIP)),
+        "largest_dip": float(d.max()),
+        "largest_collapse_dip": float(dips(limit, w).max()),
+        "q_01": float(np.interp(0.1, w, [s["q"] for s in steps])),
+        "q_1": float(steps[-1]["q"]),
+        "above_collapse": float(max(s["q"] / s["collapse"] for s in steps)),
+        "wall_s": stepwise_result["wall_s"],
+    }
+
+
+def sealed_table(result: dict) -> str:
+    """The defaults against ``seal_cavities=true``, step by step."""
+    rows = []
+    for name, key in (("defaults", "stepwise"), ("seal_cavities = true", "sealed")):
+        if key not in result:
+            continue
+        r = summary(result[key])
+        rows.append(
+            [
+                name,
+                r["dips"],
+                f"{100 * r['largest_dip']:.1f} %",
+                f"{100 * r['largest_collapse_dip']:.1f} %",
+                f"{r['q_01']:.3f}",
+                f"{r['q_1']:.3f}",
+                f"{r['above_collapse']:.3f}",
+                f"{r['wall_s']:.0f} s",
+            ]
+        )
+    head = ["mesh", "dips >= 10 %", "largest dip", "largest dip of the collapse load"]
+    head += ["q/s_u at w = 0.1 B", "q/s_u at w = B"]
+    head += ["largest q over the collapse load", "wall (with the limit programs)"]
+    return markdown_table(head, rows)
 
 
 def main() -> None:
@@ -398,7 +491,12 @@ def main() -> None:
         result["inertia"] = [inertial(rho) for rho in DENSITIES]
     if "inertia" in result:
         result["quasi_static"] = quasi_static(result["stepwise"])
-    write_results(path, json.dumps(result, indent=1), tables(result))
+    if "sealed" in parts:
+        result["sealed"] = stepwise({"seal_cavities": True})
+    text = tables(result)
+    if "sealed" in result:
+        text += "\n" + sealed_table(result) + "\n"
+    write_results(path, json.dumps(result, indent=1), text)
 
 
 if __name__ == "__main__":

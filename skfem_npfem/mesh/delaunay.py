@@ -49,6 +49,7 @@ from scipy.spatial import ConvexHull, QhullError
 from skfem import MeshTet, MeshTri
 
 from ..errors import NpfemError, ParameterError
+from .cavities import seal
 from .simplices import (
     _FACES,
     _boundary_facets,
@@ -204,6 +205,7 @@ def alpha_shape(
     seed: int = 0,
     h_local: ArrayLike | None = None,
     keep_buried_slivers: bool = False,
+    closed: ArrayLike | None = None,
 ) -> Triangulation:
     """Triangulate particles and keep the simplices that pass the alpha test.
 
@@ -249,6 +251,10 @@ def alpha_shape(
         closed.  A sliver contributes only its facet area vectors
         ``|e| grad N`` to the smoothed strain, which stay bounded as its volume
         vanishes.  Simplices below the volume tolerance are never meshed.
+    closed : array_like of bool, shape (N,), optional
+        Particles that cannot part from where they are (supports): simplices
+        failing the alpha test whose region opens onto no other hull facet are
+        kept (:func:`~skfem_npfem.mesh.cavities.seal`).  None: every opening.
 
     Returns
     -------
@@ -319,6 +325,8 @@ def alpha_shape(
                 "h_local", hl.shape, f"{n} finite spacings > 0 (one per particle)"
             )
         in_alpha = radius < alpha * hl[candidates].max(axis=1)
+    if closed is not None:
+        in_alpha = seal(candidates, in_alpha, radius, closed)
     good = quality >= min_quality
     if keep_buried_slivers:
         # Flat simplices whose facets pass the alpha test belong to the body

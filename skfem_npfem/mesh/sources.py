@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 import scipy.sparse as sp
@@ -38,6 +38,7 @@ __all__ = [
     "as_mesh_source",
     "folded_facets",
     "main_body",
+    "seal_with",
 ]
 
 
@@ -218,11 +219,20 @@ class AlphaShapeMesher:
         slivers buried in the body.  None (default): in 3D only, where a
         nearly cubic lattice leaves the kept tetrahedra non-conforming
         otherwise; a 2D lattice has no slivers.
+    seal_cavities : bool, default False
+        Keep meshed the holes the alpha test would open inside the body: those
+        that reach the outside only through particles with a prescribed
+        velocity, or not at all (:mod:`~skfem_npfem.mesh.cavities`).  The
+        step gives the mesher its particles' supports first
+        (:func:`seal_with`).
 
     Attributes
     ----------
     last : Triangulation or None
         Triangulation of the last call (the mesh the last step was solved on).
+    closed : ndarray (N,) bool or None
+        With ``seal_cavities``: the particles the next triangulation treats as
+        supported (set by :func:`seal_with`).
 
     Raises
     ------
@@ -254,6 +264,7 @@ class AlphaShapeMesher:
         seed: int = 0,
         spacing: np.ndarray | None = None,
         keep_buried_slivers: bool | None = None,
+        seal_cavities: bool = False,
     ) -> None:
         for name, val in (("h", h), ("alpha", alpha), ("wall_distance", wall_distance)):
             if not (isinstance(val, int | float) and math.isfinite(val) and val > 0):
@@ -266,6 +277,8 @@ class AlphaShapeMesher:
         self.jitter = jitter
         self.seed = seed
         self.keep_buried_slivers = keep_buried_slivers
+        self.seal_cavities = bool(seal_cavities)
+        self.closed: np.ndarray | None = None  # set per step with seal_cavities
         self.spacing = None
         if spacing is not None:
             hl = np.asarray(spacing, dtype=float).reshape(-1)
@@ -300,18 +313,31 @@ class AlphaShapeMesher:
     def _settings(self) -> tuple:
         """What a triangulation depends on besides the positions and spacings."""
         keep = self.keep_buried_slivers
-        return (self.h, self.alpha, self.min_quality, self.jitter, self.seed, keep)
+        closed = None if self.closed is None else self.closed.tobytes()
+        return (
+            self.h,
+            self.alpha,
+            self.min_quality,
+            self.jitter,
+            self.seed,
+            keep,
+            closed,
+        )
 
     def _triangulate(self, x: np.ndarray) -> Triangulation:
         extra = {}
-        if self.spacing is not None:
-            if self.spacing.size != x.shape[0]:
+        closed = self.closed if self.seal_cavities else None
+        for name, given, key in (
+            ("spacing", self.spacing, "h_local"),
+            ("closed", closed, "closed"),
+        ):
+            if given is None:
+                continue
+            if given.size != x.shape[0]:  # closed: seal_with gives one per particle
                 raise ParameterError(
-                    "spacing",
-                    f"{self.spacing.size} values",
-                    f"one per particle ({x.shape[0]})",
+                    name, f"{given.size} values", f"one per particle ({x.shape[0]})"
                 )
-            extra["h_local"] = self.spacing
+            extra[key] = given
         return alpha_shape(
             x,
             self.h,
@@ -356,6 +382,17 @@ class AlphaShapeMesher:
         if self.last is None:
             return None
         return free_surface(self.last, self.on_wall())
+
+
+def seal_with(mesh_source: Any, particles: Any) -> None:
+    """Give a mesher that seals cavities (``seal_cavities``) the supports.
+
+    Its next triangulation of ``particles`` keeps the cavities that open only
+    onto particles with a prescribed velocity (:mod:`~skfem_npfem.mesh.cavities`);
+    a mesher without ``seal_cavities`` is left as it is.
+    """
+    if getattr(mesh_source, "seal_cavities", False):
+        mesh_source.closed = np.asarray(particles.fixed, bool).any(axis=1)
 
 
 def folded_facets(x: np.ndarray, t: np.ndarray) -> np.ndarray:

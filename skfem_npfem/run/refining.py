@@ -28,6 +28,7 @@ from ..errors import ParameterError
 from ..mesh.insertion import Insertion, edge_shares, insert_midpoints, long_edges
 from ..mesh.merging import merge_pairs
 from ..mesh.refine import mark_share
+from ..mesh.sources import seal_with
 from ..particles import Particles
 
 __all__ = ["Refiner", "initial_rows", "refined_point_data"]
@@ -173,6 +174,7 @@ class Refiner:
             spacing = np.full(p.n, mesh_source.h) if given is None else given.copy()
         ids = np.arange(p.n, dtype=np.int64) if p.ids is None else p.ids
         mesh_source.spacing = spacing
+        seal_with(mesh_source, p)
         tri = mesh_source.triangulate(p.x)
         edges, share, volume = edge_shares(p.x, tri.simplices)
         a, b = edges[:, 0], edges[:, 1]

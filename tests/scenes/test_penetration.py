@@ -19,6 +19,7 @@ import itertools
 import math
 import statistics
 
+import numpy as np
 import pytest
 
 from skfem_npfem import ParameterError, run_scene
@@ -109,18 +110,45 @@ def test_footing_penetration_fem_remap_p2_near_prandtl_and_p1_locks():
     assert any("use element=p2" in w for w in p1["warnings"])
 
 
-def test_footing_penetration_keeps_particles_out_to_w_equal_b():
+@pytest.fixture(scope="module")
+def to_b():
+    """B/10, the footing moving a quarter spacing a step to w/B = 1: open, sealed."""
+    over = {"spacing": 0.1, "penetration": 1.0}
+    return {
+        seal: run_scene(SCENE, {**over, "seal_cavities": seal})["metrics"]
+        for seal in (False, True)
+    }
+
+
+def test_footing_penetration_keeps_particles_out_to_w_equal_b(to_b):
     # At B/10 with the footing moving a quarter spacing a step to w/B = 1:
     # measured 0 (0.89 spacings when the elements that clip the footing's
     # corner were dropped: two particles met under the footing on the
     # symmetry line, the pressure fell to 2.4 s_u at the end).
-    m = run_scene(SCENE, {"spacing": 0.1, "penetration": 1.0})["metrics"]
+    m = to_b[False]
     assert m["max_body_penetration"] <= 0.05 * 0.1
     assert not m["warnings"]
     assert m["final_bearing_factor"] > 2 + 3.141592653589793  # heave: it rises
     # one step falls to 2.7 at w/B = 0.775 (see docs/theory.md, "The edge of
     # a footing"): counted
     assert m["load_drops"] == _drops_by_hand(m["curve"]) >= 1
+
+
+def test_sealing_the_hole_under_the_footing_removes_its_load_drop(to_b):
+    # The drop above: the alpha test opens a hole on the symmetry axis under
+    # the footing (docs/theory.md, "Holes the alpha test opens inside the
+    # soil") and the load falls to 2.74 s_u, a third below the median.
+    # Sealed, the curve is the same step for step up to that step and has no
+    # load drop after it.
+    open_, sealed = (np.asarray(to_b[s]["curve"]) for s in (False, True))
+    first = np.flatnonzero(open_[:, 1] != sealed[:, 1])[0]
+    assert open_[first, 0] == pytest.approx(0.775, abs=0.03)
+    assert to_b[False]["load_drops"] >= 1 and to_b[True]["load_drops"] == 0
+    beyond = sealed[:, 0] > 0.2
+    falls = -np.diff(sealed[:, 1])[beyond[1:]] / np.median(sealed[beyond, 1])
+    assert falls.max() < 0.15  # measured 0.116 (open: 0.325)
+    assert to_b[True]["max_body_penetration"] <= 0.05 * 0.1
+    assert to_b[True]["final_bearing_factor"] > 2 + math.pi
 
 
 def test_penetration_warning_past_half_a_spacing():

@@ -178,6 +178,17 @@ PARAMS = [
     ),
     Param("spacing", 0.05, "m", "particle spacing near the footing", float, **POSITIVE),
     *lattice_params("footing"),
+    Param(
+        "seal_cavities",
+        False,
+        "-",
+        "true: a hole the alpha test would open inside the soil, reaching the "
+        "outside only through supported particles (the symmetry axis, the "
+        "fixed base and side) or not at all, stays meshed (the soil stretched "
+        "along the axis under the footing opens such holes, and the load "
+        "falls for a step)",
+        bool,
+    ),
     *method_params(
         ("npfem", "fem-remap"),
         missing="spfem is not available in footing-penetration: it is explicit "
@@ -315,7 +326,9 @@ def build(
         strength_law=clay_law(values),
         **fidelity_from(values, 0.0),
     )
-    mesher = AlphaShapeMesher(values["spacing"], values["alpha"], spacing=spacing)
+    seal = values["seal_cavities"]
+    h = values["spacing"]
+    mesher = AlphaShapeMesher(h, values["alpha"], spacing=spacing, seal_cavities=seal)
     sim = Simulation(
         particles,
         model,
