@@ -388,11 +388,17 @@ def seal_with(mesh_source: Any, particles: Any) -> None:
     """Give a mesher that seals cavities (``seal_cavities``) the supports.
 
     Its next triangulation of ``particles`` keeps the cavities that open only
-    onto particles with a prescribed velocity (:mod:`~skfem_npfem.mesh.cavities`);
-    a mesher without ``seal_cavities`` is left as it is.
+    onto supported particles (:mod:`~skfem_npfem.mesh.cavities`): those with a
+    prescribed velocity and those within ``wall_distance * h`` of one of the
+    mesher's walls (a cone's axis).  A mesher without ``seal_cavities`` is left
+    as it is.
     """
-    if getattr(mesh_source, "seal_cavities", False):
-        mesh_source.closed = np.asarray(particles.fixed, bool).any(axis=1)
+    if not getattr(mesh_source, "seal_cavities", False):
+        return
+    closed = np.asarray(particles.fixed, bool).any(axis=1)
+    for wall in mesh_source.walls:
+        closed |= wall.gap(particles.x) < mesh_source.wall_distance * mesh_source.h
+    mesh_source.closed = closed
 
 
 def folded_facets(x: np.ndarray, t: np.ndarray) -> np.ndarray:

@@ -18,6 +18,7 @@ import pytest
 from skfem import MeshTri
 
 from skfem_npfem import ParameterError, Tresca
+from skfem_npfem.boundary import wall_x
 from skfem_npfem.limit.analysis import limit_analysis
 from skfem_npfem.mesh.cavities import sealed_cavities
 from skfem_npfem.mesh.delaunay import alpha_shape
@@ -56,6 +57,35 @@ def test_a_hole_on_the_edge_is_sealed_only_if_the_edge_is_a_support():
     on_axis = x[:, 0] == 0.0  # a symmetry axis: the soil cannot part from it
     sealed = alpha_shape(x, 1.0, 1.3, closed=on_axis)
     assert sealed.volume == pytest.approx(64.0, rel=1e-9)
+
+
+class Cloud:
+    """What ``seal_with`` reads of the particles: positions and supports."""
+
+    def __init__(self, x: np.ndarray, fixed: np.ndarray) -> None:
+        self.x, self.fixed = x, fixed
+
+
+def test_a_mesher_seals_at_its_supports_and_at_its_walls():
+    # The notch on the left edge: the particles there are free (no fixed
+    # dof), so only a wall along x = 0 (a cone's axis) closes it.
+    x = lattice_without(lambda a, b: (a <= 1) & (np.abs(b - 4) <= 1))
+    free = Cloud(x, np.zeros(x.shape, bool))
+    plain = AlphaShapeMesher(1.0, 1.3, seal_cavities=True)
+    seal_with(plain, free)
+    assert plain.triangulate(x).volume == pytest.approx(57.0, rel=1e-9)
+    held = Cloud(x, np.column_stack([x[:, 0] == 0.0, np.zeros(len(x), bool)]))
+    seal_with(plain, held)  # the axis's particles held in x: a support
+    assert plain.triangulate(x).volume == pytest.approx(64.0, rel=1e-9)
+    walled = AlphaShapeMesher(
+        1.0, 1.3, walls=[wall_x(2, 0.0, facing=1)], seal_cavities=True
+    )
+    seal_with(walled, free)
+    assert walled.triangulate(x).volume == pytest.approx(64.0, rel=1e-9)
+    # Without seal_cavities the mesher ignores the supports.
+    off = AlphaShapeMesher(1.0, 1.3)
+    seal_with(off, held)
+    assert off.closed is None and off.triangulate(x).volume == pytest.approx(57.0)
 
 
 def test_closed_needs_one_flag_per_particle():
@@ -101,11 +131,7 @@ def test_sealing_restores_the_collapse_load_of_a_dip_step():
         h, float(d["alpha"]), spacing=d["spacing"], seal_cavities=True
     )
 
-    class Supports:
-        def __init__(self, fixed):
-            self.fixed = fixed
-
-    seal_with(sealer, Supports(fixed))
+    seal_with(sealer, Cloud(x, fixed))
     sealed = sealer.triangulate(x).simplices
     # The hole under the footing: a few triangles on the symmetry axis half a
     # width below the footing's base, which the sealed mesh keeps.
