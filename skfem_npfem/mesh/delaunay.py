@@ -252,9 +252,9 @@ def alpha_shape(
         ``|e| grad N`` to the smoothed strain, which stay bounded as its volume
         vanishes.  Simplices below the volume tolerance are never meshed.
     closed : array_like of bool, shape (N,), optional
-        Particles that cannot part from where they are (supports): simplices
-        failing the alpha test whose region opens onto no other hull facet are
-        kept (:func:`~skfem_npfem.mesh.cavities.seal`).  None: every opening.
+        Supports: a region of simplices failing the alpha test that reaches the
+        hull only through facets of closed particles, or not at all, is kept
+        (:func:`~skfem_npfem.mesh.cavities.seal`).  None: no region is kept.
 
     Returns
     -------
