@@ -65,7 +65,7 @@ import numpy as np
 
 from ..boundary import CLIP_DEPTH, Boundary, ContactNodes, oriented_boundary
 from ..errors import ParameterError
-from ..mesh.sources import MeshSource
+from ..mesh.sources import MeshSource, mesh_particles
 from ..particles import Particles
 from ..step.boundary_jobs import record, step_contacts, with_columns, without_spanned
 from ..step.conic import ConeSolution, solve_step
@@ -175,7 +175,7 @@ class FemRemap:
         the Gauss points of the mesh ``mesh_source`` gives for ``p.x``, so a
         linear initial stress (geostatic) is taken over exactly.
         """
-        active, local_t = mesh_source(p.x)
+        active, local_t = mesh_particles(mesh_source, p)
         cells = np.ascontiguousarray(active[local_t].T)
         bary, _ = quadrature(p.dim, self.element)
         sig = np.einsum("qa,eam->eqm", bary, p.stress[cells]).reshape(
@@ -295,7 +295,7 @@ class FemRemap:
         boundaries = model.boundaries
         state = with_columns(boundaries, state)
         t0 = perf_counter()
-        active, local_t = mesh_source(state.x)
+        active, local_t = mesh_particles(mesh_source, state)
         # P2: no sliver, its mid-edge node would start inside the body.
         sliver = CLIP_DEPTH if self.element == "p1" else 0.0
         active, local_t, dropped = without_spanned(

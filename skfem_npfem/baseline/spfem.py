@@ -56,7 +56,7 @@ from ..boundary import project_to_walls
 from ..errors import ParameterError
 from ..mesh.delaunay import p1_mesh
 from ..mesh.smoothing import NodalIntegration, nodal_integration
-from ..mesh.sources import MeshSource
+from ..mesh.sources import MeshSource, mesh_particles
 from ..particles import Particles
 from ..step.conic import ConeSolution
 from ..step.kinematics import equivalent_strain, rotate_stress
@@ -142,7 +142,7 @@ class SPFEM:
 
     def stable_dt(self, p: Particles, model: Model, mesh_source: MeshSource) -> float:
         """Stable time step on the mesh ``mesh_source`` gives for ``p``, s."""
-        active, local_t = mesh_source(p.x)
+        active, local_t = mesh_particles(mesh_source, p)
         ni = nodal_integration(p1_mesh(p.x[active], local_t))
         return stable_time_step(ni, model, p.mass[active], p.material[active])
 
@@ -204,7 +204,7 @@ class SPFEM:
         if not (math.isfinite(dt) and dt > 0):
             raise ParameterError("dt", dt, "a finite time step > 0 (s)")
         t0 = perf_counter()
-        active, local_t = mesh_source(p.x)
+        active, local_t = mesh_particles(mesh_source, p)
         ni = nodal_integration(p1_mesh(p.x[active], local_t))
         stable = stable_time_step(ni, model, p.mass[active], p.material[active])
         n_sub = self._substeps(dt, stable, step)

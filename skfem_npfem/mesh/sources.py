@@ -38,6 +38,7 @@ __all__ = [
     "as_mesh_source",
     "folded_facets",
     "main_body",
+    "mesh_particles",
     "seal_with",
 ]
 
@@ -221,10 +222,11 @@ class AlphaShapeMesher:
         otherwise; a 2D lattice has no slivers.
     seal_cavities : bool, default False
         Keep meshed the holes the alpha test would open inside the body: those
-        that reach the outside only through particles with a prescribed
-        velocity, or not at all (:mod:`~skfem_npfem.mesh.cavities`).  The
-        step gives the mesher its particles' supports first
-        (:func:`seal_with`).
+        that reach the outside only through supported particles (a prescribed
+        velocity, or within ``wall_distance * h`` of one of ``walls``), or not
+        at all (:mod:`~skfem_npfem.mesh.cavities`).  The step gives the mesher
+        its particles' supports first (:func:`seal_with`,
+        :func:`mesh_particles`).
 
     Attributes
     ----------
@@ -399,6 +401,21 @@ def seal_with(mesh_source: Any, particles: Any) -> None:
     for wall in mesh_source.walls:
         closed |= wall.gap(particles.x) < mesh_source.wall_distance * mesh_source.h
     mesh_source.closed = closed
+
+
+def mesh_particles(mesh_source: Any, particles: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh ``mesh_source`` gives for ``particles``, told their supports first.
+
+    :func:`seal_with`, then ``mesh_source(particles.x)``: every mesh of a run
+    (the step's, a baseline's, the one written) is built so, sealed alike.
+
+    Returns
+    -------
+    active, local_t : ndarray
+        As :class:`MeshSource`.
+    """
+    seal_with(mesh_source, particles)
+    return mesh_source(particles.x)
 
 
 def folded_facets(x: np.ndarray, t: np.ndarray) -> np.ndarray:

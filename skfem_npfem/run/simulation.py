@@ -25,7 +25,7 @@ from skfem import Mesh
 from ..boundary import check_clear
 from ..errors import ParameterError, RunInterrupted, SolverError
 from ..io import read_checkpoint, water_point_data, write_checkpoint
-from ..mesh.sources import MeshSource, as_mesh_source
+from ..mesh.sources import MeshSource, as_mesh_source, mesh_particles
 from ..particles import Particles
 from ..profiles import profile_point_data
 from ..step.kinematics import energies
@@ -296,7 +296,7 @@ class Simulation:
             raise ParameterError("steps", None, "give steps, t_end or a stop rule")
         if self.step == 0 and self.writer is not None and not self.writer.entries:
             # The initial state, with the mesh the first step will be built on.
-            active, local_t = self.mesh_source(self.particles.x)
+            active, local_t = mesh_particles(self.mesh_source, self.particles)
             self.write_output(active[local_t].T, active)
         n_target = None if steps is None else self.step + int(steps)
         progress = Progress(
@@ -470,7 +470,7 @@ class Simulation:
         if self.particles.spacing is not None:  # a refined run's alpha test
             self.mesh_source.spacing = self.particles.spacing
         try:
-            active, local_t = self.mesh_source(self.particles.x)
+            active, local_t = mesh_particles(self.mesh_source, self.particles)
         except ParameterError:
             return
         self.write_output(active[local_t].T, active)

@@ -20,7 +20,7 @@ from ..errors import ParameterError
 from ..mesh.delaunay import p1_mesh
 from ..mesh.operators import strain_operator
 from ..mesh.smoothing import NodalIntegration
-from ..mesh.sources import MeshSource, seal_with
+from ..mesh.sources import MeshSource, mesh_particles
 from ..particles import Particles
 from ..water.forces import darcy_matrix, drained_nodes, projection_matrix, water_force
 from .boundary_jobs import (
@@ -107,8 +107,7 @@ def build_operators(
     start = StepState() if start is None else start
     boundaries = model.boundaries if boundaries is None else boundaries
     time = float(start.time)
-    seal_with(mesh_source, p)
-    active, local_t = mesh_source(p.x)
+    active, local_t = mesh_particles(mesh_source, p)
     active, local_t, dropped = without_spanned(boundaries, p.x, active, local_t, time)
     mesh = p1_mesh(p.x[active], local_t)
     op, h = strain_operator(mesh, model.components, model.axisymmetric)

@@ -23,7 +23,7 @@ from skfem_npfem.limit.analysis import limit_analysis
 from skfem_npfem.mesh.cavities import sealed_cavities
 from skfem_npfem.mesh.delaunay import alpha_shape
 from skfem_npfem.mesh.smoothing import nodal_integration
-from skfem_npfem.mesh.sources import AlphaShapeMesher, seal_with
+from skfem_npfem.mesh.sources import AlphaShapeMesher, mesh_particles, seal_with
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 
@@ -86,6 +86,25 @@ def test_a_mesher_seals_at_its_supports_and_at_its_walls():
     off = AlphaShapeMesher(1.0, 1.3)
     seal_with(off, held)
     assert off.closed is None and off.triangulate(x).volume == pytest.approx(57.0)
+
+
+def test_every_mesh_of_a_run_is_told_the_supports():
+    # mesh_particles (the step's, a baseline's and the written mesh) gives
+    # the mesher the particles' supports before it meshes them: the notch on
+    # the held axis is sealed without a seal_with call before.
+    x = lattice_without(lambda a, b: (a <= 1) & (np.abs(b - 4) <= 1))
+
+    def area(cloud: Cloud) -> float:
+        active, t = mesh_particles(mesher, cloud)
+        a, b, c = x[active][t]  # t: (3, n_triangles), into the active particles
+        e, f = b - a, c - a
+        return 0.5 * np.abs(e[:, 0] * f[:, 1] - e[:, 1] * f[:, 0]).sum()
+
+    mesher = AlphaShapeMesher(1.0, 1.3, seal_cavities=True)
+    held = Cloud(x, np.column_stack([x[:, 0] == 0.0, np.zeros(len(x), bool)]))
+    assert area(held) == pytest.approx(64.0, rel=1e-9)
+    # The supports of the call count, not the last call's.
+    assert area(Cloud(x, np.zeros(x.shape, bool))) == pytest.approx(57.0, rel=1e-9)
 
 
 def test_closed_needs_one_flag_per_particle():

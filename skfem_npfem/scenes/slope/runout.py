@@ -25,6 +25,7 @@ from ...limit.loads import gravity_load
 from ...limit.safety import strength_reduction
 from ...limit.undrained import undrained_materials
 from ...mesh.smoothing import nodal_integration
+from ...mesh.sources import mesh_particles
 from ...run.simulation import Simulation
 from ...step.operators import step_strength
 from ...strength_laws import SHEAR_FROM_EQUIVALENT
@@ -219,7 +220,7 @@ def deposit_factor_of_safety(sim: Simulation, values: Mapping[str, Any]) -> floa
     effective stresses at the end (undrained).
     """
     p = sim.particles
-    active, t = sim.mesh_source(p.x)
+    active, t = mesh_particles(sim.mesh_source, p)
     mesh = MeshTri(np.ascontiguousarray(p.x[active].T), np.ascontiguousarray(t))
     ni = nodal_integration(mesh, (0, 1, 3))
     material = np.asarray(p.material)[active]
