@@ -6,7 +6,9 @@ spacing (B/20), smooth and rough, with ``refine=none``, ``refine=bodies``
 (a particle at the middle of every edge stretched beyond 1.6 times its
 particles' lattice spacing, before each step) and ``refine=strain`` (the
 target spacing halved at the particles that carry half of the last step's
-plastic power, and the edges round them split at 1.6 times it).  For each
+plastic power, and the edges round them split at 1.6 times it), with the
+holes the alpha test opens inside the soil kept meshed (the scene's default)
+and, with ``--footing-holes open``, left open.  For each
 run: the bearing factor at w = 0.1 B, the load drops (``load_drops``: a step
 under 80 % of the running median), the largest one-step fall of q/s_u in the
 second half of the push (relative to the median load there), the particles
@@ -39,7 +41,8 @@ Usage (from the repository root)::
 
     python demos/studies/particle_insertion.py [--out docs/validation]
         [--spacing H] [--parts footing,cone,collapse,slope]
-        [--footing-refine none,bodies,strain] [--cone-refine ...]
+        [--footing-refine none,bodies,strain] [--footing-holes sealed,open]
+        [--cone-refine ...]
         [--collapse-refine none,surface,strain]
 
 Writes ``<out>/particle_insertion.json`` and ``<out>/particle_insertion.inc``
@@ -66,6 +69,9 @@ from soil_profiles import run
 #: plastically (``refine=strain``, the scene's ``refine_share``).
 REFINES = ("none", "bodies", "strain")
 INTERFACES = ("smooth", "rough")
+#: The footing's holes inside the soil: kept meshed (the scene's default,
+#: ``seal_cavities=true``) or opened by the alpha test (``false``).
+HOLES = ("sealed", "open")
 
 
 def largest_fall(curve: list[list[float]]) -> float:
@@ -221,6 +227,12 @@ def main() -> None:
             default=default,
             help=f"the {part}'s refine settings to run (the others kept from the JSON)",
         )
+    ap.add_argument(
+        "--footing-holes",
+        default="sealed",
+        help="the footing's seal_cavities settings to run: sealed (true, the "
+        "default) and/or open (false); the others kept from the JSON",
+    )
     args = ap.parse_args()
     parts = args.parts.split(",")
     path = args.out / "particle_insertion.json"
@@ -257,13 +269,20 @@ def main() -> None:
             for n in SLOPE_RESOLUTIONS:
                 slope.append(slope_case(n, refine))
                 print(slope[-1], flush=True)
-    cases = {(c["interface"], c["refine"]): c for c in old.get("cases", [])}
-    for interface in INTERFACES if "footing" in parts else ():
-        for refine in args.footing_refine.split(","):
+    cases = {(c["interface"], c["refine"], c["holes"]): c for c in old.get("cases", [])}
+    # Each setting sealed and open one after the other: their wall times compare.
+    for interface, refine in (
+        (i, r)
+        for i in (INTERFACES if "footing" in parts else ())
+        for r in args.footing_refine.split(",")
+    ):
+        for holes in args.footing_holes.split(","):
             over = {"spacing": args.spacing, "interface": interface, "refine": refine}
-            m = run("footing-penetration", over)
+            seal = {"seal_cavities": holes == "sealed"}
+            m = run("footing-penetration", {**over, **seal})
             case = {
                 **over,
+                "holes": holes,
                 "bearing_factor": m["bearing_factor"],
                 "final_bearing_factor": m["final_bearing_factor"],
                 "load_drops": m["load_drops"],
@@ -273,13 +292,20 @@ def main() -> None:
                 "stress_roughness_max": m["stress_roughness_max"],
                 "wall_s": m["wall_s"],
             }
-            cases[interface, refine] = case
+            cases[interface, refine, holes] = case
             print(case, flush=True)
-    cases = [cases[i, r] for i in INTERFACES for r in REFINES if (i, r) in cases]
+    cases = [
+        cases[i, r, h]
+        for h in HOLES
+        for i in INTERFACES
+        for r in REFINES
+        if (i, r, h) in cases
+    ]
     rows = []
     for case in cases:
         rows.append(
             [
+                case["holes"],
                 case["interface"],
                 case["refine"],
                 f"{case['bearing_factor']:.3f}",
@@ -293,6 +319,7 @@ def main() -> None:
         )
     table = markdown_table(
         [
+            "holes inside the soil",
             "interface",
             "refine",
             "q/s_u at w = 0.1 B",

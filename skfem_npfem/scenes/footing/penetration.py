@@ -180,13 +180,13 @@ PARAMS = [
     *lattice_params("footing"),
     Param(
         "seal_cavities",
-        False,
+        True,
         "-",
         "true: a hole the alpha test would open inside the soil, reaching the "
         "outside only through supported particles (the symmetry axis, the "
-        "fixed base and side) or not at all, stays meshed (the soil stretched "
-        "along the axis under the footing opens such holes, and the load "
-        "falls for a step)",
+        "fixed base and side) or not at all, stays meshed; false: such holes "
+        "open (the soil stretched along the axis under the footing opens "
+        "them past w = B/2, and the load falls for a step where one does)",
         bool,
     ),
     *method_params(
