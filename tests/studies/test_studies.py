@@ -15,6 +15,7 @@ import math
 from pathlib import Path
 
 import collapse_validation
+import numpy as np
 import pytest
 import speed_accuracy
 
@@ -138,3 +139,34 @@ def test_examples_of_the_studies_helpers():
     for module in (_reporting, _study):
         result = doctest.testmod(module)
         assert result.attempted > 0 and result.failed == 0
+
+
+def test_cone_drops_helpers_count_holes_and_keep_the_face_on_the_cone():
+    """Geometry: a lattice with one cell emptied has one hole; a face particle's
+    velocity from the cone study's map moves normal to the face with the cone."""
+    import cone_drops
+
+    g = np.arange(4.0)
+    x = np.stack(np.meshgrid(g, g), axis=-1).reshape(-1, 2)
+    cells = [
+        (i + 4 * j, i + 1 + 4 * j, i + 5 + 4 * j, i + 4 + 4 * j)
+        for j in range(3)
+        for i in range(3)
+    ]
+    tris = np.array([t for a, b, c, d in cells for t in ((a, b, c), (a, c, d))])
+    assert cone_drops.holes(x, tris) == 0
+    assert cone_drops.holes(x, np.delete(tris, [8, 9], axis=0)) == 1  # the middle cell
+    rng = np.random.default_rng(0)
+    n = rng.normal(size=(5, 2))
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    fixed = np.zeros((5, 2), bool)
+    fixed[0, 0] = True  # on the axis
+    face = np.array([True, True, False, True, False])
+    T = cone_drops.velocity_map(fixed, face, n)
+    V = (T @ np.eye(T.shape[1])[0]).reshape(5, 2)[face, 1]  # column 0: the cone
+    assert np.allclose(V, 1.0)
+    w = rng.normal(size=T.shape[1])
+    u = (T @ w).reshape(5, 2)
+    assert np.allclose(np.sum(u[face] * n[face], axis=1), w[0] * n[face, 1])
+    assert u[0, 0] == 0.0
+    assert T.shape[1] == 1 + 4 + 2  # V, the two free particles' dofs, two slides
