@@ -9,7 +9,8 @@ triangulation of its start positions (the same axisymmetric nodal
 integration, the elements spanning the cone dropped as the step drops them),
 the particles within a quarter spacing of the cone's outline moving with it
 (their velocity normal to the outline the cone's, along it free: ``u = V e_z
-+ a t``, one ``V`` for all), the supports held.  The soil is weightless
++ a t``, one ``V`` for all: ``limit_analysis``'s ``velocity_map``), the
+supports held.  The soil is weightless
 Tresca, so this collapse force is a property of the particles' positions
 alone.  Beside it: the step's cone force, the holes of the step's mesh (closed
 loops of its boundary other than the outline of the soil) and where the
@@ -43,13 +44,11 @@ from _reporting import markdown_table
 from scipy.sparse.csgraph import connected_components
 
 import skfem_npfem as npfem
-from skfem_npfem.limit.analysis import associated
-from skfem_npfem.limit.program import assemble, scaling, solve, static_program
+from skfem_npfem.limit.analysis import limit_analysis
 from skfem_npfem.mesh.delaunay import p1_mesh
 from skfem_npfem.mesh.operators import strain_operator
 from skfem_npfem.scenes.footing.cone import build, shoulder_height, sizes
 from skfem_npfem.step.boundary_jobs import without_spanned
-from skfem_npfem.step.solver import SolverOptions
 
 #: Particles this close to the cone's outline (in spacings) move with it.
 REACH = 0.25
@@ -103,28 +102,24 @@ def collapse_force(sim, x0: np.ndarray, fixed0: np.ndarray, t0: float) -> dict:
     dist, normal, _ = model.bodies[0].signed_distance(xa, t0)
     face = dist < REACH * h
     fixed = np.asarray(fixed0, bool)[active]
-    T = velocity_map(fixed, face, normal)
-    f0 = np.zeros((active.size, 2))
-    prog = static_program(
+    # The smooth cone pushes normal to its outline: a normal reference load on
+    # the face (unit total, downward) does work through the cone's unknown only.
+    pushed = face & (normal[:, 1] < 0.0)
+    load = np.zeros((active.size, 2))
+    load[pushed] = -normal[pushed] / normal[pushed, 1].sum()
+    res = limit_analysis(
         op,
-        [associated(m) for m in model.materials],
+        model.materials,
         np.asarray(sim.particles.material)[active],
-        f0,
-        fixed | face[:, None],
-        None,
+        load,
+        fixed=fixed,
+        velocity_map=velocity_map(fixed, face, normal),
     )
-    f1 = np.zeros((active.size, 2))
-    f1[face, 1] = -1.0 / face.sum()
-    f1_red = np.zeros(T.shape[1])
-    f1_red[0] = -1.0  # a unit force on the cone, downward
-    lp = assemble(op, prog, T, T.shape[1], f1_red, f0, None)
-    col, row, lam_star = scaling(op, prog, lp, f0, f1)
-    res, x, z = solve(lp, col, row, lam_star, SolverOptions(), 2)
-    u = -(T @ z[: T.shape[1]]).reshape(-1, 2)
+    u = res.velocity
     speed = np.linalg.norm(u, axis=1)
     k = int(np.argmax(speed))
     return {
-        "collapse": float(x[-1]),
+        "collapse": float(res.multiplier),
         "status": res.status,
         "fastest": float(speed[k] / np.abs(u[face, 1]).max()),
         "fastest_at": xa[k].tolist(),

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..errors import ParameterError
 from ..materials import Material
@@ -137,6 +138,29 @@ def _strain_operator(operator: Any, materials: list[Material]) -> Any:
     if d == 2 and any(m.needs_zz(2) for m in materials):
         comp = (0, 1, 2, 3)
     return nodal_integration(operator, comp)
+
+
+def _checked_map(velocity_map: Any, tied: Any, n_dofs: int) -> tuple[Any, int]:
+    """``velocity_map`` as a CSC matrix and its number of unknowns, checked.
+
+    Raises
+    ------
+    ParameterError
+        If it is not ``(n_dofs, n)`` with ``n >= 1`` and finite entries, or
+        if ``tied`` is given beside it.
+    """
+    if tied is not None:
+        raise ParameterError(
+            "tied", "given with velocity_map", "None (put the ties in the map)"
+        )
+    T = sp.csc_matrix(velocity_map, dtype=float)
+    if T.shape[0] != n_dofs or T.shape[1] < 1 or not np.all(np.isfinite(T.data)):
+        raise ParameterError(
+            "velocity_map",
+            f"matrix of shape {T.shape}",
+            f"a finite ({n_dofs}, n) matrix, n >= 1 (d N rows, node-major)",
+        )
+    return T, int(T.shape[1])
 
 
 def _checked_loads(
@@ -241,6 +265,7 @@ def limit_analysis(
     plastic_fraction: float = PLASTIC_FRACTION,
     max_multiplier: float | None = None,
     strength: np.ndarray | None = None,
+    velocity_map: Any = None,
 ) -> LimitResult:
     """Collapse multiplier of a reference load, as one cone program.
 
@@ -275,6 +300,14 @@ def limit_analysis(
     strength : ndarray (n_p,), optional
         Factor on each point's cohesive strength (a soil profile,
         :attr:`~skfem_npfem.Particles.strength`); default 1.
+    velocity_map : sparse matrix (d N, n), optional
+        The nodal velocities (node-major) as a linear map of ``n`` unknowns,
+        for kinematics that ``fixed`` and ``tied`` cannot say: a node on a
+        smooth rigid body's face moves with the body normal to the face and
+        freely along it (``u = V e + a t``).  It replaces the map ``fixed``
+        and ``tied`` make (``tied`` must then be None; ``fixed`` still marks
+        the supports of the program's data).  The reference load must do work
+        through it (``velocity_map^T load`` not zero).
 
     Returns
     -------
@@ -301,7 +334,10 @@ def limit_analysis(
     d, N = operator.dim, operator.n_nodes
     load, f0, fixed = _checked_loads(load, dead_load, fixed, N, d)
     prog = static_program(operator, materials, material, f0, fixed, strength)
-    T, n_red = dof_map(d * N, fixed.reshape(-1), list(tied or []))
+    if velocity_map is None:
+        T, n_red = dof_map(d * N, fixed.reshape(-1), list(tied or []))
+    else:
+        T, n_red = _checked_map(velocity_map, tied, d * N)
     f1 = load.reshape(-1)
     f1_red = T.T @ f1
     if not np.any(f1_red):

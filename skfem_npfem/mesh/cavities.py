@@ -6,7 +6,7 @@ the symmetry axis), a few elongated simplices inside the body can fail it and
 open a hole that reaches no free surface: the particles round it then move
 into it at little cost and the body's collapse load falls for a step (on the
 pushed footing the collapse load of the configuration a dip step starts from
-is about 0.63 of its neighbours'; docs/validation/footing_drops.md).  A failed
+is about 0.63 of its neighbours'; docs/validation/particle_insertion.md).  A failed
 region is a real opening only where it reaches the outside of the particle
 cloud through particles that are free to part from it; where its only way out
 is onto supports (particles whose velocity is prescribed in a direction: a

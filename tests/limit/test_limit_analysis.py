@@ -353,3 +353,45 @@ def test_a_failed_limit_program_carries_the_limit_hint(monkeypatch):
         )  # fmt: skip
     assert limit_hint("NumericalError") in str(err.value)
     assert "load steps" not in str(err.value)
+
+
+def test_a_velocity_map_says_the_same_kinematics_in_any_basis():
+    """The multiplier is a property of the admissible velocities, not of their basis.
+
+    The smooth footing's tie as a velocity map gives the tied program's
+    multiplier; the same velocities in another basis (each free node's two
+    dofs rotated by 30 degrees, the footing's unknown scaled by 3) give it
+    too; a map beside ``tied``, or of the wrong size, is refused.
+    """
+    import scipy.sparse as sp
+
+    from skfem_npfem.limit.program import dof_map
+
+    mesh, fixed, foot, load = footing_problem()
+    mat = npfem.MohrCoulomb(1e8, 0.3, c=1.0, phi=20.0)
+    zero = np.zeros(mesh.p.shape[1], int)
+    tied = npfem.limit_analysis(
+        mesh, [mat], zero, load, fixed=fixed, tied=[2 * foot + 1]
+    ).multiplier
+    T, _ = dof_map(fixed.size, fixed.reshape(-1), [2 * foot + 1])
+    same = npfem.limit_analysis(mesh, [mat], zero, load, fixed=fixed, velocity_map=T)
+    assert same.multiplier == pytest.approx(tied, rel=1e-9)
+    # Another basis: free nodes rotated, the footing's column scaled.
+    n = fixed.shape[0]
+    rot = np.eye(2 * n)
+    c, s = math.cos(math.pi / 6), math.sin(math.pi / 6)
+    for k in np.flatnonzero(~fixed.any(axis=1) & ~np.isin(np.arange(n), foot)):
+        rot[2 * k : 2 * k + 2, 2 * k : 2 * k + 2] = [[c, -s], [s, c]]
+    scale = np.ones(T.shape[1])
+    scale[np.flatnonzero(T[2 * foot[0] + 1].toarray())] = 3.0
+    other = sp.csc_matrix(rot) @ T @ sp.diags(scale)
+    turned = npfem.limit_analysis(
+        mesh, [mat], zero, load, fixed=fixed, velocity_map=other
+    )
+    assert turned.multiplier == pytest.approx(tied, rel=1e-6)
+    with pytest.raises(npfem.ParameterError, match="tied"):
+        npfem.limit_analysis(
+            mesh, [mat], zero, load, fixed=fixed, tied=[2 * foot + 1], velocity_map=T
+        )
+    with pytest.raises(npfem.ParameterError, match="velocity_map"):
+        npfem.limit_analysis(mesh, [mat], zero, load, velocity_map=T[:-2])
