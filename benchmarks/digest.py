@@ -90,9 +90,9 @@ CASES: dict[str, tuple[str, dict]] = {
     ),
     "strip-footing-limit": (
         "strip-footing",
-        {"analysis": "limit", "spacing": 0.25, "domain_width": 5},
+        {"analysis": "limit", "refine": "none", "spacing": 0.25, "domain_width": 5},
     ),
-    "slope-limit": ("slope", {"analysis": "limit", "spacing": 2.0}),
+    "slope-limit": ("slope", {"analysis": "limit", "refine": "none", "spacing": 2.0}),
     "slope-runout": (
         "slope",
         {"spacing": 2.0, "runout": "true", "t_end": 0.5, "phi": 10.0},

@@ -16,6 +16,12 @@ than ``refine_tol``), from the coarsest lattice:
 3. **N_c at phi = 40 deg** (``strip-footing``, smooth, weightless): against
    Prandtl's exact 75.31.
 
+Then ``strip-footing --set analysis=limit`` as a user runs it, at the scene's
+own lattice (B/25), uniform (``refine=none``) and at the default
+(``refine=strain``): Tresca smooth and rough, phi = 20 deg rough and phi = 30
+deg smooth, against Prandtl's exact N_c of a weightless soil (the same for a
+smooth and a rough footing).
+
 Every run is one process, one after another, on the same machine: the wall
 times compare.
 
@@ -62,6 +68,55 @@ ADAPTIVE = (
 )
 
 
+#: The footing's own limit analyses: (label, parameters, phi).
+DEFAULT_FOOTINGS = (
+    ("Tresca, smooth", {}, 0.0),
+    ("Tresca, rough", {"interface": "rough"}, 0.0),
+    (
+        "phi = 20, rough",
+        {"material": "mohr-coulomb", "phi": 20.0, "c": 1.0e3, "interface": "rough"},
+        20.0,
+    ),
+    ("phi = 30, smooth", {"material": "mohr-coulomb", "phi": 30.0, "c": 1.0e3}, 30.0),
+)
+
+
+def defaults() -> list[dict]:
+    """The footing at its own lattice: uniform, then the default refinement."""
+    rows = []
+    for label, over, phi in DEFAULT_FOOTINGS:
+        for refine in ("none", "strain"):
+            base = {"analysis": "limit", **over, "refine": refine}
+            m = run("strip-footing", base)
+            rows.append(
+                {
+                    "case": label,
+                    "refine": refine,
+                    "value": m["bearing_factor"],
+                    "reference": prandtl_nc(phi),
+                    "particles": m["n_particles"],
+                    "wall_s": m["wall_s"],
+                }
+            )
+            print(label, refine, m["bearing_factor"], f"{m['wall_s']:.1f} s")
+    return rows
+
+
+def defaults_table(rows: list[dict]) -> str:
+    """The footing's defaults as a markdown table."""
+    lines = [
+        "| footing | refine | particles | N_c | Prandtl | error | wall (s) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        lines.append(
+            f"| {r['case']} | {r['refine']} | {r['particles']} | {r['value']:.4f} | "
+            f"{r['reference']:.4f} | {r['value'] / r['reference'] - 1:+.2%} | "
+            f"{r['wall_s']:.1f} |"
+        )
+    return "\n".join(lines).replace("%", " %")
+
+
 def row(label: str, value: float, n: int, wall: float, history=None) -> dict:
     """One table row."""
     return {
@@ -77,7 +132,7 @@ def series(scene, base, spacings, value, count, labels) -> list[dict]:
     """Uniform lattices at ``spacings``, then the adaptive runs from the first."""
     rows = []
     for h, lab in zip(spacings, labels, strict=True):
-        m = run(scene, {**base, "spacing": h})
+        m = run(scene, {**base, "spacing": h, "refine": "none"})
         rows.append(row(lab, value(m), count(m), m["wall_s"]))
         print(scene, lab, rows[-1]["value"], f"{m['wall_s']:.1f} s", flush=True)
     for over in ADAPTIVE:
@@ -151,10 +206,12 @@ def main() -> None:
         foot_lab,
     )
     gl_ref, gl_order = richardson([r["value"] for r in gl[:n]])
+    own = defaults()
     report = {
         "vertical_cut": {"reference": CUT_REF, "rows": cut},
         "griffiths_lane": {"reference": gl_ref, "order": gl_order, "rows": gl},
         "nc_phi40": {"reference": prandtl_nc(40.0), "rows": nc},
+        "footing_defaults": own,
     }
     text = "\n\n".join(
         [
@@ -166,6 +223,7 @@ def main() -> None:
     text += (
         f"\n\nGriffiths & Lane's reference: {gl_ref:.4f}, extrapolated from the "
         f"three finest uniform lattices (observed order {gl_order:.2f}).\n"
+        f"\n{defaults_table(own)}\n"
     )
     write_results(
         args.out / "adaptive_limit.json", json.dumps(report, indent=1) + "\n", text

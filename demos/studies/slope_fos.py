@@ -4,9 +4,10 @@
 Part 1: the homogeneous 2:1 slope of Griffiths & Lane (1999, example 1: H = 10
 m, phi' = 20 deg, c'/(gamma H) = 0.05, no foundation layer), whose factor of
 safety from Bishop & Morgenstern's charts is 1.38, by ``slope --set
-analysis=limit`` at H/5 ... H/20: F, its error, the cone programs and the wall
-time.  Part 2: the cost per stage (initial stresses, factor of safety,
-run-out) of a staged run with ``runout=true`` on a small dry-sand cut.
+analysis=limit --set refine=none`` (uniform lattices) at H/5 ... H/20: F, its
+error, the cone programs and the wall time. Part 2: the cost per stage (initial
+stresses, factor of safety, run-out) of a staged run with ``runout=true`` on a
+small dry-sand cut.
 
 Usage (from the repository root)::
 
@@ -34,6 +35,7 @@ import skfem_npfem as npfem
 REFERENCE = 1.38
 SLOPE = {
     "analysis": "limit",
+    "refine": "none",  # the uniform lattice at each spacing
     "height": 10.0,
     "angle": math.degrees(math.atan(0.5)),
     "foundation_depth": 0.0,

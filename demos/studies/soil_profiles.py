@@ -55,7 +55,7 @@ from skfem_npfem.laws import davis_booker_factor
 #: Davis & Booker's smooth strip at k B / s_u0 = 4 (PLAXIS 2D Validation
 #: Manual, section 3.2), Pa.
 DAVIS_BOOKER_Q = 7.80e3
-FOOTING = {"analysis": "limit", "c": 1.0e3, "width": 2.0}
+FOOTING = {"analysis": "limit", "refine": "none", "c": 1.0e3, "width": 2.0}
 DB_SPACINGS = (0.1, 0.05, 0.025)
 F_SPACINGS = (0.05, 0.025)
 KAPPAS = (0.0, 1.0, 2.0, 4.0, 10.0)

@@ -39,7 +39,8 @@ ANALYSES = ("incremental", "limit")
 #: Metrics every limit-mode summary has.
 LIMIT_METRICS = {
     "collapse_multiplier": "analysis=limit: collapse multiplier of the reference "
-    "load, one cone program on the initial mesh",
+    "load, one cone program on the initial mesh (with refine=strain, the default, "
+    "on the last lattice of refine_history)",
     "limit_status": "analysis=limit: Clarabel status of the (last) limit program",
     "cone_programs": "analysis=limit: cone programs solved",
     "plastic_fraction": "analysis=limit: volume fraction of the plastic zone of the "
@@ -69,7 +70,9 @@ def analysis_param(incremental: str) -> Param:
         "incremental",
         "-",
         f"incremental: {incremental}; limit: the collapse multiplier as one cone "
-        "program on the initial mesh (no elasticity, no steps)",
+        "program on the initial mesh (no elasticity, no steps), solved again on "
+        "lattices refined where its mechanism dissipates (refine=strain, the "
+        "default with limit)",
         str,
         ANALYSES,
     )

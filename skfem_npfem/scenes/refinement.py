@@ -17,6 +17,7 @@ limit analysis") says why the plastic power is the indicator.
 from __future__ import annotations
 
 import math
+import sys
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -26,6 +27,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..mesh.refine import mark_share, split_around
+from ..run.control import end_line
 from ..run.refining import Refiner
 from .params import POSITIVE, Param
 
@@ -40,6 +42,7 @@ __all__ = [
     "check_refine",
     "insert_metrics",
     "insert_params",
+    "progress_lines",
     "refiner_from",
     "strategies",
 ]
@@ -49,20 +52,28 @@ REFINE_CHOICES = ("none", "strain")
 
 
 def strategies(values: Mapping[str, Any]) -> frozenset[str]:
-    """The strategies ``refine`` names (``a+b`` names two; ``none``: none)."""
-    chosen = str(values.get("refine", "none")).split("+")
-    return frozenset(s for s in chosen if s != "none")
+    """The strategies ``refine`` names (``a+b`` names two; ``none``: none).
+
+    An unset ``refine`` (None) is its default: ``strain`` with
+    ``analysis=limit`` (the adaptive limit analysis wins on accuracy for the
+    wall time, docs/validation/adaptive_limit.md), ``none`` otherwise.
+    """
+    refine = values.get("refine", "none")
+    if refine is None:
+        refine = "strain" if values.get("analysis") == "limit" else "none"
+    return frozenset(s for s in str(refine).split("+") if s != "none")
 
 
 REFINE_PARAMS = [
     Param(
         "refine",
-        "none",
+        None,
         "-",
         "analysis=limit: none (the uniform lattice) or strain (adaptive: the "
         "spacing is halved where the collapse mechanism's plastic power "
         "concentrates and the program solved again, until the result changes "
-        "by less than refine_tol in two successive cycles)",
+        "by less than refine_tol in two successive cycles; default strain "
+        "with analysis=limit, none otherwise)",
         str,
         REFINE_CHOICES,
     ),
@@ -191,7 +202,7 @@ INSERT_PARAMS = insert_params(
 SLOPE_REFINE_PARAMS = [
     Param(
         "refine",
-        "none",
+        None,
         "-",
         "none (the uniform lattice), strain (the factor of safety adaptive: "
         "the spacing is halved where its mechanism's plastic power "
@@ -202,7 +213,8 @@ SLOPE_REFINE_PARAMS = [
         "the middle of every edge stretched beyond refine_ratio times its "
         "particles' spacing, where the sliding soil thins; mass and momentum "
         "kept; it also fills the crack behind the slide, so the crest settles "
-        "less) or strain+surface (both)",
+        "less) or strain+surface (both); default strain with analysis=limit, "
+        "none otherwise",
         str,
         ("none", "strain", "surface", "strain+surface"),
     ),
@@ -311,17 +323,18 @@ class Adapted(Generic[B]):
 
 
 def check_refine(
-    values: Mapping[str, Any],
+    values: dict[str, Any],
     limit_stage: bool = False,
     insertion: str | None = None,
     runs: bool = False,
 ) -> None:
-    """Refuse a ``refine`` strategy the run would not use.
+    """Fill ``refine``'s default in place; refuse a strategy the run would not use.
 
     Parameters
     ----------
-    values : mapping
-        ``refine`` and ``analysis``.
+    values : dict
+        ``refine`` (None: ``strain`` with ``analysis=limit``, else ``none``,
+        :func:`strategies`) and ``analysis``.
     limit_stage : bool
         The scene's incremental run has a limit analysis of its own (the
         slope's factor of safety), which ``strain`` refines.
@@ -331,6 +344,8 @@ def check_refine(
         The scene steps (so that ``insertion`` has a run to act on).
     """
     chosen = strategies(values)
+    if values.get("refine") is None:
+        values["refine"] = "+".join(sorted(chosen)) or "none"
     limit = values.get("analysis") == "limit"
     if "strain" in chosen and not (limit or limit_stage):
         raise ParameterError(
@@ -357,6 +372,7 @@ def adapt(
     solve: Callable[[B], tuple[Any, float, np.ndarray]],
     points: Callable[[B], tuple[np.ndarray, np.ndarray]],
     rebuild: Callable[[np.ndarray], B],
+    report: Callable[[str], None] | None = None,
 ) -> Adapted[B]:
     """Solve, refine where the mechanism dissipates, solve again.
 
@@ -374,6 +390,10 @@ def adapt(
         triangles (3, m).
     rebuild : callable
         ``rebuild(pts) -> body``: a lattice on new points.
+    report : callable, optional
+        Called with one line per cycle (particles, result, its change, the
+        cycle's seconds): a long adaptive run's progress
+        (:func:`progress_lines`).
 
     Returns
     -------
@@ -383,6 +403,8 @@ def adapt(
     t0 = time.perf_counter()
     result, number, power = solve(body)
     history.append([len(points(body)[0]), number, time.perf_counter() - t0])
+    if report is not None:
+        report(_cycle_line(values, history))
     small = 0  # successive cycles whose change was below the tolerance
     for _ in range(values["refine_cycles"]):
         pts, t = points(body)
@@ -391,9 +413,38 @@ def adapt(
         new_body = rebuild(split_around(pts, t, marked))
         new_result, new_number, new_power = solve(new_body)
         history.append([len(points(new_body)[0]), new_number, time.perf_counter() - t0])
+        if report is not None:
+            report(_cycle_line(values, history))
         change = abs(new_number - number) / max(abs(new_number), 1e-300)
         body, result, number, power = new_body, new_result, new_number, new_power
         small = small + 1 if change < values["refine_tol"] else 0
         if small == 2:
             return Adapted(body, result, history, True)
     return Adapted(body, result, history, False)
+
+
+def _cycle_line(values: Mapping[str, Any], history: list[list[float]]) -> str:
+    """One progress line of an adaptive limit analysis (the last cycle)."""
+    n, number, seconds = history[-1]
+    k = len(history) - 1
+    head = f"refine=strain cycle {k}/{values['refine_cycles']}: {int(n)} particles"
+    if k == 0:
+        return f"{head}, result {number:.6g} (the given lattice), {seconds:.1f} s"
+    change = number / history[-2][1] - 1.0
+    return f"{head}, result {number:.6g} ({100 * change:+.2f} %), {seconds:.1f} s"
+
+
+def progress_lines(enabled: bool) -> Callable[[str], None] | None:
+    """A reporter that prints each line on stderr (None: ``enabled`` false).
+
+    The progress of a limit analysis's refinement cycles, which take no time
+    steps (a run's steps have :class:`~skfem_npfem.run.control.Progress`).
+    """
+    if not enabled:
+        return None
+
+    def report(line: str) -> None:
+        end_line()
+        print(line, file=sys.stderr, flush=True)
+
+    return report

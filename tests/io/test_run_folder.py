@@ -106,7 +106,7 @@ def test_a_run_whose_set_up_fails_keeps_the_earlier_results(used, monkeypatch):
         raise npfem.NpfemError("injected: strength reduction found no factor")
 
     monkeypatch.setattr(slope_stages, "strength_reduction", broken)
-    argv = ["run", "slope", "--set", "analysis=limit", "--set", "spacing=2"]
+    argv = "run slope --set analysis=limit --set refine=none --set spacing=2".split()
     code, err = cli([*argv, "--out", str(d), "--quiet"])
     assert code == 2 and err.startswith("error:") and "injected" in err, err
     assert files(d) == before
@@ -243,7 +243,7 @@ def test_a_commit_cut_short_is_finished_by_the_next_run(tmp_path, monkeypatch):
 @pytest.mark.parametrize("summary", ["summary.json", "s.json"])
 def test_a_fresh_run_replaces_the_mechanism_and_summary(tmp_path, summary):
     m = tmp_path / "M"
-    argv = ["run", "slope", "--set", "analysis=limit", "--set", "spacing=2"]
+    argv = "run slope --set analysis=limit --set refine=none --set spacing=2".split()
     assert cli([*argv, "--out", str(m), "--summary", str(m / summary)])[0] == 0
     assert {"mechanism.npz", summary} <= set(files(m))
     assert cli([*EARLIER, "--out", str(m)])[0] == 0

@@ -10,11 +10,15 @@ mechanism's plastic power is reaches them on far fewer particles
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 from adaptive_limit import CUT as CUT_STUDY  # demos/studies (tests/conftest.py)
 from adaptive_limit import CUT_REF
 from scipy.spatial import Delaunay
+from slope_fos import SLOPE as GRIFFITHS_LANE
 
 import skfem_npfem as npfem
 from skfem_npfem import ParameterError
@@ -25,6 +29,7 @@ from skfem_npfem.scenes.refinement import adapt
 
 CUT = {**CUT_STUDY, "spacing": 1.0}
 VERTICAL_CUT = CUT_REF
+STUDY = Path(__file__).resolve().parents[2] / "docs/validation/adaptive_limit.json"
 
 
 def test_mark_share_takes_the_fewest_nodes_that_carry_the_share():
@@ -53,7 +58,16 @@ def test_split_around_adds_the_midpoints_of_the_touched_edges_only():
 
 @pytest.fixture(scope="module")
 def cut() -> dict:
-    return npfem.run_scene("slope", {**CUT, "refine": "strain"})["metrics"]
+    # At the defaults: analysis=limit refines (refine=strain) unless told not to.
+    return npfem.run_scene("slope", CUT)["metrics"]
+
+
+def test_limit_analysis_refines_by_default_and_runs_keep_their_lattice():
+    for scene in ("slope", "strip-footing"):
+        sc = get_scene(scene)
+        assert sc.resolve({"analysis": "limit"})["refine"] == "strain"
+        assert sc.resolve({})["refine"] == "none"
+        assert sc.resolve({"analysis": "limit", "refine": "none"})["refine"] == "none"
 
 
 def test_adaptive_vertical_cut_is_within_one_percent(cut):
@@ -72,9 +86,26 @@ def test_adaptive_vertical_cut_is_within_one_percent(cut):
 
 
 @pytest.mark.filterwarnings("ignore:.* limit program")
+def test_griffiths_lane_slope_at_the_defaults_beats_a_finer_uniform_lattice():
+    # The reference is extrapolated from the uniform H/20, H/40 and H/80 of the
+    # committed study (Richardson, 1.3757), not from an adaptive run.
+    study = json.loads(STUDY.read_text())["griffiths_lane"]
+    ref = study["reference"]
+    h40 = next(r for r in study["rows"] if r["label"] == "H/40")
+    defaults = {k: v for k, v in GRIFFITHS_LANE.items() if k != "refine"}
+    m = npfem.run_scene("slope", {**defaults, "spacing": 1.0})["metrics"]
+    error = abs(m["factor_of_safety"] / ref - 1)
+    # Measured +0.12 % on 3 808 particles; the uniform H/40 is +0.41 % on 5 828.
+    assert error < 0.01
+    assert error < abs(h40["value"] / ref - 1)
+    assert m["n_particles"] < h40["particles"]
+    assert m["cone_programs"] > len(m["refine_history"])  # every cycle counted
+
+
+@pytest.mark.filterwarnings("ignore:.* limit program")
 def test_adaptive_footing_is_closer_to_prandtl():
     over = {"analysis": "limit", "material": "mohr-coulomb", "phi": 40.0, "c": 1.0e3}
-    uniform = npfem.run_scene("strip-footing", over)["metrics"]
+    uniform = npfem.run_scene("strip-footing", {**over, "refine": "none"})["metrics"]
     # A 1 % tolerance keeps the test short: two cycles (the default 0.5 %
     # takes three, -0.50 % in about a minute; docs/validation/adaptive_limit.md).
     coarse = {**over, "refine": "strain", "refine_tol": 0.01}
@@ -129,3 +160,15 @@ def test_the_slope_refines_its_factor_of_safety_before_a_run_out_too():
         sc.resolve({"refine": "surface", "analysis": "limit"})
     with pytest.raises(ParameterError, match="runout=true"):
         sc.resolve({"refine": "strain+surface", "analysis": "incremental"})
+
+
+def test_each_refinement_cycle_reports_a_progress_line(capsys):
+    over = {"analysis": "limit", "spacing": 0.125, "refine_cycles": 2}
+    m = npfem.run_scene("strip-footing", over, progress=True)["metrics"]
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if "cycle" in ln]
+    history = m["refine_history"]
+    assert len(lines) == len(history) == m["cone_programs"]
+    assert lines[0].startswith("refine=strain cycle 0/2: 900 particles")
+    assert f"{history[-1][1]:.6g}" in lines[-1]
+    npfem.run_scene("strip-footing", over)  # progress=False by default
+    assert "cycle" not in capsys.readouterr().err

@@ -87,7 +87,9 @@ def test_duality_and_mechanism():
 
 def test_matches_the_incremental_plateau():
     """Same mesh: the one program equals the settlement steps' plateau (0.15 %)."""
-    limit = npfem.run_scene("strip-footing", {"analysis": "limit", "spacing": 0.125})
+    limit = npfem.run_scene(
+        "strip-footing", {"analysis": "limit", "refine": "none", "spacing": 0.125}
+    )
     steps = npfem.run_scene("strip-footing", {"spacing": 0.125})
     n_limit = limit["metrics"]["bearing_factor"]
     n_steps = steps["metrics"]["bearing_factor"]
@@ -102,6 +104,7 @@ def test_scene_limit_mode_phi30():
         "strip-footing",
         {
             "analysis": "limit",
+            "refine": "none",
             "material": "mohr-coulomb",
             "phi": 30.0,
             "spacing": 0.0625,
@@ -181,7 +184,9 @@ def test_a_limit_run_reports_its_cone_programs_not_zero_steps():
     """Reproducer: a limit run's headline said "0 steps, 0 IPM iterations"."""
     out = io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
-        argv = ["run", "slope", "--set", "analysis=limit", "--set", "spacing=1.0"]
+        argv = (
+            "run slope --set analysis=limit --set refine=none --set spacing=1.0".split()
+        )
         assert main(argv) == 0
     head = out.getvalue().splitlines()[0]
     metrics = dict(
@@ -227,7 +232,12 @@ def test_bad_input():
     with pytest.raises(npfem.ParameterError, match="method"):
         npfem.run_scene(
             "strip-footing",
-            {"analysis": "limit", "method": "fem-remap", "spacing": 0.25},
+            {
+                "analysis": "limit",
+                "refine": "none",
+                "method": "fem-remap",
+                "spacing": 0.25,
+            },
         )
 
 
@@ -282,7 +292,7 @@ def test_a_block_shallower_than_the_mechanism_overestimates():
 @pytest.mark.parametrize("phi", [60.0, 70.0, 80.0, 85.0])
 def test_strip_footing_refuses_a_block_the_mechanism_does_not_fit(phi):
     code, err = run_cli(
-        ["run", "strip-footing", "--set", "analysis=limit",
+        ["run", "strip-footing", "--set", "analysis=limit", "--set", "refine=none",
          "--set", "material=mohr-coulomb", "--set", f"phi={phi:g}"]
     )  # fmt: skip
     need = MECHANISM_MARGIN * prandtl_depth(phi)
@@ -292,7 +302,7 @@ def test_strip_footing_refuses_a_block_the_mechanism_does_not_fit(phi):
 def test_the_refusal_names_a_block_and_a_phi_that_hold_the_mechanism():
     """phi = 55 in a 10 b block: refused; in the block the message names, N_c holds."""
     code, err = run_cli(
-        ["run", "strip-footing", "--set", "analysis=limit",
+        ["run", "strip-footing", "--set", "analysis=limit", "--set", "refine=none",
          "--set", "material=mohr-coulomb", "--set", "phi=55"]
     )  # fmt: skip
     line = check_cli_error(
@@ -305,7 +315,7 @@ def test_the_refusal_names_a_block_and_a_phi_that_hold_the_mechanism():
     ), line
     res = npfem.run_scene(
         "strip-footing",
-        {"analysis": "limit", "material": "mohr-coulomb", "phi": 55.0,
+        {"analysis": "limit", "refine": "none", "material": "mohr-coulomb", "phi": 55.0,
          "domain_width": 14.0, "spacing": 0.125},
     )  # fmt: skip
     assert res["metrics"]["limit_status"] == "Solved"
@@ -316,7 +326,7 @@ def test_the_block_check_leaves_tresca_alone():
     """Tresca has no friction angle: a 2 b block is not refused for Tresca,
     though it is for Mohr-Coulomb at phi = 20 (needs 1.2 x 2.32 b)."""
     scene = npfem.get_scene("strip-footing")
-    shallow = {"analysis": "limit", "domain_width": 2.0}
+    shallow = {"analysis": "limit", "refine": "none", "domain_width": 2.0}
     check_limit_method(scene.resolve({**shallow, "material": "tresca"}))
     frictional = {**shallow, "material": "mohr-coulomb", "phi": 20.0}
     with pytest.raises(npfem.ParameterError, match="domain_width"):

@@ -28,7 +28,9 @@ PROFILE = {"c": 1.0e3, "su_gradient": 2.0e3, "width": 2.0}
 def test_smooth_footing_on_a_strength_gradient_is_davis_booker():
     # h = B/40: measured +0.65 % (+2.2 % at B/20, +0.37 % at B/80: converging
     # from above to within the reference's three digits)
-    m = run_scene(SCENE, {**PROFILE, "analysis": "limit", "spacing": 0.05})["metrics"]
+    m = run_scene(
+        SCENE, {**PROFILE, "analysis": "limit", "refine": "none", "spacing": 0.05}
+    )["metrics"]
     assert m["q_ult"] == pytest.approx(DAVIS_BOOKER, rel=0.03)
     F = m["q_ult"] / ((2 + math.pi) * 1.0e3 + 2.0e3 * 2.0 / 4)
     assert m["heterogeneity_factor"] == pytest.approx(F, rel=1e-12)
@@ -42,7 +44,13 @@ def test_davis_booker_factor_at_three_gradients(kappa, interface):
     # measured smooth +1.6 / +1.3 / +0.0 %, rough +2.0 / +1.3 / +1.2 % at
     # k B / s_u0 = 1 / 2 / 4 (converging from above; B/80 in
     # docs/validation/soil_profiles.md)
-    over = {**PROFILE, "analysis": "limit", "spacing": 0.05, "interface": interface}
+    over = {
+        **PROFILE,
+        "analysis": "limit",
+        "refine": "none",
+        "spacing": 0.05,
+        "interface": interface,
+    }
     over["su_gradient"] = kappa * 1.0e3 / 2.0
     m = run_scene(SCENE, over)["metrics"]
     assert m["heterogeneity_factor"] == pytest.approx(
@@ -56,7 +64,7 @@ def test_the_gradient_raises_the_load_above_the_uniform_clay():
     # adds at least k B / 4 (F >= 1: the surface strength's mechanism, with
     # stronger soil below it, carries at least its uniform load plus the
     # gradient's) and a rough base carries more than a smooth one.
-    over = {**PROFILE, "analysis": "limit", "spacing": 0.1}
+    over = {**PROFILE, "analysis": "limit", "refine": "none", "spacing": 0.1}
     uniform = run_scene(SCENE, {**over, "su_gradient": 0.0})["metrics"]
     smooth = run_scene(SCENE, over)["metrics"]
     rough = run_scene(SCENE, {**over, "interface": "rough"})["metrics"]
@@ -71,7 +79,7 @@ def test_incremental_run_reaches_the_limit_load():
     # same spacing (measured 7966 against 7970 Pa): within 1 %.
     over = {**PROFILE, "spacing": 0.1, "domain_width": 10.0}
     pushed = run_scene(SCENE, over)["metrics"]
-    limit = run_scene(SCENE, {**over, "analysis": "limit"})["metrics"]
+    limit = run_scene(SCENE, {**over, "analysis": "limit", "refine": "none"})["metrics"]
     assert pushed["plateau_reached"]
     assert pushed["q_ult"] == pytest.approx(limit["q_ult"], rel=0.01)
 
@@ -98,7 +106,13 @@ def test_layered_clay_under_the_footing():
     # clay's: the load is the top clay's (within 1 %).  A weak clay can only
     # lower it (the mechanism seeks it out: measured -9 % for one at 0.3 c
     # 3 m down), and 0.5 m down by more than 10 %.
-    over = {"c": 1.0e3, "width": 2.0, "analysis": "limit", "spacing": 0.1}
+    over = {
+        "c": 1.0e3,
+        "width": 2.0,
+        "analysis": "limit",
+        "refine": "none",
+        "spacing": 0.1,
+    }
     uniform = run_scene(SCENE, over)["metrics"]["q_ult"]
 
     def q(layers: str) -> float:

@@ -191,8 +191,12 @@ def test_factor_of_safety_reports_the_value_at_twice_the_spacing():
     """The hint is the factor of safety of the same slope at twice the spacing."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        fine = npfem.run_scene("slope", {"analysis": "limit", "spacing": 2.0})
-        coarse = npfem.run_scene("slope", {"analysis": "limit", "spacing": 4.0})
+        fine = npfem.run_scene(
+            "slope", {"analysis": "limit", "refine": "none", "spacing": 2.0}
+        )
+        coarse = npfem.run_scene(
+            "slope", {"analysis": "limit", "refine": "none", "spacing": 4.0}
+        )
     m = fine["metrics"]
     F, F2 = m["factor_of_safety"], coarse["metrics"]["factor_of_safety"]
     assert m["factor_of_safety_coarse"] == F2
@@ -205,7 +209,8 @@ def test_an_unconverged_factor_of_safety_is_warned_of():
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             res = npfem.run_scene(
-                "slope", {"analysis": "limit", "spacing": 2.0, "phi": phi}
+                "slope",
+                {"analysis": "limit", "refine": "none", "spacing": 2.0, "phi": phi},
             )
         m = res["metrics"]
         loud = abs(m["fos_spacing_change"]) > 0.05

@@ -14,7 +14,13 @@ from skfem_npfem import ParameterError
 from skfem_npfem.scenes import get_scene, run_scene
 
 SCENE = "slope"
-CLAY = {"analysis": "limit", "material": "tresca", "c": 2.0e4, "angle": 30.0}
+CLAY = {
+    "analysis": "limit",
+    "refine": "none",
+    "material": "tresca",
+    "c": 2.0e4,
+    "angle": 30.0,
+}
 
 
 def fos(over: dict) -> dict:
@@ -57,7 +63,12 @@ def test_a_cross_section_file_refuses_a_profile(tmp_path):
     path = tmp_path / "s.json"
     path.write_text(json.dumps(section))
     sc = get_scene(SCENE)
-    over = {"analysis": "limit", "geometry": str(path), "su_gradient": 1e3}
+    over = {
+        "analysis": "limit",
+        "refine": "none",
+        "geometry": str(path),
+        "su_gradient": 1e3,
+    }
     with pytest.raises(ParameterError, match="su_gradient"):
         sc.build(sc.resolve(over))
 

@@ -98,7 +98,13 @@ def test_a_push_the_scene_cannot_model_is_refused(over, name):
 
 
 def test_a_push_speed_without_a_push_is_warned_about():
-    values = {**EDGE, "push_depth": 0.0, "push_speed": 0.1, "analysis": "limit"}
+    values = {
+        **EDGE,
+        "push_depth": 0.0,
+        "push_speed": 0.1,
+        "analysis": "limit",
+        "refine": "none",
+    }
     with pytest.warns(UserWarning, match="push_speed"):
         npfem.run_scene("slope", values)
 

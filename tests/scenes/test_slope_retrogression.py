@@ -81,7 +81,9 @@ def test_the_softened_strength_is_written(slide):
 
 
 def test_blocks_is_null_without_softening():
-    m = npfem.run_scene("slope", {"analysis": "limit", "spacing": 2.0})["metrics"]
+    m = npfem.run_scene(
+        "slope", {"analysis": "limit", "refine": "none", "spacing": 2.0}
+    )["metrics"]
     assert m["blocks"] is None
 
 

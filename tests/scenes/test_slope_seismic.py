@@ -28,7 +28,14 @@ from skfem_npfem import ParameterError
 
 BETA, PHI = 20.0, 40.0
 #: A cohesionless slope (beta = 20 deg, phi = 40 deg), 10 m high, at H/10.
-SAND = {"analysis": "limit", "c": 0.0, "phi": PHI, "angle": BETA, "spacing": 1.0}
+SAND = {
+    "analysis": "limit",
+    "refine": "none",
+    "c": 0.0,
+    "phi": PHI,
+    "angle": BETA,
+    "spacing": 1.0,
+}
 
 
 def infinite_slope_F(kh: float) -> float:

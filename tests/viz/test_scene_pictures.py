@@ -150,7 +150,9 @@ def slope_limit(tmp_path_factory) -> Path:
     """The two-layer example's factor of safety at spacing 2 m (a second)."""
     folder = tmp_path_factory.mktemp("slope") / "run"
     geometry = ROOT / "docs/examples/two_layer_slope.json"
-    return _run("slope", folder, spacing=2, analysis="limit", geometry=geometry)
+    return _run(
+        "slope", folder, spacing=2, analysis="limit", refine="none", geometry=geometry
+    )
 
 
 def test_slope_mechanism_shows_outline_rollers_and_layers(slope_limit, tmp_path):

@@ -48,7 +48,7 @@ from ..limit_mode import (
 from ..limits import SPACING as SPACING_RANGE
 from ..methods import METHOD_METRICS_NO_SPFEM, method_params, with_method
 from ..params import ANGLE, POSITIVE, Param, Values
-from ..refinement import REFINE_METRICS, REFINE_PARAMS, check_refine
+from ..refinement import REFINE_METRICS, REFINE_PARAMS, check_refine, progress_lines
 from ..soil_profile import PROFILE_PARAMS, check_layers, has_profile
 from ..water import derive_drainage
 from .mesh import (
@@ -378,8 +378,10 @@ def build(
     if (s_u := undrained_strength(values, phi)) is not None:  # Tresca of s_u
         c, ref = s_u, prandtl_nc(0.0)
     if values["analysis"] == "limit":
+        report = progress_lines(sim.progress)
         return limit_scene_run(
-            sim, lambda: footing_limit(values, mesh, mat, particles, foot, ref, phi)
+            sim,
+            lambda: footing_limit(values, mesh, mat, particles, foot, ref, phi, report),
         )
     sim.callbacks.append(record)
 

@@ -9,7 +9,7 @@ the metric ``heterogeneity_factor`` is then Davis & Booker's (1973) factor
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -22,7 +22,7 @@ from ...mesh.smoothing import nodal_integration
 from ...particles import Particles
 from ..common import solver_from
 from ..limit_mode import limit_metrics
-from ..refinement import adapt
+from ..refinement import adapt, strategies
 from ..soil_profile import has_profile
 from .mesh import soil_particles, unit_weight
 from .strip_water import footing_gamma, limit_soil, water_dead_load
@@ -56,6 +56,7 @@ def footing_limit(
     foot: np.ndarray,
     ref: float | None,
     phi: float = 0.0,
+    report: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
     """The footing's collapse load as one cone program (``analysis=limit``).
 
@@ -66,21 +67,29 @@ def footing_limit(
     the bearing factor ``q / c`` (``q / (gamma b)``).  With ``refine=strain``
     the program is solved again on lattices refined where its mechanism
     dissipates (:func:`~skfem_npfem.scenes.refinement.adapt`; ``phi`` makes the
-    particles of each lattice).
+    particles of each lattice; the limit metrics count the programs of every
+    cycle; ``report`` gets a progress line per cycle).
     """
-    history = None
-    if values.get("refine", "none") != "none":
+    history, spent = None, []
+
+    def solve(body: tuple) -> tuple[tuple[Any, Any, float], float, np.ndarray]:
+        out = _program(values, mat, *body)
+        spent.append(out[0][0])
+        return out
+
+    if "strain" in strategies(values):
         run = adapt(
             values,
             (mesh, particles, foot),
-            lambda body: _program(values, mat, *body),
+            solve,
             lambda body: (body[0].p.T, body[0].t),
             lambda pts: _lattice(values, pts, phi),
+            report,
         )
         (res, ni, c), (mesh, particles, foot) = run.result, run.body
         history = run.history
     else:
-        res, ni, c = _program(values, mat, mesh, particles, foot)[0]
+        res, ni, c = solve((mesh, particles, foot))[0]
     factor = res.multiplier
     q = factor * (c if c > 0 else footing_gamma(values) * values["width"] / 2)
     return {
@@ -90,7 +99,14 @@ def footing_limit(
         "relative_error": None if ref is None else factor / ref - 1.0,
         "n_particles": int(particles.n),
         "heterogeneity_factor": heterogeneity_factor(values, q),
-        **limit_metrics(res, ni.volumes, 1),
+        **limit_metrics(
+            res,
+            ni.volumes,
+            len(spent),
+            sum(r.wall_time for r in spent),
+            sum(r.iterations for r in spent),
+            [r.status for r in spent],
+        ),
         "refine_history": history,
     }
 

@@ -72,6 +72,7 @@ from ..refinement import (
     REFINE_METRICS,
     SLOPE_REFINE_PARAMS,
     insert_metrics,
+    progress_lines,
     refiner_from,
 )
 from ..scenery import Scenery, number, section_lines
@@ -387,7 +388,7 @@ def build(
     toe_crest = toe_and_crest(body.sec, values)
 
     def metrics(sim_: Simulation) -> dict[str, Any]:
-        fos = fos_metrics(values, body, state, out)
+        fos = fos_metrics(values, body, state, out, progress_lines(sim_.progress))
         # The run-out's lattice, else the last lattice of refine=strain.
         n = len(pts) if run_out else len(state["fos_body"].pts)
         m = base_metrics(fos, resid, n, state, sim_) | dict.fromkeys(PUSH_METRICS)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -221,7 +221,11 @@ def factor_of_safety(
 
 
 def fos_metrics(
-    values: Mapping[str, Any], body: SlopeBody, state: dict[str, Any], out: Path | None
+    values: Mapping[str, Any],
+    body: SlopeBody,
+    state: dict[str, Any],
+    out: Path | None,
+    report: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
     """Stage 2 once: the factor of safety's metrics, kept in ``state``.
 
@@ -239,6 +243,8 @@ def fos_metrics(
         The run's shared state: gets ``fos``, ``fos_metrics`` and ``t_fos``.
     out : Path or None
         Output folder of ``mechanism.npz``.
+    report : callable, optional
+        Progress lines of the refinement cycles (``refine=strain``).
 
     Returns
     -------
@@ -248,6 +254,8 @@ def fos_metrics(
     """
     if "fos" not in state:
         t0 = time.perf_counter()
+
+        spent = []  # every cycle's strength reduction
 
         def solve(b: SlopeBody) -> tuple[Any, float, np.ndarray]:
             out = factor_of_safety(
@@ -261,6 +269,7 @@ def fos_metrics(
                 b.sec,
                 b.strength,
             )
+            spent.append(out[0])
             return out, out[0].factor_of_safety, out[0].limit.dissipation
 
         history, sec = None, body.sec
@@ -273,6 +282,7 @@ def fos_metrics(
                 solve,
                 lambda b: (b.pts, b.tri),
                 lambda p: body_from(values, sec, *mesh_regions(p, sec.regions, body.h)),
+                report,
             )
             (res, ni_, mats), body, history = run.result, run.body, run.history
         state["fos_body"] = body
@@ -284,10 +294,10 @@ def fos_metrics(
             **limit_metrics(
                 res.limit,
                 ni_.volumes,
-                res.programs,
+                sum(r.programs for r in spent),
                 state["t_fos"],
-                iterations=res.iterations,
-                statuses=res.statuses,
+                iterations=sum(r.iterations for r in spent),
+                statuses=[s for r in spent for s in r.statuses],
                 what="the factor of safety",
             ),
             # The gravity multiplier of the slope as it is (F = 1).
