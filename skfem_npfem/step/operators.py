@@ -115,10 +115,13 @@ def build_operators(
     contacts, wall_ids = step_contacts(boundaries, nodes, dt, h, time)
     mass = model.node_masses(p.mass[active], p.material[active], op.volumes)
     force = model.external_force(p.x.shape[0], active, mass, time + dt)
+    # The volume's share (weight, k_h): the stabilisation's residual must not
+    # read the dead loads (tractions, point loads) as a body force.
+    body = mass[:, None] * model.body_acceleration(time + dt)[None, :]
     pore = None
     if model.water is not None:
         pore, water = pore_input(model, p, active, op, contacts, dt)
-        force = force + water
+        force, body = force + water, body + water
     strains = volume_strains(
         model.volume_correction,
         p.mass[active],
@@ -157,6 +160,7 @@ def build_operators(
         tied=tied_dofs(model, active),
         strength=step_strength(model, p, active),
         stiffness=None if p.stiffness is None else p.stiffness[active],
+        body_force=None if model.loads is None else body,
     )
     columns = nodes.lagged.shape[1]
     return StepOperators(

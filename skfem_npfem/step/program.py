@@ -207,6 +207,11 @@ class ConeInput:
     stiffness : ndarray (n_p,) or None
         Per-point factor on each material's elastic moduli (the compliance
         is divided by it; :attr:`~skfem_npfem.Particles.stiffness`).  None: 1.
+    body_force : ndarray (N, d) or None
+        The part of ``force`` that acts in the volume (the weight, ``k_h`` and
+        the water's force), N: the stabilisation's residual takes it as a
+        body-force density; a traction or point load (``Model.loads``) is no
+        body force.  None: all of ``force``.
     """
 
     operator: StrainOperator
@@ -232,6 +237,7 @@ class ConeInput:
     tied: list[np.ndarray] | None = None
     strength: np.ndarray | None = None
     stiffness: np.ndarray | None = None
+    body_force: np.ndarray | None = None
 
 
 @dataclass

@@ -26,8 +26,11 @@ The step therefore adds to its complementary energy the Galerkin least-squares
     1/2 sum_e  beta tau_e |e|  |div tau_h(sigma_n+1) + f_e - m a_e|^2,
     tau_e = min(h_e^2 / G_e, dt^2 / rho_e),
 
-where ``f_e`` and ``m a_e`` are the element means of the nodal load and
-inertia densities ``f_i / V_i`` and ``m_i a_i / V_i``, ``h_e = (d! |e|)^(1/d)``
+where ``f_e`` and ``m a_e`` are the element means of the nodal body-force and
+inertia densities ``f_i / V_i`` and ``m_i a_i / V_i`` (the weight, ``k_h`` and
+the water's force: a traction or point load of ``Model.loads`` acts on the
+boundary, not in the elements, and is left out; read as a body force it made
+the exact stress of a loaded surface a residual), ``h_e = (d! |e|)^(1/d)``
 is the lattice spacing of an element of that size, ``G_e`` the smallest shear
 modulus at its vertices, ``rho_e`` the largest density there and ``beta`` the
 dimensionless factor :attr:`~skfem_npfem.step.model.Model.stabilisation`.
@@ -303,7 +306,8 @@ def element_residual(prog: Program) -> tuple[sp.csr_matrix, np.ndarray, np.ndarr
     if hasattr(op, "element_areas"):  # axisymmetric: vol is the 2 pi r ring
         area = np.asarray(op.element_areas, float)
         B = B + hoop_matrix(t, vol / (2.0 * math.pi * area), prog.comp)
-    f = np.asarray(data.force, float).reshape(-1)
+    body = data.force if data.body_force is None else data.body_force
+    f = np.asarray(body, float).reshape(-1)
     if data.dynamic and data.a_n is not None:
         m = np.repeat(np.asarray(data.mass, float), d)
         f = f - m * np.asarray(data.a_n, float).reshape(-1)
