@@ -158,8 +158,8 @@ class Refiner:
         ``model`` (a :class:`~skfem_npfem.Model`, optional): its bodies get
         no particle inside them, and its dead loads (``loads``, one row per
         particle) follow the particles: an initial particle keeps its load,
-        an added one has none.  A model with tied groups of particles
-        (``tied``) is refused, and so is merging with dead loads.
+        an added one has none, and a loaded particle is never merged.  A
+        model with tied groups of particles (``tied``) is refused.
         """
         bodies = self._check_model(model)
         if not hasattr(mesh_source, "triangulate"):
@@ -198,7 +198,7 @@ class Refiner:
         if self.merge > 0.0:  # never a particle of a split edge
             busy = np.zeros(p.n, bool)
             busy[edges[chosen].ravel()] = True
-            ok = free & ~busy
+            ok = free & ~busy & ~self._loaded(out_ids=ids, n=p.n)
             short = long_edges(
                 p.x, edges, goal, self.merge, ok[a] & ok[b] & same, shorter=True
             )
@@ -219,6 +219,19 @@ class Refiner:
             model.loads = loads
         self.particles = out
         return out
+
+    def _loaded(self, out_ids: np.ndarray, n: int) -> np.ndarray:
+        """Rows that carry a dead load (n,) bool: a loaded particle never merges.
+
+        The loads follow the initial particles' ids, so a pair of unloaded
+        particles merges into one that is unloaded whichever id it keeps.
+        """
+        loaded = np.zeros(n, bool)
+        if self._loads0 is not None:
+            n0 = self._loads0.shape[0]
+            rows = np.flatnonzero(out_ids < n0)
+            loaded[rows] = np.any(self._loads0[out_ids[rows]] != 0.0, axis=1)
+        return loaded
 
     def _mark(self, power: np.ndarray) -> np.ndarray:
         """The fewest particles that carry ``strain_share`` of ``power`` (n,) bool.
@@ -256,13 +269,6 @@ class Refiner:
                 "None with particle refinement (a tied group names particles by row)",
             )
         if model.loads is not None and self._loads0 is None:
-            if self.merge > 0.0:
-                raise ParameterError(
-                    "merge",
-                    self.merge,
-                    "0 with dead loads (Model.loads): a merged pair's load "
-                    "would have to move",
-                )
             self._loads0 = np.array(model.loads)
         return model.bodies
 

@@ -205,8 +205,6 @@ def test_dead_loads_follow_the_particles_and_ties_are_refused():
     # A retry of the step from the same particles gives the same loads.
     again = refiner(p, AlphaShapeMesher(0.125, 1.5), model)
     assert again.n == q.n and model.loads.shape == (q.n, 2)
-    with pytest.raises(ParameterError, match="merge"):
-        Refiner(1.6, merge=0.3)(p, AlphaShapeMesher(0.125, 1.5), model)
     tied = Model(
         dim=2,
         materials=[LinearElastic(1e6, 0.3)],
@@ -215,6 +213,29 @@ def test_dead_loads_follow_the_particles_and_ties_are_refused():
     )
     with pytest.raises(ParameterError, match="tied"):
         Refiner(1.6)(p, AlphaShapeMesher(0.125, 1.5), tied)
+
+
+def test_merging_leaves_the_loaded_particles_and_keeps_the_total_dead_load():
+    from skfem_npfem import LinearElastic, Model
+
+    p = crowded()  # squeezed at its top
+    loads = np.zeros((p.n, 2))
+    top = p.x[:, 1] == np.unique(p.x[:, 1])[-3]  # a row that merges unloaded
+    loads[top, 1] = -np.arange(1.0, top.sum() + 1.0)
+    model = Model(dim=2, materials=[LinearElastic(1e6, 0.3)], loads=loads)
+    refiner = Refiner(3.0, merge=0.4)
+    q = refiner(p, AlphaShapeMesher(0.125, 1.5), model)
+    assert refiner.last_merge.count > 0 and model.loads.shape == (q.n, 2)
+    # Every loaded particle is still there, at its place, with its own load.
+    kept = np.isin(q.ids, np.flatnonzero(top))
+    assert kept.sum() == top.sum()
+    np.testing.assert_array_equal(q.x[kept], p.x[q.ids[kept]])
+    np.testing.assert_array_equal(model.loads[kept], loads[q.ids[kept]])
+    assert not np.any(model.loads[~kept])
+    # Without the load they merge (and move to a pair's centre).
+    free = Refiner(3.0, merge=0.4)(p, AlphaShapeMesher(0.125, 1.5))
+    stayed = (np.abs(free.x[:, None] - p.x[top][None]).max(axis=2) == 0).any(axis=0)
+    assert stayed.sum() < top.sum()
 
 
 def test_the_mesher_gives_the_last_triangulation_back_only_for_the_same_input():

@@ -11,6 +11,7 @@ import pytest
 from skfem_npfem.errors import ParameterError
 from skfem_npfem.io import load_checkpoint, read_pvd, read_step
 from skfem_npfem.scenes import run_scene
+from skfem_npfem.scenes.refinement import insert_metrics
 
 COARSE = {"spacing": 0.1, "refine": "bodies"}  # 957 particles, 40 steps
 STRAIN = {**COARSE, "refine": "strain"}
@@ -123,22 +124,25 @@ def test_a_baseline_method_refuses_refinement():
         )
 
 
-@pytest.mark.slow  # 20 s; the dead loads' rebuild is unit-tested in tests/mesh
-def test_the_cone_with_its_surcharge_refines_and_keeps_its_dead_load(tmp_path):
+@pytest.mark.slow  # 20 s each; the dead loads' rebuild is unit-tested in tests/mesh
+@pytest.mark.parametrize("merge", [0.0, 0.3])
+def test_the_cone_with_its_surcharge_refines_and_keeps_its_dead_load(tmp_path, merge):
     from skfem_npfem.scenes import get_scene
 
     D = 0.0357
     scene = get_scene("cone-penetration")
-    values = scene.resolve(
-        {"spacing": D / 6, "penetration": 2 * D, "dt": D / 6 / 0.02, "refine": "bodies"}
-    )
+    given = {"spacing": D / 6, "penetration": 2 * D, "dt": D / 6 / 0.02}
+    values = scene.resolve({**given, "refine": "bodies", "refine_merge": merge})
     srun = scene.build(values)
     sim = srun.simulation
     total = sim.model.loads.sum(axis=0)
     n0, mass = sim.particles.n, sim.particles.mass.sum()
     sim.progress = False
     sim.run(**srun.run_kwargs)
-    assert sim.particles.n > n0  # particles were added
+    counts = insert_metrics(sim)
+    assert counts["inserted"] > 0  # particles were added, and merged if asked
+    assert (counts["merged"] > 0) == (merge > 0)
+    assert sim.particles.n == n0 + counts["inserted"] - counts["merged"]
     # The surcharge's dead load stays on the particles it was put on.
     np.testing.assert_allclose(sim.model.loads.sum(axis=0), total, rtol=1e-12)
     assert sim.model.loads.shape[0] == sim.particles.n
