@@ -172,3 +172,21 @@ def test_each_refinement_cycle_reports_a_progress_line(capsys):
     assert f"{history[-1][1]:.6g}" in lines[-1]
     npfem.run_scene("strip-footing", over)  # progress=False by default
     assert "cycle" not in capsys.readouterr().err
+
+
+def test_a_run_out_reports_the_cycles_of_the_factor_of_safety_it_starts_from(capsys):
+    # The run-out's reduction needs F first, which refine=strain finds in
+    # cycles before the run's steps: each cycle's line comes then.
+    from skfem_npfem.scenes import get_scene
+
+    scene = get_scene("slope")
+    over = {"refine": "strain", "runout": True, "spacing": 2.0, "refine_cycles": 1}
+    over |= {"t_end": 0.05, "phi": 10.0}
+    scene.build(scene.resolve(over), progress=True)
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if "cycle" in ln]
+    assert [ln.split(":")[0] for ln in lines] == [
+        "refine=strain cycle 0/1",
+        "refine=strain cycle 1/1",
+    ]
+    scene.build(scene.resolve(over), progress=False)
+    assert "cycle" not in capsys.readouterr().err

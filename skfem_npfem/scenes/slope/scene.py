@@ -359,7 +359,10 @@ def build(
     if push:
         model = push_model(values, body)
     else:
-        model = flow_model(values, body, state, run_out)
+        # The run's progress (None: on, as the Simulation takes it) also
+        # reports the cycles of an adaptive factor of safety made first.
+        lines = progress_lines(True if progress is None else bool(progress))
+        model = flow_model(values, body, state, run_out, lines)
     particles = Particles.create(
         pts,
         masses,

@@ -408,13 +408,15 @@ def flow_model(
     body: SlopeBody,
     state: dict[str, Any],
     run_out: bool,
+    report: Callable[[str], None] | None = None,
 ) -> Model:
     """The dynamic model of stage 3, with the run-out's reduced strengths.
 
-    With ``run_out`` the factor of safety comes first (:func:`fos_metrics`):
-    the strengths are divided by ``reduction`` (default ``margin`` times the
-    factor of safety, or 1 when it is below 1: such a slope fails as it is),
-    which goes into ``state["reduction"]``.
+    With ``run_out`` the factor of safety comes first (:func:`fos_metrics`,
+    ``report`` getting its refinement cycles' progress lines): the strengths
+    are divided by ``reduction`` (default ``margin`` times the factor of
+    safety, or 1 when it is below 1: such a slope fails as it is), which goes
+    into ``state["reduction"]``.
 
     Parameters
     ----------
@@ -426,6 +428,8 @@ def flow_model(
         The run's shared state.
     run_out : bool
         Whether stage 3 runs.
+    report : callable, optional
+        Gets one progress line per refinement cycle of the factor of safety.
 
     Returns
     -------
@@ -434,7 +438,7 @@ def flow_model(
     flow_mats = section_materials(body.sec, values, flow=True)
     if run_out:
         # Stage 3 needs the factor of safety first: reduce, then flow to rest.
-        F = fos_metrics(values, body, state, None)["factor_of_safety"]
+        F = fos_metrics(values, body, state, None, report)["factor_of_safety"]
         # A slope that fails as it is (F < 1) runs out with its own strength.
         red = values["reduction"] or (values["margin"] * F if F >= 1 else 1.0)
         state["reduction"] = red
