@@ -198,7 +198,7 @@ class Refiner:
         if self.merge > 0.0:  # never a particle of a split edge
             busy = np.zeros(p.n, bool)
             busy[edges[chosen].ravel()] = True
-            ok = free & ~busy & ~self._loaded(out_ids=ids, n=p.n)
+            ok = free & ~busy & ~self._loaded(ids)
             short = long_edges(
                 p.x, edges, goal, self.merge, ok[a] & ok[b] & same, shorter=True
             )
@@ -220,17 +220,17 @@ class Refiner:
         self.particles = out
         return out
 
-    def _loaded(self, out_ids: np.ndarray, n: int) -> np.ndarray:
-        """Rows that carry a dead load (n,) bool: a loaded particle never merges.
+    def _loaded(self, ids: np.ndarray) -> np.ndarray:
+        """Particles (by their ``ids``) that carry a dead load, bool.
 
         The loads follow the initial particles' ids, so a pair of unloaded
-        particles merges into one that is unloaded whichever id it keeps.
+        particles merges into one that is unloaded whichever id it keeps: a
+        loaded particle is never merged.
         """
-        loaded = np.zeros(n, bool)
+        loaded = np.zeros(ids.size, bool)
         if self._loads0 is not None:
-            n0 = self._loads0.shape[0]
-            rows = np.flatnonzero(out_ids < n0)
-            loaded[rows] = np.any(self._loads0[out_ids[rows]] != 0.0, axis=1)
+            rows = np.flatnonzero(ids < self._loads0.shape[0])
+            loaded[rows] = np.any(self._loads0[ids[rows]] != 0.0, axis=1)
         return loaded
 
     def _mark(self, power: np.ndarray) -> np.ndarray:
