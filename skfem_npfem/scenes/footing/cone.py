@@ -82,7 +82,14 @@ from .cone_dissipation import (
     dissipation_metrics,
     in_push,
 )
-from .cone_geometry import APEX, check, cone_body, sizes, soil_points
+from .cone_geometry import (
+    APEX,
+    SHOULDER_PARAM,
+    check,
+    cone_body,
+    sizes,
+    soil_points,
+)
 from .cone_ground import (
     GROUND_METRICS,
     GROUND_PARAMS,
@@ -172,6 +179,7 @@ PARAMS = [
         INTERFACES,
     ),
     ADHESION,
+    SHOULDER_PARAM,
     Param(
         "penetration",
         None,

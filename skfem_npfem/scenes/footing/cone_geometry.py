@@ -16,6 +16,7 @@ import numpy as np
 from ...boundary import RigidBody
 from ...errors import ParameterError
 from ..limits import check_size
+from ..params import Param
 from .penetration_common import (
     axis_count,
     graded_axis,
@@ -26,16 +27,35 @@ from .penetration_common import (
 
 __all__ = [
     "APEX",
+    "SHOULDER_PARAM",
     "check",
     "cone_body",
     "fine_window",
     "heights",
+    "shoulder_arc",
     "sizes",
     "soil_points",
 ]
 
 #: Apex angle of the standard cone, degrees.
 APEX = 60.0
+
+#: Straight pieces of a rounded shoulder's arc (7.5 degrees each).
+ARC_PIECES = 4
+
+SHOULDER_PARAM = Param(
+    "shoulder_round",
+    0.0,
+    "-",
+    "radius of the cone's shoulder (where the face meets the shaft), in "
+    "spacings: 0 keeps the standard cone's sharp corner; r > 0 rounds it to an "
+    "arc tangent to the face and the shaft (a regularisation of the corner that "
+    "vanishes with the spacing: the soil flowing round a sharp corner gives way "
+    "in single steps)",
+    float,
+    lo=0.0,
+    hi=4.0,
+)
 
 
 def sizes(values: Mapping[str, Any]) -> dict[str, float]:
@@ -53,7 +73,37 @@ def sizes(values: Mapping[str, Any]) -> dict[str, float]:
         "z_tip": z_tip,
         "top": z_tip + depth,
         "radius": values["domain_radius"] * D,
+        "round": values["shoulder_round"] * h,
     }
+
+
+def shoulder_arc(g: dict[str, float]) -> np.ndarray:
+    """The cone's shoulder at time 0: its corner (1, 2), or its rounded arc.
+
+    With a radius ``r = g["round"] > 0`` the corner is replaced by
+    :data:`ARC_PIECES` + 1 points on the circle of radius ``r`` tangent to
+    the face and to the shaft, from the face's tangent point, ``r tan(15°)``
+    below the corner along the face, to the shaft's, as far above it.
+
+    Examples
+    --------
+    >>> g = {"D": 2.0, "z_tip": 0.0, "round": 0.0}
+    >>> shoulder_arc(g).round(4).tolist()
+    [[1.0, 1.7321]]
+    >>> arc = shoulder_arc(g | {"round": 0.5})
+    >>> arc.shape, arc[-1].round(4).tolist()
+    ((5, 2), [1.0, 1.866])
+    """
+    R, half = g["D"] / 2, math.radians(APEX / 2)
+    corner = np.array([R, g["z_tip"] + R / math.tan(half)])
+    r = g["round"]
+    if r <= 0:
+        return corner[None]
+    along = np.array([math.sin(half), math.cos(half)])  # the face, tip to corner
+    outward = np.array([math.cos(half), -math.sin(half)])  # the face's normal
+    centre = corner - r * math.tan(half / 2) * along - r * outward
+    theta = np.linspace(-half, 0.0, ARC_PIECES + 1)
+    return centre + r * np.stack([np.cos(theta), np.sin(theta)], axis=1)
 
 
 def fine_window(g: dict[str, float]) -> tuple[float, float]:
@@ -99,13 +149,13 @@ def cone_body(values: Mapping[str, Any]) -> RigidBody:
     """The cone with its shaft at time 0, wished in place, moving down."""
     g = sizes(values)
     R = g["D"] / 2
-    tall = R / math.tan(math.radians(APEX / 2))
+    shoulder = shoulder_arc(g)
     adhesion = interface_adhesion(values)
-    if adhesion > 0:  # on the face only (edge 0); the shaft is smooth
-        adhesion = [adhesion, 0.0, 0.0, 0.0]
+    if adhesion > 0:  # on the face and its rounded end only; the shaft is smooth
+        adhesion = [adhesion] * shoulder.shape[0] + [0.0, 0.0, 0.0]
     top = g["top"] + g["w"] + g["D"]
     return RigidBody(
-        [[0.0, g["z_tip"]], [R, g["z_tip"] + tall], [R, top], [0.0, top]],
+        [[0.0, g["z_tip"]], *shoulder, [R, top], [0.0, top]],
         velocity=[0.0, -values["speed"]],
         adhesion=adhesion,
         name="cone",
@@ -119,7 +169,8 @@ def soil_points(values: Mapping[str, Any], body: RigidBody) -> tuple[np.ndarray,
     A graded lattice without the points inside the cone or closer to it
     than half their spacing, plus points on the cone's face and shaft (the
     soil starts in contact with the cone: an unsupported cavity would close
-    plastically under sigma_0).
+    plastically under sigma_0; on a rounded shoulder the face's points
+    inside the arc are moved onto it).
     """
     g = sizes(values)
     rs = graded_axis(1.5 * g["D"], g["h"], g["radius"], values["grading"])
@@ -136,5 +187,8 @@ def soil_points(values: Mapping[str, Any], body: RigidBody) -> tuple[np.ndarray,
     gap = lattice_gap(lattice, rs, zs)
     dist, _, _ = body.signed_distance(lattice, 0.0)
     keep = dist > 0.5 * gap
+    if g["round"] > 0:  # the face's points in the rounded corner onto the arc
+        d, _, on = body.signed_distance(face, 0.0)
+        face[d < 0] = on[d < 0]
     x = np.concatenate([face, shaft, lattice[keep]])
     return x, lattice_gap(x, rs, zs)

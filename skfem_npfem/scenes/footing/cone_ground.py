@@ -40,7 +40,7 @@ from ..soil_profile import (
     strength_profile,
     with_profile,
 )
-from .cone_geometry import APEX, sizes
+from .cone_geometry import APEX, shoulder_arc, sizes
 from .penetration_soil import with_pore_pressure
 
 __all__ = [
@@ -124,12 +124,20 @@ def cone_soil(values: Mapping[str, Any], E: float) -> AxisymmetricMohrCoulomb:
 
 
 def soil_volume(g: dict[str, float]) -> float:
-    """Volume of the soil round the embedded cone at the start, m^3."""
+    """Volume of the soil round the embedded cone at the start, m^3.
+
+    A rounded shoulder leaves the ring between its arc and the sharp
+    corner to the soil (Pappus: the polygon's first moment about the axis).
+    """
     R = g["D"] / 2
     tall = R / math.tan(math.radians(APEX / 2))
     cylinder = math.pi * g["radius"] ** 2 * g["top"]
     shaft = math.pi * R**2 * (g["top"] - g["z_tip"] - tall)
-    return cylinder - shaft - math.pi * R**2 * tall / 3.0
+    ring = np.vstack([shoulder_arc(g), shoulder_arc(g | {"round": 0.0})])
+    r, z = ring.T
+    r1, z1 = np.roll(r, -1), np.roll(z, -1)
+    rounded = abs(math.pi / 3 * float(np.sum((r + r1) * (r * z1 - r1 * z))))
+    return cylinder - shaft - math.pi * R**2 * tall / 3.0 + rounded
 
 
 def start_state(
