@@ -105,3 +105,16 @@ def test_a_rounded_shoulder_keeps_the_steady_cone_free_of_large_falls():
     assert falls.max() < 0.2 * mean
     assert m["cone_factor_mean"] == pytest.approx(m["cone_factor"], rel=0.01)
     assert 0.97 * 9.72 < m["cone_factor"] < 1.03 * 10.77
+
+
+def test_the_pictures_draw_the_rounded_cone_and_a_sharp_run_records_as_before():
+    from skfem_npfem.scenes.footing.cone import cone_scenery
+    from skfem_npfem.scenes.footing.penetration_soil import penetration_parameters
+
+    values = _values(shoulder_round=2.0)
+    recorded = penetration_parameters(values)
+    outline, _, name = cone_scenery(recorded).bodies[0]
+    assert name == "cone"
+    np.testing.assert_allclose(outline, cone_body(values).vertices, rtol=1e-12)
+    assert recorded["shoulder_round"] == 2.0
+    assert "shoulder_round" not in penetration_parameters(_values())

@@ -87,6 +87,7 @@ from .cone_geometry import (
     SHOULDER_PARAM,
     check,
     cone_body,
+    shoulder_arc,
     sizes,
     soil_points,
 )
@@ -425,6 +426,7 @@ def cone_scenery(p: dict, folder: Path | None = None) -> Scenery:
         "depth",
         "domain_below",
         "domain_radius",
+        "shoulder_round",
     )
     values = {k: number(p, k, default[k]) for k in names}
     speed = number(p, "speed", default["speed"])
@@ -441,11 +443,8 @@ def cone_scenery(p: dict, folder: Path | None = None) -> Scenery:
     s.symmetry = 0.0
     s.outline = box(0.0, g["radius"], 0.0, g["top"])
     R = g["D"] / 2
-    tall = R / math.tan(math.radians(APEX / 2))
     top = g["top"] + g["w"] + g["D"]
-    outline = np.array(
-        [[0, g["z_tip"]], [R, g["z_tip"] + tall], [R, top], [0, top]], float
-    )
+    outline = np.array([[0, g["z_tip"]], *shoulder_arc(g), [R, top], [0, top]], float)
     s.bodies.append((outline, np.array([0.0, -speed]), "cone"))
     D = g["D"]
     s.label = lambda t: f"w/D = {speed * t / D:.3g}"

@@ -255,7 +255,8 @@ def penetration_parameters(values: Mapping[str, Any]) -> dict[str, Any]:
     (:func:`~skfem_npfem.scenes.wet_soil.recorded_parameters`) and, with
     ``material=tresca``, the Mohr-Coulomb parameters at their defaults are
     left out; so are a cone's ``k`` when not coupled, its dissipation
-    stepping without a dissipation test and its ``rho`` when weightless.
+    stepping without a dissipation test, its ``rho`` when weightless and its
+    ``shoulder_round`` when sharp.
     """
     out = recorded_parameters(values)
     if out.get("k", 0.0) is None:  # not coupled: no conductivity
@@ -264,6 +265,7 @@ def penetration_parameters(values: Mapping[str, Any]) -> dict[str, Any]:
         out = {k: v for k, v in out.items() if k not in DISSIPATION_NAMES}
     if values.get("material") == "tresca":
         out = {k: v for k, v in out.items() if TRESCA_VALUES.get(k, k) != v}
-    if out.get("rho") == 0.0:  # a weightless cone records as it did before
-        del out["rho"]
+    for name in ("rho", "shoulder_round"):  # a weightless or sharp cone as before
+        if out.get(name) == 0.0:
+            del out[name]
     return out
