@@ -59,7 +59,7 @@ SHOULDER_PARAM = Param(
 
 
 def sizes(values: Mapping[str, Any]) -> dict[str, float]:
-    """Lengths of the set-up, m: D, spacing, push, tip depth, soil, radius."""
+    """Lengths of the set-up, m: D, spacing, push, tip depth, soil, radius, round."""
     D = values["diameter"]
     h = values["spacing"] if values["spacing"] is not None else D / 12
     w = values["penetration"] if values["penetration"] is not None else 6 * D
