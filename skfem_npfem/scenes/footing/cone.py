@@ -87,7 +87,7 @@ from .cone_geometry import (
     SHOULDER_PARAM,
     check,
     cone_body,
-    shoulder_arc,
+    cone_outline,
     sizes,
     soil_points,
 )
@@ -442,10 +442,7 @@ def cone_scenery(p: dict, folder: Path | None = None) -> Scenery:
     s.walls.append((g["radius"], -1, "rollers"))
     s.symmetry = 0.0
     s.outline = box(0.0, g["radius"], 0.0, g["top"])
-    R = g["D"] / 2
-    top = g["top"] + g["w"] + g["D"]
-    outline = np.array([[0, g["z_tip"]], *shoulder_arc(g), [R, top], [0, top]], float)
-    s.bodies.append((outline, np.array([0.0, -speed]), "cone"))
+    s.bodies.append((cone_outline(g), np.array([0.0, -speed]), "cone"))
     D = g["D"]
     s.label = lambda t: f"w/D = {speed * t / D:.3g}"
     s.unit = ("wD", "w/D", D / speed)

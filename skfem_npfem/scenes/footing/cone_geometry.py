@@ -30,6 +30,7 @@ __all__ = [
     "SHOULDER_PARAM",
     "check",
     "cone_body",
+    "cone_outline",
     "fine_window",
     "heights",
     "shoulder_arc",
@@ -145,17 +146,25 @@ def check(values: Mapping[str, Any]) -> float:
     return dt
 
 
+def cone_outline(g: dict[str, float]) -> np.ndarray:
+    """The cone with its shaft at time 0 (m, 2): tip, shoulder, shaft's top, axis.
+
+    The shaft reaches a diameter above the soil's top at the end of the push.
+    """
+    top = g["top"] + g["w"] + g["D"]
+    R = g["D"] / 2
+    return np.array([[0.0, g["z_tip"]], *shoulder_arc(g), [R, top], [0.0, top]])
+
+
 def cone_body(values: Mapping[str, Any]) -> RigidBody:
     """The cone with its shaft at time 0, wished in place, moving down."""
     g = sizes(values)
-    R = g["D"] / 2
-    shoulder = shoulder_arc(g)
+    outline = cone_outline(g)
     adhesion = interface_adhesion(values)
     if adhesion > 0:  # on the face and its rounded end only; the shaft is smooth
-        adhesion = [adhesion] * shoulder.shape[0] + [0.0, 0.0, 0.0]
-    top = g["top"] + g["w"] + g["D"]
+        adhesion = [adhesion] * (outline.shape[0] - 3) + [0.0, 0.0, 0.0]
     return RigidBody(
-        [[0.0, g["z_tip"]], *shoulder, [R, top], [0.0, top]],
+        outline,
         velocity=[0.0, -values["speed"]],
         adhesion=adhesion,
         name="cone",
