@@ -49,7 +49,6 @@ penetration, ``N_c = (q_c - sigma_0)/s_u = 1.25 + 1.84 ln I_r``.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Any
 
@@ -83,10 +82,10 @@ from .cone_dissipation import (
     in_push,
 )
 from .cone_geometry import (
-    APEX,
     SHOULDER_PARAM,
     check,
     cone_body,
+    cone_height,
     cone_outline,
     sizes,
     soil_points,
@@ -399,8 +398,7 @@ def shoulder_filter(x: np.ndarray, g: dict[str, float], push: float) -> np.ndarr
 
 def shoulder_height(g: dict[str, float], push: float) -> float:
     """The height of the cone's shoulder after ``push`` x D (``g``: :func:`sizes`)."""
-    R = g["D"] / 2
-    return g["z_tip"] - push * g["D"] + R / math.tan(math.radians(APEX / 2))
+    return g["z_tip"] - push * g["D"] + cone_height(g)
 
 
 #: The cone's pictures show r <= WINDOW_R D, from WINDOW_Z D below the end of the

@@ -30,6 +30,7 @@ __all__ = [
     "SHOULDER_PARAM",
     "check",
     "cone_body",
+    "cone_height",
     "cone_outline",
     "fine_window",
     "heights",
@@ -78,6 +79,11 @@ def sizes(values: Mapping[str, Any]) -> dict[str, float]:
     }
 
 
+def cone_height(g: dict[str, float]) -> float:
+    """Height of the cone from its tip to its (sharp) shoulder, m: R / tan 30°."""
+    return g["D"] / 2 / math.tan(math.radians(APEX / 2))
+
+
 def shoulder_arc(g: dict[str, float]) -> np.ndarray:
     """The cone's shoulder at time 0: its corner (1, 2), or its rounded arc.
 
@@ -96,7 +102,7 @@ def shoulder_arc(g: dict[str, float]) -> np.ndarray:
     ((5, 2), [1.0, 1.866])
     """
     R, half = g["D"] / 2, math.radians(APEX / 2)
-    corner = np.array([R, g["z_tip"] + R / math.tan(half)])
+    corner = np.array([R, g["z_tip"] + cone_height(g)])
     r = g["round"]
     if r <= 0:
         return corner[None]
@@ -185,7 +191,7 @@ def soil_points(values: Mapping[str, Any], body: RigidBody) -> tuple[np.ndarray,
     rs = graded_axis(1.5 * g["D"], g["h"], g["radius"], values["grading"])
     zs = heights(g, values["grading"])
     R, z_tip, h = g["D"] / 2, g["z_tip"], g["h"]
-    shoulder = z_tip + R / math.tan(math.radians(APEX / 2))
+    shoulder = z_tip + cone_height(g)
     n_face = max(2, math.ceil(math.hypot(R, shoulder - z_tip) / h - 1e-9))
     s = np.linspace(0.0, 1.0, n_face + 1)
     face = np.stack([s * R, z_tip + s * (shoulder - z_tip)], axis=1)

@@ -40,7 +40,7 @@ from ..soil_profile import (
     strength_profile,
     with_profile,
 )
-from .cone_geometry import APEX, shoulder_arc, sizes
+from .cone_geometry import cone_height, shoulder_arc, sizes
 from .penetration_soil import with_pore_pressure
 
 __all__ = [
@@ -130,7 +130,7 @@ def soil_volume(g: dict[str, float]) -> float:
     corner to the soil (Pappus: the polygon's first moment about the axis).
     """
     R = g["D"] / 2
-    tall = R / math.tan(math.radians(APEX / 2))
+    tall = cone_height(g)
     cylinder = math.pi * g["radius"] ** 2 * g["top"]
     shaft = math.pi * R**2 * (g["top"] - g["z_tip"] - tall)
     ring = np.vstack([shoulder_arc(g), shoulder_arc(g | {"round": 0.0})])
