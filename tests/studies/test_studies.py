@@ -170,3 +170,33 @@ def test_cone_drops_helpers_count_holes_and_keep_the_face_on_the_cone():
     assert np.allclose(np.sum(u[face] * n[face], axis=1), w[0] * n[face, 1])
     assert u[0, 0] == 0.0
     assert T.shape[1] == 1 + 4 + 2  # V, the two free particles' dofs, two slides
+
+
+def test_cone_sensitivity_nudge_keeps_the_run_s_own_constraints():
+    """The nudge moves only free particles within reach of the tip, by about
+    eps spacings, keeps the axis's particles on it and none inside the cone;
+    the original simulation is left as it was."""
+    import cone_sensitivity
+
+    import skfem_npfem as npfem
+    from skfem_npfem.scenes.footing.cone import build, sizes
+
+    values = npfem.get_scene("cone-penetration").resolve(
+        {"spacing": 0.0357 / 4, "shoulder_round": 2.0}
+    )
+    sim, g = build(values, progress=False).simulation, sizes(values)
+    h, D, x0 = values["spacing"], values["diameter"], sim.particles.x.copy()
+    eps, rng = 1e-2, np.random.default_rng(0)
+    s = cone_sensitivity.nudged(sim, eps, h, 2 * D, g["z_tip"], rng)
+    assert np.array_equal(sim.particles.x, x0)
+    moved = np.linalg.norm(s.particles.x - x0, axis=1)
+    far = np.hypot(x0[:, 0], x0[:, 1] - g["z_tip"]) > 2 * D
+    held = np.asarray(sim.particles.fixed, bool).all(axis=1)
+    assert np.all(moved[far | held] == 0.0)
+    assert np.all(s.particles.x[x0[:, 0] == 0.0, 0] == 0.0)
+    # Normal moves of eps h per coordinate: the mean size is sqrt(pi/2) eps h
+    # (projected particles move less), within a factor of 1.5 over these.
+    mean = moved[~far & ~held].mean() / (eps * h)
+    assert math.sqrt(math.pi / 2) / 1.5 < mean < 1.5 * math.sqrt(math.pi / 2)
+    dist, _, _ = sim.model.bodies[0].signed_distance(s.particles.x, s.time)
+    assert dist.min() >= -1e-12 * D
