@@ -69,8 +69,9 @@ def force(sim) -> tuple[float, set, int]:
     return float(rec.extra["cone_force_y"]), tris, rec.n_contacts
 
 
-def run(per: float, start: float, samples: int, seed: int = 1) -> dict:
-    """The cone at D/``per`` pushed ``start`` D, then ``samples`` nudged steps."""
+def run(per: float, start: float, samples: int, seed: int = 1) -> tuple[dict, float]:
+    """The cone at D/``per`` pushed ``start`` D, then ``samples`` nudged steps;
+    the record and the seconds it took."""
     scene = npfem.get_scene("cone-penetration")
     D = scene.resolve({})["diameter"]
     values = scene.resolve({"spacing": D / per, "shoulder_round": 2.0})
