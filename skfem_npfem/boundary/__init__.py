@@ -25,7 +25,14 @@
   span a body.
 """
 
-from .body import RigidBody, body_loads, check_clear, project_out_of_bodies
+from .body import (
+    START_DEPTH,
+    RigidBody,
+    body_loads,
+    check_clear,
+    project_out_of_bodies,
+    start_clear,
+)
 from .contact import (
     body_contacts,
     boundary_tributary,
@@ -47,6 +54,7 @@ from .walls import RigidWall, Walls, floor, node_contacts, project_to_walls, wal
 
 __all__ = [
     "CLIP_DEPTH",
+    "START_DEPTH",
     "BodyOfRevolution",
     "Boundary",
     "ContactNodes",
@@ -70,5 +78,6 @@ __all__ = [
     "project_to_walls",
     "spanning_elements",
     "spanning_tetrahedra",
+    "start_clear",
     "wall_x",
 ]

@@ -40,7 +40,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -48,15 +48,23 @@ from ..errors import ParameterError
 from ..mesh.geometry import tangents
 from .contacts import Contacts
 
+if TYPE_CHECKING:
+    from ..particles import Particles
+
 __all__ = [
     "RigidBody",
     "body_loads",
     "check_clear",
     "project_out_of_bodies",
+    "start_clear",
 ]
 
 #: Relative tolerance (of a body's size) below which a point counts as on the outline.
 _ON_OUTLINE = 1e-9
+
+#: Relative depth (of a body's size) to which a particle may start inside a body
+#: (:func:`start_clear`).
+START_DEPTH = 1e-6
 
 #: Relative distance (of a body's size) within which a node counts as on a corner.
 _ON_CORNER = 1e-6
@@ -362,9 +370,15 @@ def _near(body, x: np.ndarray, t: float, reach: float | np.ndarray):
 
 
 def project_out_of_bodies(
-    bodies: Sequence[RigidBody], x: np.ndarray, v: np.ndarray, time: float
+    bodies: Sequence[RigidBody],
+    x: np.ndarray,
+    v: np.ndarray,
+    time: float,
+    beyond: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Put points that are inside a body at ``time`` back on its outline.
+
+    Only points deeper than ``beyond`` (m; 0: all inside) move.
 
     The velocity loses its component into the body (relative to the body's
     velocity).  2D and 3D: the bodies are :class:`RigidBody` objects, or
@@ -384,7 +398,7 @@ def project_out_of_bodies(
         if not near.size:
             continue
         dist, normal, closest = body.signed_distance(x[near], time)
-        inside = dist < 0.0
+        inside = dist < -beyond
         if not np.any(inside):
             continue
         idx = near[inside]
@@ -464,3 +478,22 @@ def check_clear(
                 "a body that starts clear of the soil (touching is fine): move "
                 "its vertices or remove the particles it covers",
             )
+
+
+def start_clear(bodies: Sequence[Any], particles: Particles) -> Particles:
+    """The particles a run starts from, clear of the bodies at time 0.
+
+    A particle deeper than :data:`START_DEPTH` times a body's size inside it
+    is refused (:func:`check_clear`); one inside by less, but by more than the
+    outline's tolerance (``1e-9`` of the size), is put on the outline
+    (:func:`project_out_of_bodies`): left there, the elements that join it to
+    the soil would span the body and the first step drop them (on the cone, a
+    particle ``1e-7`` of its size inside the shaft took a third of its force).
+    """
+    x, v = particles.x, particles.v
+    for body in bodies:
+        check_clear([body], x, 0.0, START_DEPTH * body.size)
+        x, v, _ = project_out_of_bodies([body], x, v, 0.0, _ON_OUTLINE * body.size)
+    if x is particles.x and v is particles.v:
+        return particles
+    return particles.replace(x=x, v=v)

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from skfem import Mesh
 
-from ..boundary import check_clear
+from ..boundary import start_clear
 from ..errors import ParameterError, RunInterrupted, SolverError
 from ..io import read_checkpoint, water_point_data, write_checkpoint
 from ..mesh.sources import MeshSource, as_mesh_source, mesh_particles
@@ -186,8 +186,7 @@ class Simulation:
                     getattr(stepper, "__name__", type(stepper).__name__),
                     "None with rigid bodies (they are part of the N-PFEM step)",
                 )
-            for body in model.bodies:
-                check_clear([body], particles.x, 0.0, 1e-6 * body.size)
+            self.particles = particles = start_clear(model.bodies, particles)
 
     @property
     def time(self) -> float:
